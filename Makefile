@@ -1,0 +1,32 @@
+# Two commands for a fresh machine: `make run` and `make test`. Each creates .venv and installs
+# what it needs by itself (nothing is assumed to be installed by hand).
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.faultmas-installed
+
+.PHONY: run test bench install clean
+
+$(STAMP): pyproject.toml Makefile
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	# The ROS 2 wheels first: they bring lark-parser 0.12, which overwrites Lark 1.x ...
+	$(PY) -m pip install -q -e '.[ros2,dev]'
+	# ... so Lark 1.x is reinstalled last (see ../shared/notes/ros2-and-zenoh.md, 1.4).
+	$(PY) -m pip install -q --force-reinstall --no-deps 'lark==1.3.1'
+	$(PY) -c 'import lark, sys; sys.exit(0 if lark.__version__.startswith("1.") else "lark-parser 0.12 shadows Lark 1.x")'
+	touch $(STAMP)
+
+install: $(STAMP)
+
+run: $(STAMP)
+	$(VENV)/bin/faultmas run
+
+test: $(STAMP)
+	$(PY) -m pytest -q -p no:cacheprovider
+
+bench: $(STAMP)
+	$(PY) -m benchmarks
+
+clean:
+	rm -rf $(VENV) build *.egg-info

@@ -1,0 +1,1 @@
+"""faultmas benchmarks: speed and memory targets, measured side by side, printed as tables."""

@@ -1,0 +1,1 @@
+"""faultmas: robot_bridge."""
