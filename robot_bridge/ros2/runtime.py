@@ -1,0 +1,157 @@
+"""Running rclpy safely: the missing-ROS hint, isolated contexts, spinning threads, node mains.
+
+Shared by every node, the agent-side bridge and the tests, so each one gets the shutdown order
+that works (executor, nodes, context, thread; see the notes, section 6) without repeating it.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import threading
+import time
+from typing import Callable, Sequence
+
+ROS_HINT = ("ROS 2 is not installed: pip install 'faultmas[ros2]', then "
+            "pip install --force-reinstall --no-deps lark==1.3.1")
+
+
+class RosUnavailable(ImportError):
+    """rclpy (or its RMW library) cannot be imported; the message is the one-line install hint."""
+
+
+def require_ros(module_name: str = "") -> None:
+    """Import rclpy or fail with the one-line hint (exit 2 when ``module_name`` is ``__main__``)."""
+    try:
+        import rclpy  # noqa: F401
+    except ImportError as exc:
+        if module_name == "__main__":
+            print(f"error: {ROS_HINT} ({exc})", file=sys.stderr)
+            raise SystemExit(2)
+        raise RosUnavailable(f"{ROS_HINT} ({exc})") from None
+
+
+def loopback_env(env: dict[str, str] | None = None) -> dict[str, str]:
+    """``env`` (default: ours) with discovery kept on this host unless the user chose otherwise."""
+    env = dict(os.environ if env is None else env)
+    env.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    env.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
+    return env
+
+
+def wait_for(predicate: Callable[[], bool], timeout: float = 10.0, period: float = 0.02) -> bool:
+    """Poll ``predicate`` until it holds or ``timeout`` passes (discovery has no fixed delay)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        if predicate():
+            return True
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(period)
+
+
+class RosContext:
+    """One rclpy Context and one SingleThreadedExecutor spinning in a daemon thread.
+
+    Isolated from every other context in the process (own participant, own ``domain_id``), so
+    a bridge and the nodes it talks to can share a process, and tests do not leak into each other.
+    """
+
+    def __init__(self, domain_id: int | None = None, args: Sequence[str] | None = None) -> None:
+        require_ros()
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+
+        os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        self.context = rclpy.Context()
+        rclpy.init(args=list(args) if args else None, context=self.context, domain_id=domain_id)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.nodes: list = []
+        self._thread = threading.Thread(target=self._spin, daemon=True, name="rclpy-spin")
+        self._lock = threading.Lock()
+        self._closed = False
+
+    def _spin(self) -> None:
+        from rclpy.executors import ExternalShutdownException
+        try:
+            self.executor.spin()
+        except ExternalShutdownException:
+            pass
+        except Exception:           # a context shut down under the executor's feet
+            if self.ok():
+                raise
+
+    def ok(self) -> bool:
+        return self.context.ok() and not self._closed
+
+    def add(self, node):
+        """Spin ``node`` (built with ``context=self.context``) in this context's executor."""
+        with self._lock:
+            self.nodes.append(node)
+            self.executor.add_node(node)
+        return node
+
+    def start(self) -> "RosContext":
+        self._thread.start()
+        return self
+
+    def close(self) -> None:
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+        for node in self.nodes:
+            stop = getattr(node, "stop", None)
+            if stop:
+                stop()
+        self.executor.shutdown(timeout_sec=2.0)
+        for node in self.nodes:
+            node.destroy_node()
+        self.context.try_shutdown()
+        if self._thread.is_alive():
+            self._thread.join(timeout=5.0)
+
+    def __enter__(self) -> "RosContext":
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def run_node(node_factory: Callable[..., object], description: str, argv: Sequence[str] | None = None,
+             configure: Callable[[argparse.ArgumentParser], None] | None = None) -> int:
+    """The ``main`` of one node process: ``python -m robot_bridge.ros2.X [--robot R] [--ros-args ...]``.
+
+    ``--robot R`` puts the node in namespace ``/R``; ``--ros-args`` (remaps, ``-p`` parameters) are
+    handed to rclpy unchanged. SIGINT and SIGTERM stop the node cleanly with exit code 0.
+    """
+    require_ros("__main__")
+    import rclpy
+    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from rclpy.utilities import remove_ros_args
+
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--robot", default="", help="robot name; the node runs in namespace /ROBOT")
+    parser.add_argument("--domain-id", type=int, default=None, help="ROS_DOMAIN_ID for this node")
+    if configure:
+        configure(parser)
+    options = parser.parse_args(remove_ros_args(args=["prog", *argv])[1:])
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    rclpy.init(args=["prog", *argv], domain_id=options.domain_id)
+    node = None
+    try:
+        node = node_factory(namespace=f"/{options.robot}" if options.robot else "", options=options)
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            stop = getattr(node, "stop", None)
+            if stop:
+                stop()
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
