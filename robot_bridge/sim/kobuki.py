@@ -129,7 +129,7 @@ def step(state: BaseState, command: WheelSpeeds | None, dt: float,
     noisy_left, noisy_right = left, right
     if rng is not None and params.speed_noise > 0.0 and (left or right):
         scale = 1.0 + params.speed_noise * rng.standard_normal(2)
-        noisy_left, noisy_right = left * scale[0], right * scale[1]
+        noisy_left, noisy_right = left * float(scale[0]), right * float(scale[1])
     # Exact arc integration over the step (no drift for pure rotation or straight lines).
     linear, angular = wheels_to_twist(WheelSpeeds(noisy_left, noisy_right), params)
     dyaw = angular * dt

@@ -24,8 +24,8 @@ class MotionLimits:
 
     linear_accel: float = 0.5
     angular_accel: float = 2.0
-    distance_tolerance: float = 0.01
-    angle_tolerance: float = math.radians(1.0)
+    distance_tolerance: float = 0.005
+    angle_tolerance: float = math.radians(0.5)
     creep_linear: float = 0.02
     """Slowest speed near the goal, so the approach does not crawl forever."""
     creep_angular: float = math.radians(4.0)

@@ -1,0 +1,522 @@
+"""A Kinect-like RGB-D camera for the simulator: real pixel arrays for ``perception/`` to process.
+
+World frame per REP 103: x forward, y left, z up, yaw counter-clockwise. The camera is level (no
+pitch or roll), which is what makes rendering cheap: the floor's depth depends only on the image row,
+a wall's only on the column, and every object (robot bodies, the marker cylinders, props) is a
+vertical prism whose silhouette is a band of columns. Output follows the Kinect's ROS driver: an
+``rgb8`` image (H x W x 3 uint8, RGB order) and a registered depth image (H x W float32 metres along
+the optical axis, 0 = no reading) with depth-dependent noise, disparity quantisation, dropouts,
+projector shadows and out-of-range holes. Noise comes from banks drawn once per camera, so a frame
+costs a few milliseconds instead of hundreds of thousands of fresh Gaussian draws.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Sequence
+
+import numpy as np
+
+from perception import markers
+from perception.camera import CameraModel
+
+Pose = tuple[float, float, float]      # x, y, yaw (radians) in the world frame
+RGB = tuple[int, int, int]
+
+_NEAR_M = 0.05          # objects closer than this to the camera plane are not drawn
+_FAR = np.float32(np.inf)
+
+
+# --------------------------------------------------------------------------------------------- scene
+@dataclass(frozen=True)
+class CameraRig:
+    """Where a camera sits on its robot: height of the optical centre and offset from the robot centre."""
+
+    camera: CameraModel = field(default_factory=CameraModel.kinect)
+    height_m: float = 0.30
+    mount_x_m: float = 0.10
+    mount_y_m: float = 0.0
+
+    def pose_of(self, robot_pose: Pose) -> Pose:
+        """World pose (x, y, yaw) of the camera's optical centre on a robot at ``robot_pose``."""
+        x, y, yaw = robot_pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        return (x + c * self.mount_x_m - s * self.mount_y_m, y + s * self.mount_x_m + c * self.mount_y_m, yaw)
+
+
+@dataclass(frozen=True)
+class Wall:
+    """A vertical wall along the segment (x0, y0)-(x1, y1), from the floor to ``height_m``."""
+
+    x0: float
+    y0: float
+    x1: float
+    y1: float
+    height_m: float = 2.5
+    rgb: RGB = (205, 200, 188)
+
+
+@dataclass(frozen=True)
+class CylinderProp:
+    """A vertical cylinder standing in the world (distractor, occluder, or a marker look-alike)."""
+
+    x: float
+    y: float
+    radius_m: float
+    bottom_m: float
+    top_m: float
+    rgb: RGB
+
+
+@dataclass(frozen=True)
+class BoxProp:
+    """A vertical box (footprint ``length_m`` along its yaw, ``width_m`` across)."""
+
+    x: float
+    y: float
+    yaw: float
+    length_m: float
+    width_m: float
+    bottom_m: float
+    top_m: float
+    rgb: RGB
+
+
+@dataclass(frozen=True)
+class RobotLook:
+    """How a robot appears: a dark body topped by the front and rear marker cylinders."""
+
+    body_radius_m: float = 0.177
+    body_top_m: float = markers.CYLINDER_BOTTOM_M
+    body_rgb: RGB = (58, 58, 62)
+    front_rgb: RGB = markers.MARKER_RGB[markers.FRONT_COLOUR]
+    rear_rgb: RGB = markers.MARKER_RGB[markers.REAR_COLOUR]
+
+
+@dataclass(frozen=True)
+class DepthSensor:
+    """Kinect v1 depth behaviour (Nguyen et al. 2012 axial noise; 1/8 px disparity steps)."""
+
+    min_m: float = 0.8
+    max_m: float = 4.5
+    noise_a_m: float = 0.0012               # sigma(z) = a + b (z - 0.4)^2
+    noise_b_per_m: float = 0.0019
+    noise_blur_px: float = 1.0              # spatial correlation of the noise (block matching)
+    focal_baseline_px_m: float = 580.0 * 0.075
+    subpixel: int = 8
+    dropout: float = 0.02                   # fraction of random holes
+    shadows: bool = True                    # projector shadow left of foreground objects
+    registration_px: int = 1                # depth-to-colour registration error (columns)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Everything static a camera sees besides the robots, plus the lighting and sensor settings."""
+
+    walls: tuple[Wall, ...] = ()
+    props: tuple[CylinderProp | BoxProp, ...] = ()
+    gain: float = 1.0                       # illumination: multiplies every colour (saturating)
+    floor_rgb: RGB = (150, 140, 128)
+    backdrop_rgb: RGB = (120, 122, 128)     # what is seen where there is no wall (depth: no reading)
+    rgb_noise: float = 2.5                  # sensor noise, grey levels (sigma)
+    depth: DepthSensor = field(default_factory=DepthSensor)
+    robot_look: RobotLook = field(default_factory=RobotLook)
+
+
+# ----------------------------------------------------------------------------------------- truth
+@dataclass(frozen=True)
+class TrueView:
+    """Where a robot's markers are in a camera's optical frame, per the ``Detection`` definitions."""
+
+    angle_deg: float        # bearing of the midpoint of the two axes, degrees(atan2(x, z)), + right
+    depth_m: float          # mean optical-axis depth of the two axes
+    yaw_deg: float          # degrees(atan2(hx, hz)), h = front - rear: 0 = facing away, 90 = moving right
+    x_m: float
+    z_m: float
+    front_xz: tuple[float, float]
+    rear_xz: tuple[float, float]
+    front_u: float          # pixel column of each axis
+    rear_u: float
+
+
+def to_camera(rig: CameraRig, camera_pose: Pose, x: float, y: float) -> tuple[float, float]:
+    """World point (x, y) -> optical-frame (x right, z forward) of a camera at ``camera_pose``."""
+    cx, cy, yaw = camera_pose
+    dx, dy = x - cx, y - cy
+    c, s = math.cos(yaw), math.sin(yaw)
+    return (-(-s * dx + c * dy), c * dx + s * dy)
+
+
+def true_view(rig: CameraRig, camera_pose: Pose, robot: Pose) -> TrueView:
+    """Ground truth for ``robot`` seen by the camera at ``camera_pose`` (pose of the optical centre)."""
+    rx, ry, ryaw = robot
+    c, s = math.cos(ryaw), math.sin(ryaw)
+    fx_, fz_ = to_camera(rig, camera_pose, rx + c * markers.FRONT_OFFSET_M, ry + s * markers.FRONT_OFFSET_M)
+    bx_, bz_ = to_camera(rig, camera_pose, rx + c * markers.REAR_OFFSET_M, ry + s * markers.REAR_OFFSET_M)
+    mx, mz = (fx_ + bx_) / 2, (fz_ + bz_) / 2
+    cam = rig.camera
+    return TrueView(
+        angle_deg=math.degrees(math.atan2(mx, mz)), depth_m=mz,
+        yaw_deg=math.degrees(math.atan2(fx_ - bx_, fz_ - bz_)), x_m=mx, z_m=mz,
+        front_xz=(fx_, fz_), rear_xz=(bx_, bz_),
+        front_u=cam.fx * fx_ / fz_ + cam.cx if fz_ > 0 else math.nan,
+        rear_u=cam.fx * bx_ / bz_ + cam.cx if bz_ > 0 else math.nan)
+
+
+# ---------------------------------------------------------------------------------------- render
+@dataclass(frozen=True)
+class MarkerPixels:
+    """Pixel counts of one robot's markers: as rendered (``*_visible``) and if nothing hid them (``*_full``)."""
+
+    front_visible: int
+    front_full: int
+    rear_visible: int
+    rear_full: int
+
+    def both_visible(self, min_fraction: float = 0.4, min_px: int = 30) -> bool:
+        """Both cylinders show at least ``min_fraction`` of their silhouette and ``min_px`` pixels."""
+        return all(vis >= min_px and vis >= min_fraction * full
+                   for vis, full in ((self.front_visible, self.front_full),
+                                     (self.rear_visible, self.rear_full)))
+
+
+@dataclass
+class _Prism:
+    footprint: str                  # "circle" or "box"
+    cam_xz: tuple[float, float]     # centre in the optical frame
+    radius: float                   # circle
+    half: tuple[float, float]       # box half sizes along its axes
+    axis: tuple[float, float]       # box length axis in the optical frame (x, z)
+    bottom: float
+    top: float
+    rgb: RGB
+    label: int                      # 0 = not tracked, else an id for MarkerPixels
+
+
+class _Renderer:
+    """Per-camera constants and noise banks; one instance per rig (cached)."""
+
+    def __init__(self, rig: CameraRig, sensor: DepthSensor, seed: int = 12345) -> None:
+        cam = rig.camera
+        self.rig, self.cam, self.sensor = rig, cam, sensor
+        h, w = cam.height, cam.width
+        self.tan_u = ((np.arange(w) - cam.cx) / cam.fx).astype(np.float64)          # x / z per column
+        self.k_v = ((np.arange(h) - cam.cy) / cam.fy).astype(np.float64)            # (down) / z per row
+        with np.errstate(divide="ignore"):
+            floor = np.where(self.k_v > 0, rig.height_m / self.k_v, np.inf)
+        self.floor_z = floor.astype(np.float32)[:, None]
+        self.k_v32 = self.k_v.astype(np.float32)[:, None]
+        # floor shading per row: a little darker far away
+        self.floor_shade = np.clip(0.72 + 0.28 * np.exp(-np.nan_to_num(floor, posinf=50) / 6), 0, 1)[:, None]
+        rng = np.random.default_rng(seed)
+        extra = 64
+        import cv2
+        white = rng.standard_normal((h + extra, w + extra)).astype(np.float32)
+        if sensor.noise_blur_px > 0:
+            white = cv2.GaussianBlur(white, (0, 0), sensor.noise_blur_px)
+            white /= white.std()
+        self.depth_bank = white
+        self.hole_bank = rng.random((h + extra, w + extra)) < sensor.dropout
+        colour = rng.normal(0.0, 1.0, (h + extra, w, 3)).astype(np.float32)
+        self.colour_bank_unit = colour
+        self._colour_cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+        self.extra = extra
+
+    def colour_noise(self, sigma: float) -> tuple[np.ndarray, np.ndarray]:
+        """Positive and negative parts of the colour noise bank as uint8 (for saturating add/subtract)."""
+        if sigma not in self._colour_cache:
+            n = np.rint(self.colour_bank_unit * sigma)
+            self._colour_cache[sigma] = (np.clip(n, 0, 255).astype(np.uint8), np.clip(-n, 0, 255).astype(np.uint8))
+        return self._colour_cache[sigma]
+
+
+@lru_cache(maxsize=32)
+def _renderer(rig: CameraRig, sensor: DepthSensor) -> _Renderer:
+    return _Renderer(rig, sensor)
+
+
+def render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Scene,
+           rng: np.random.Generator | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """One RGB-D frame from a camera whose optical centre is at ``camera_pose`` (see ``CameraRig.pose_of``).
+
+    Returns ``(rgb, depth)``: H x W x 3 uint8 in RGB order, H x W float32 metres (0 = no reading).
+    """
+    rgb, depth, _ = render_with_pixels(rig, camera_pose, robots, scene, rng)
+    return rgb, depth
+
+
+def render_with_pixels(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Scene,
+                       rng: np.random.Generator | None = None
+                       ) -> tuple[np.ndarray, np.ndarray, list[MarkerPixels]]:
+    """Like ``render``, plus each robot's visible and unoccluded marker pixel counts (ground truth)."""
+    import cv2
+
+    rng = rng if rng is not None else np.random.default_rng()
+    r = _renderer(rig, scene.depth)
+    cam = r.cam
+    h, w = cam.height, cam.width
+    hc = rig.height_m
+
+    # walls: depth per column
+    wall_z, wall_idx = _wall_depths(r, camera_pose, scene.walls)
+    wall_top = np.array([wl.height_m for wl in scene.walls] + [0.0])[wall_idx]
+    kz = r.k_v32 * wall_z[None, :].astype(np.float32)                      # (hc - height) at the wall
+    is_wall = (kz <= hc) & (kz >= (hc - wall_top)[None, :].astype(np.float32))
+    is_floor = ~is_wall & (r.k_v32 > 0)
+    depth = np.where(is_wall, wall_z[None, :].astype(np.float32), np.where(is_floor, r.floor_z, _FAR))
+
+    wall_rgb = _wall_colours(r, camera_pose, scene.walls, wall_idx, wall_z)               # W x 3
+    floor_rgb = (np.asarray(scene.floor_rgb, np.float32)[None, :] * r.floor_shade).astype(np.uint8)
+    sky = np.asarray(scene.backdrop_rgb, np.uint8)
+    back = np.where(is_floor[:, :, None], floor_rgb[:, None, :], sky[None, None, :])
+    image = np.where(is_wall[:, :, None], wall_rgb[None, :, :], back)
+
+    # objects: robots (body + markers) and props, nearest drawn last is not needed: depth test per pixel
+    prisms, n_labels = _prisms(rig, camera_pose, robots, scene)
+    labels = np.zeros((h, w), np.int16) if n_labels else None
+    full = np.zeros(n_labels + 1, np.int64)
+    shadows: list[tuple[int, int, int, float]] = []
+    for p in prisms:
+        _draw_prism(r, p, depth, image, labels, full, shadows)
+
+    # illumination and colour noise (saturating uint8 arithmetic)
+    if scene.gain != 1.0:
+        image = cv2.convertScaleAbs(image, alpha=scene.gain)
+    if scene.rgb_noise > 0:
+        pos, neg = r.colour_noise(float(scene.rgb_noise))
+        off = int(rng.integers(0, r.extra))
+        image = cv2.subtract(cv2.add(image, pos[off:off + h]), neg[off:off + h])
+
+    noisy = _depth_noise(r, depth, shadows, rng)
+    pixels = []
+    if labels is not None:
+        counts = np.bincount(labels.ravel(), minlength=n_labels + 1)
+        for i in range(len(robots)):
+            a, b = 1 + 2 * i, 2 + 2 * i
+            pixels.append(MarkerPixels(int(counts[a]), int(full[a]), int(counts[b]), int(full[b])))
+    return image, noisy, pixels
+
+
+def _wall_depths(r: _Renderer, pose: Pose, walls: Sequence[Wall]) -> tuple[np.ndarray, np.ndarray]:
+    """Nearest wall depth (z) per column and its index (len(walls) where none)."""
+    w = r.cam.width
+    best = np.full(w, np.inf)
+    idx = np.full(w, len(walls), np.int64)
+    cx, cy, yaw = pose
+    c, s = math.cos(yaw), math.sin(yaw)
+    # ray in the world for column u: P(z) = C + z * (f + tan_u * rgt), f = (c, s), rgt = (s, -c)
+    dx = c + r.tan_u * s
+    dy = s - r.tan_u * c
+    for i, wl in enumerate(walls):
+        ex, ey = wl.x1 - wl.x0, wl.y1 - wl.y0
+        ox, oy = wl.x0 - cx, wl.y0 - cy
+        den = dx * (-ey) - dy * (-ex)          # solve z*d - t*e = o
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = (ox * (-ey) - oy * (-ex)) / den
+            t = (dx * oy - dy * ox) / den
+        ok = (np.abs(den) > 1e-12) & (z > _NEAR_M) & (t >= 0) & (t <= 1) & (z < best)
+        best = np.where(ok, z, best)
+        idx = np.where(ok, i, idx)
+    return best, idx
+
+
+def _wall_colours(r: _Renderer, pose: Pose, walls: Sequence[Wall], idx: np.ndarray,
+                  z: np.ndarray) -> np.ndarray:
+    """Per-column wall colour, shaded by the angle between the wall and the viewing ray."""
+    w = r.cam.width
+    cols = np.zeros((w, 3), np.float32)
+    if not walls:
+        return cols.astype(np.uint8)
+    base = np.array([wl.rgb for wl in walls] + [(0, 0, 0)], np.float32)[idx]
+    cx, cy, yaw = pose
+    c, s = math.cos(yaw), math.sin(yaw)
+    dx = c + r.tan_u * s
+    dy = s - r.tan_u * c
+    nrm = np.hypot(dx, dy)
+    ex = np.array([wl.x1 - wl.x0 for wl in walls] + [1.0])[idx]
+    ey = np.array([wl.y1 - wl.y0 for wl in walls] + [0.0])[idx]
+    el = np.hypot(ex, ey)
+    cos_inc = np.abs((dx * ey - dy * ex) / (nrm * el))
+    shade = 0.55 + 0.45 * cos_inc - 0.03 * np.minimum(np.nan_to_num(z, posinf=0), 8)
+    return np.clip(base * shade[:, None], 0, 255).astype(np.uint8)
+
+
+def _prisms(rig: CameraRig, pose: Pose, robots: Sequence[Pose], scene: Scene) -> tuple[list[_Prism], int]:
+    look = scene.robot_look
+    out: list[_Prism] = []
+    cyaw = pose[2]
+
+    def add_circle(x, y, radius, bottom, top, rgb, label=0):
+        out.append(_Prism("circle", to_camera(rig, pose, x, y), radius, (0, 0), (0, 0), bottom, top, rgb, label))
+
+    for i, (x, y, yaw) in enumerate(robots):
+        add_circle(x, y, look.body_radius_m, 0.0, look.body_top_m, look.body_rgb)
+        c, s = math.cos(yaw), math.sin(yaw)
+        for off, rgb, label in ((markers.FRONT_OFFSET_M, look.front_rgb, 1 + 2 * i),
+                                (markers.REAR_OFFSET_M, look.rear_rgb, 2 + 2 * i)):
+            add_circle(x + c * off, y + s * off, markers.CYLINDER_RADIUS_M, markers.CYLINDER_BOTTOM_M,
+                       markers.CYLINDER_TOP_M, rgb, label)
+    for p in scene.props:
+        if isinstance(p, CylinderProp):
+            add_circle(p.x, p.y, p.radius_m, p.bottom_m, p.top_m, p.rgb)
+        else:
+            rel = p.yaw - cyaw        # box axis in the optical frame: x = -left, z = forward
+            out.append(_Prism("box", to_camera(rig, pose, p.x, p.y), 0.0, (p.length_m / 2, p.width_m / 2),
+                              (-math.sin(rel), math.cos(rel)), p.bottom_m, p.top_m, p.rgb, 0))
+    return out, 2 * len(robots)
+
+
+def _entry_exit(r: _Renderer, p: _Prism) -> tuple[int, int, np.ndarray, np.ndarray] | None:
+    """Columns [u0, u1) the prism covers and, per column, the z where the ray enters and leaves it."""
+    cam = r.cam
+    xc, zc = p.cam_xz
+    if p.footprint == "circle":
+        reach = p.radius
+    else:
+        reach = math.hypot(*p.half)
+    if zc - reach < _NEAR_M:
+        return None
+    # conservative column span from the bounding circle
+    rng_ = math.hypot(xc, zc)
+    beta = math.asin(min(1.0, reach / rng_))
+    phi = math.atan2(xc, zc)
+    lo, hi = phi - beta, phi + beta
+    if hi <= -math.pi / 2 or lo >= math.pi / 2:
+        return None
+    u0 = max(0, int(math.floor(cam.fx * math.tan(max(lo, -1.5)) + cam.cx)))
+    u1 = min(cam.width, int(math.ceil(cam.fx * math.tan(min(hi, 1.5)) + cam.cx)) + 1)
+    if u1 <= u0:
+        return None
+    tau = r.tan_u[u0:u1]
+    if p.footprint == "circle":
+        a = 1.0 + tau * tau
+        b = -2.0 * (xc * tau + zc)
+        c = xc * xc + zc * zc - p.radius * p.radius
+        disc = b * b - 4 * a * c
+        ok = disc >= 0
+        sq = np.sqrt(np.where(ok, disc, 0.0))
+        t1 = np.where(ok, (-b - sq) / (2 * a), np.inf)
+        t2 = np.where(ok, (-b + sq) / (2 * a), -np.inf)
+    else:
+        ax, az = p.axis                   # length axis; width axis is its perpendicular
+        bx, bz = az, -ax
+        # ray point z*(tau, 1) - centre, projected on the two axes: o + z * d
+        o1, d1 = -(xc * ax + zc * az), tau * ax + az
+        o2, d2 = -(xc * bx + zc * bz), tau * bx + bz
+        t1 = np.full(tau.shape, -np.inf)
+        t2 = np.full(tau.shape, np.inf)
+        for o, d, hlf in ((o1, d1, p.half[0]), (o2, d2, p.half[1])):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ta = (-hlf - o) / d
+                tb = (hlf - o) / d
+            par = np.abs(d) < 1e-12
+            inside = np.abs(o) <= hlf
+            lo_t = np.where(par, np.where(inside, -np.inf, np.inf), np.minimum(ta, tb))
+            hi_t = np.where(par, np.where(inside, np.inf, -np.inf), np.maximum(ta, tb))
+            t1 = np.maximum(t1, lo_t)
+            t2 = np.minimum(t2, hi_t)
+        bad = t1 > t2
+        t1 = np.where(bad, np.inf, t1)
+        t2 = np.where(bad, -np.inf, t2)
+    return u0, u1, t1, t2
+
+
+def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, labels: np.ndarray | None,
+                full: np.ndarray, shadows: list) -> None:
+    span = _entry_exit(r, p)
+    if span is None:
+        return
+    u0, u1, t1, t2 = span
+    hit_cols = np.isfinite(t1) & (t1 > _NEAR_M)
+    if not hit_cols.any():
+        return
+    cam, hc = r.cam, r.rig.height_m
+    zmin = float(t1[hit_cols].min())
+    zmax = float(t2[hit_cols].max())
+    a, b = hc - p.top, hc - p.bottom          # a <= k*z <= b inside the prism's height range
+    ks = [a / zmin, a / zmax, b / zmin, b / zmax]
+    v0 = max(0, int(math.floor(min(ks) * cam.fy + cam.cy)))
+    v1 = min(cam.height, int(math.ceil(max(ks) * cam.fy + cam.cy)) + 1)
+    if v1 <= v0:
+        return
+    k = r.k_v[v0:v1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        qa, qb = a / k, b / k
+    pos, neg = k > 0, k < 0
+    inside0 = (a <= 0) & (0 <= b)
+    lo = np.where(pos, qa, np.where(neg, qb, -np.inf if inside0 else np.inf))[:, None]
+    hi = np.where(pos, qb, np.where(neg, qa, np.inf if inside0 else -np.inf))[:, None]
+    t1c, t2c = t1[None, :], t2[None, :]
+    zhit = np.maximum(t1c, lo)
+    hit = (zhit <= np.minimum(t2c, hi)) & (zhit > _NEAR_M)
+    if p.label:
+        full[p.label] += int(hit.sum())
+    region = depth[v0:v1, u0:u1]
+    closer = hit & (zhit < region)
+    if not closer.any():
+        return
+    face = t1c >= lo
+    # shading: vertical faces by the angle between normal and view ray, caps flat
+    tau = r.tan_u[u0:u1]
+    if p.footprint == "circle":
+        xh, zh = t1 * tau, t1
+        nx, nz = (xh - p.cam_xz[0]) / p.radius, (zh - p.cam_xz[1]) / p.radius
+    else:
+        ax, az = p.axis
+        bx, bz = az, -ax
+        xh, zh = t1 * tau - p.cam_xz[0], t1 - p.cam_xz[1]
+        u_ax = xh * ax + zh * az
+        u_bx = xh * bx + zh * bz
+        on_len = np.abs(np.abs(u_ax) - p.half[0]) < np.abs(np.abs(u_bx) - p.half[1])
+        nx = np.where(on_len, np.sign(u_ax) * ax, np.sign(u_bx) * bx)
+        nz = np.where(on_len, np.sign(u_ax) * az, np.sign(u_bx) * bz)
+    view = np.nan_to_num(-(nx * tau + nz) / np.sqrt(1 + tau * tau))
+    face_shade = 0.62 + 0.38 * np.clip(view, 0, 1)
+    cap_shade = 0.9 if p.top < hc else 0.45            # a lit top, or an underside in shadow
+    shade = np.where(face, face_shade[None, :], cap_shade).astype(np.float32)
+    col = np.clip(shade[:, :, None] * np.asarray(p.rgb, np.float32)[None, None, :], 0, 255).astype(np.uint8)
+    region[closer] = zhit[closer].astype(np.float32)
+    image[v0:v1, u0:u1][closer] = col[closer]
+    if labels is not None:
+        lab = labels[v0:v1, u0:u1]
+        lab[closer] = p.label
+    shadows.append((u0 + int(np.argmax(hit_cols)), v0, v1, zmin))
+
+
+def _depth_noise(r: _Renderer, depth: np.ndarray, shadows: list, rng: np.random.Generator) -> np.ndarray:
+    """Kinect-like measurement of the true depth: shadows, noise, quantisation, holes, range limits."""
+    s = r.sensor
+    h, w = depth.shape
+    z = depth
+    if s.shadows and shadows:
+        z = depth.copy()
+        cols = np.arange(w, dtype=np.float32)
+        for u_left, v0, v1, zf in shadows:
+            # the projector sits beside the IR camera: the background just left of a nearer object gets
+            # no pattern over the disparity difference fb * (1/z_object - 1/z_background)
+            widest = int(s.focal_baseline_px_m / zf) + 1
+            a = max(0, u_left - widest)
+            if a >= u_left:
+                continue
+            blk = z[v0:v1, a:u_left]
+            with np.errstate(divide="ignore"):
+                gap = s.focal_baseline_px_m * (1 / zf - 1 / blk)
+            blk[(blk > zf + 0.05) & ((u_left - cols[a:u_left])[None, :] <= gap)] = np.inf
+    oy, ox = int(rng.integers(0, r.extra)), int(rng.integers(0, r.extra))
+    noise = r.depth_bank[oy:oy + h, ox:ox + w]
+    d = z - np.float32(0.4)
+    sigma = np.float32(s.noise_a_m) + np.float32(s.noise_b_per_m) * d * d
+    with np.errstate(invalid="ignore", over="ignore"):
+        zn = z + sigma * noise
+        fb = np.float32(s.focal_baseline_px_m * s.subpixel)
+        disp = np.rint(fb / zn)
+        zq = fb / disp
+    valid = np.isfinite(z) & (z >= s.min_m) & (z <= s.max_m) & (disp > 0)
+    valid &= ~r.hole_bank[oy:oy + h, ox:ox + w]
+    out = np.where(valid, zq, np.float32(0)).astype(np.float32)
+    if s.registration_px:
+        k = s.registration_px
+        out[:, k:] = out[:, :-k].copy()
+        out[:, :k] = 0
+    return out

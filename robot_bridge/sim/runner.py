@@ -1,0 +1,100 @@
+"""Paces a ``World`` against wall time in a background thread: how simulated time relates to the agents'.
+
+* ``speed > 0``: simulated time runs ``speed`` times faster than wall time, always (``speed=1``: real time).
+* ``speed = 0`` (the default, "as fast as possible"): while any robot has a motion running or a wheel
+  turning, the world steps as fast as the CPU allows; while everything is at rest it advances at wall-time
+  pace (1x), so idle periods still pass (a camera keeps its rate, an agent's ``.wait(500)`` sees about
+  0.5 simulated seconds go by) instead of freezing or racing ahead.
+
+Agents' ``.wait`` and deadlines are in wall time; the simulated clock is the world's (``World.time``) and
+actions complete in simulated time. With ``speed=0`` a ``move(1)`` that takes 5 simulated seconds
+typically completes within tens of wall milliseconds. For results that must not depend on the machine,
+drive the world directly (``World.step``/``run_until``) instead of through a runner.
+"""
+from __future__ import annotations
+
+import threading
+import time
+import weakref
+
+from robot_bridge.sim.world import World
+
+
+class WorldRunner:
+    """Steps one world in a daemon thread; several bridges share it through ``acquire``/``release``."""
+
+    def __init__(self, world: World, speed: float = 0.0) -> None:
+        if speed < 0:
+            raise ValueError(f"speed must be >= 0 (0 = as fast as possible), got {speed!r}")
+        self.world, self.speed = world, speed
+        self._users = 0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._mutex = threading.Lock()
+        self.error: BaseException | None = None
+
+    def acquire(self) -> None:
+        """One more user: start the thread on the first."""
+        with self._mutex:
+            self._users += 1
+            if self._thread is None:
+                self._stop.clear()
+                self._thread = threading.Thread(target=self._run, name="faultmas-sim", daemon=True)
+                self._thread.start()
+
+    def release(self) -> None:
+        """One user fewer: stop and join the thread after the last."""
+        with self._mutex:
+            self._users = max(0, self._users - 1)
+            thread = self._thread if self._users == 0 else None
+            if thread is not None:
+                self._thread = None
+                self._stop.set()
+                with self.world.changed:
+                    self.world.changed.notify_all()
+        if thread is not None and thread is not threading.current_thread():
+            thread.join(timeout=5.0)
+
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    def _run(self) -> None:
+        world, dt = self.world, self.world.dt
+        anchor_wall, anchor_sim, flat_out = time.monotonic(), world.time, False
+        try:
+            while not self._stop.is_set():
+                fast = self.speed == 0 and world.busy()
+                if fast:
+                    world.step()
+                    flat_out = True
+                    continue
+                if flat_out:  # back to paced time: re-anchor so idle time is not "caught up" at once
+                    anchor_wall, anchor_sim, flat_out = time.monotonic(), world.time, False
+                rate = self.speed or 1.0
+                due = anchor_sim + (time.monotonic() - anchor_wall) * rate
+                if world.time + dt <= due:
+                    world.step()
+                    continue
+                with world.changed:  # a new command (or shutdown) wakes us early
+                    world.changed.wait(timeout=min(0.05, (world.time + dt - due) / rate))
+        except BaseException as exc:  # keep the failure for the bridges to report
+            self.error = exc
+            world.cancel_all("shutdown")
+            raise
+
+
+_shared: "weakref.WeakValueDictionary[int, WorldRunner]" = weakref.WeakValueDictionary()
+"""Runners by world id; a runner lives as long as some bridge holds it."""
+_shared_lock = threading.Lock()
+
+
+def shared_runner(world: World, speed: float = 0.0) -> WorldRunner:
+    """The one runner of ``world`` (created with ``speed`` by whoever asks first)."""
+    with _shared_lock:
+        runner = _shared.get(id(world))
+        if runner is None or runner.world is not world:
+            runner = _shared[id(world)] = WorldRunner(world, speed)
+        elif runner.speed != speed:
+            raise ValueError(f"world already runs at speed {runner.speed:g}, not {speed:g}")
+        return runner

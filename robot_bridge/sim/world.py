@@ -1,0 +1,377 @@
+"""A 2D world of Kobuki robots on one simulated clock, stepped at a fixed ``dt``; no I/O, no threads.
+
+The world owns ground truth; each robot owns only what a real one has (encoders, odometry, bumper,
+camera). Every public method takes the world's lock, so a runner thread (``runner.py``), bridges in
+other threads, or later a network server can share one world. Motion futures are resolved after the
+lock is released, so a completion callback may issue the next action at once.
+
+Deterministic: the same seed, robots and actions issued at the same simulated times give the same
+trajectories (each robot draws its noise from its own generator, seeded by the world seed and its name).
+"""
+from __future__ import annotations
+
+import math
+import threading
+import zlib
+from concurrent.futures import Future
+from dataclasses import dataclass, field, replace
+from typing import Callable, NamedTuple
+
+import numpy as np
+
+from robot_bridge import percepts as vocabulary
+from robot_bridge.protocol import Completion, Percept
+from robot_bridge.sim import faults, kobuki, motion, odometry
+from robot_bridge.sim.faults import NO_FAULT, Fault
+
+DEFAULT_DT = 0.01
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """A vertical cylinder standing on the floor (a post, a bin): blocks robots, shows on cameras."""
+
+    x: float
+    y: float
+    radius: float = 0.15
+    height: float = 0.6
+    rgb: tuple[int, int, int] = (120, 110, 100)
+
+
+@dataclass(frozen=True)
+class CameraMount:
+    """A camera on a robot, rendering at ``rate_hz`` simulated frames per second when someone listens."""
+
+    rate_hz: float = 10.0
+    height: float = 0.5
+    """Optical centre above the floor (m); a Kinect on a TurtleBot 2 top plate."""
+    forward: float = 0.0
+    """Optical centre ahead of the robot centre (m)."""
+
+
+@dataclass(frozen=True)
+class CameraFrame:
+    """One rendered image: RGB (H x W x 3 uint8) and depth (H x W float32 m, NaN = no data)."""
+
+    robot: str
+    time: float
+    pose: tuple[float, float, float]
+    """Camera pose in the world (x, y, yaw rad) when the frame was taken."""
+    rgb: np.ndarray
+    depth: np.ndarray
+
+
+class TrajectoryPoint(NamedTuple):
+    """Ground truth next to belief, logged at a fixed simulated interval."""
+
+    time: float
+    x: float
+    y: float
+    yaw_deg: float
+    odom_x: float
+    odom_y: float
+    odom_yaw_deg: float
+
+
+@dataclass
+class _Robot:
+    name: str
+    base: kobuki.BaseState
+    rng: np.random.Generator | None
+    camera_rng: np.random.Generator
+    """Separate from ``rng`` so frames rendered on demand never change the physics' noise."""
+    fault: Fault = NO_FAULT
+    odom: odometry.Odometry = field(default_factory=odometry.Odometry)
+    ticks: tuple[int, int] = (0, 0)
+    motion: motion.MotionState | None = None
+    pending: Future | None = None
+    command: kobuki.WheelSpeeds | None = None
+    bumper: str | None = None
+    camera: CameraMount | None = None
+    camera_listeners: list[Callable[[CameraFrame], None]] = field(default_factory=list)
+    next_frame: float = 0.0
+    last_frame: float = -math.inf
+    trajectory: list[TrajectoryPoint] = field(default_factory=list)
+
+
+class World:
+    """Several robots in a rectangular arena (walls) with optional obstacles, one clock for all."""
+
+    def __init__(self, seed: int = 0, dt: float = DEFAULT_DT, arena: tuple[float, float, float, float] =
+                 (-5.0, -5.0, 5.0, 5.0), obstacles: tuple[Obstacle, ...] = (), noise: bool = True,
+                 log_interval: float = 0.05, params: kobuki.BaseParams = kobuki.KOBUKI,
+                 limits: motion.MotionLimits = motion.DEFAULT_LIMITS) -> None:
+        if dt <= 0:
+            raise ValueError(f"dt must be positive, got {dt!r}")
+        xmin, ymin, xmax, ymax = arena
+        if xmax - xmin <= 2 * kobuki.ROBOT_RADIUS or ymax - ymin <= 2 * kobuki.ROBOT_RADIUS:
+            raise ValueError(f"arena (xmin, ymin, xmax, ymax) too small for a robot: {arena!r}")
+        self.seed, self.dt, self.arena, self.obstacles = seed, dt, arena, tuple(obstacles)
+        self.noise, self.params, self.limits = noise, params, limits
+        self.log_interval = log_interval
+        self._robots: dict[str, _Robot] = {}
+        self._steps = 0
+        self._lock = threading.RLock()
+        self.changed = threading.Condition(self._lock)
+        """Notified on every new command and every step, for runners and waiters."""
+
+    # ------------------------------------------------------------------ set-up
+    def add_robot(self, name: str, x: float = 0.0, y: float = 0.0, yaw_deg: float = 0.0,
+                  fault: Fault | str = NO_FAULT, camera: CameraMount | bool | None = None) -> None:
+        """Place robot ``name`` at (x, y) facing ``yaw_deg``; ``camera=True`` mounts a default camera."""
+        fault = Fault.parse(fault) if isinstance(fault, str) else fault
+        with self._lock:
+            if name in self._robots:
+                raise ValueError(f"robot {name!r} is already in the world")
+            key = zlib.crc32(name.encode())
+            rng = np.random.default_rng([self.seed, key]) if self.noise else None
+            base = kobuki.BaseState(x=x, y=y, yaw=math.radians(yaw_deg), time=self.time)
+            ticks = kobuki.encoder_ticks(base)
+            mount = CameraMount() if camera is True else (camera or None)
+            robot = _Robot(name, base, rng, np.random.default_rng([self.seed, key, 1]), fault, odometry.Odometry(ticks=ticks), ticks, camera=mount,
+                           next_frame=self.time)
+            self._robots[name] = robot
+            self._log(robot)
+
+    @property
+    def robots(self) -> list[str]:
+        with self._lock:
+            return list(self._robots)
+
+    @property
+    def time(self) -> float:
+        """Simulated seconds since the world started (exact multiple of ``dt``)."""
+        return self._steps * self.dt
+
+    def _robot(self, name: str) -> _Robot:
+        try:
+            return self._robots[name]
+        except KeyError:
+            raise KeyError(f"no robot {name!r} in the world (robots: {', '.join(self._robots) or 'none'})") \
+                from None
+
+    # ------------------------------------------------------------------ commands
+    def set_fault(self, name: str, fault: Fault | str) -> None:
+        """Inject ``fault`` into robot ``name`` from the next step on (``"none"`` repairs it)."""
+        fault = Fault.parse(fault) if isinstance(fault, str) else fault
+        with self._lock:
+            self._robot(name).fault = fault
+
+    def fault(self, name: str) -> Fault:
+        with self._lock:
+            return self._robot(name).fault
+
+    def reset_odometry(self, name: str) -> None:
+        with self._lock:
+            robot = self._robot(name)
+            robot.odom = odometry.reset(robot.odom)
+
+    def command(self, name: str, kind: str, args: tuple = ()) -> "Future[Completion]":
+        """Start motion ``kind`` (move, turn, rotate, stop) with normalized args; preempts the running one."""
+        future: Future[Completion] = Future()
+        with self._lock:
+            robot = self._robot(name)
+            previous = robot.pending
+            current = (robot.motion.linear, robot.motion.angular) if robot.motion else (0.0, 0.0)
+            robot.motion = motion.start(kind, args, robot.odom, self.time, current, self.limits)
+            robot.pending = future
+            self.changed.notify_all()
+        if previous is not None and not previous.done():
+            previous.set_result(Completion.failure("preempted", f"replaced by {kind}"))
+        return future
+
+    def cancel_all(self, reason: str = "shutdown", name: str | None = None) -> None:
+        """Fail pending actions (of robot ``name`` or all) with ``reason`` and stop their motions."""
+        with self._lock:
+            robots = [self._robot(name)] if name else list(self._robots.values())
+            pending = [r.pending for r in robots if r.pending is not None]
+            for robot in robots:
+                if robot.motion is not None:
+                    robot.command = kobuki.WheelSpeeds(0.0, 0.0)
+                robot.motion, robot.pending = None, None
+        for future in pending:
+            if not future.done():
+                future.set_result(Completion.failure(reason))
+
+    # ------------------------------------------------------------------ stepping
+    def busy(self) -> bool:
+        """True while some robot has a motion running or a wheel turning (time matters now)."""
+        with self._lock:
+            return any(r.motion is not None or kobuki.is_moving(r.base) for r in self._robots.values())
+
+    def step(self, steps: int = 1) -> None:
+        """Advance the world by ``steps`` x ``dt`` simulated seconds."""
+        for _ in range(steps):
+            with self._lock:
+                done = self._step_locked()
+                frames = self._due_frames()
+                self.changed.notify_all()
+            for future, completion in done:
+                if not future.done():
+                    future.set_result(completion)
+            for listeners, frame in frames:
+                for listener in listeners:
+                    listener(frame)
+
+    def run(self, seconds: float) -> None:
+        """Advance by ``seconds`` (rounded to whole steps)."""
+        self.step(max(0, round(seconds / self.dt)))
+
+    def run_until(self, done: Callable[[], bool], max_seconds: float) -> bool:
+        """Step until ``done()`` is true or ``max_seconds`` passed; returns ``done()``."""
+        end = self._steps + round(max_seconds / self.dt)
+        while not done() and self._steps < end:
+            self.step()
+        return done()
+
+    def run_until_idle(self, max_seconds: float = 60.0) -> bool:
+        """Step until no robot moves or has a motion; returns whether that happened."""
+        return self.run_until(lambda: not self.busy(), max_seconds)
+
+    def _step_locked(self) -> list[tuple[Future, Completion]]:
+        dt, done = self.dt, []
+        now = self.time
+        for robot in self._robots.values():
+            if robot.motion is not None:
+                robot.motion, wheels, completion = motion.control(
+                    robot.motion, robot.odom, now, dt, robot.bumper is not None, self.limits, self.params)
+                if wheels is not None:
+                    robot.command = wheels
+                if completion is not None and robot.pending is not None:
+                    done.append((robot.pending, completion))
+                    robot.pending = None
+            sent, robot.command = robot.command, None
+            base = faults.apply_to_base(robot.fault, robot.base)
+            moved = kobuki.step(base, faults.inject_command(robot.fault, sent), dt, robot.rng, self.params)
+            robot.base = self._collide(robot, base, moved)
+            robot.ticks = faults.inject_encoders(robot.fault, kobuki.encoder_ticks(robot.base), robot.ticks)
+            robot.odom = odometry.update(robot.odom, robot.ticks, dt, self.params)
+        self._steps += 1
+        if self.log_interval > 0:
+            every = max(1, round(self.log_interval / dt))
+            if self._steps % every == 0:
+                for robot in self._robots.values():
+                    self._log(robot)
+        return done
+
+    def _collide(self, robot: _Robot, before: kobuki.BaseState, after: kobuki.BaseState) -> kobuki.BaseState:
+        """Keep the robot out of walls, obstacles and other robots; wheels slip, the bumper reports."""
+        contact = self._contact(robot.name, after.x, after.y)
+        robot.bumper = None
+        if contact is None:
+            return after
+        # Bumpers are at the front: report the side of the contact direction relative to the heading.
+        bearing = math.degrees(math.atan2(contact[1], contact[0]) - after.yaw)
+        bearing = vocabulary.normalize_degrees(bearing)
+        if abs(bearing) < 90.0:
+            robot.bumper = "left" if bearing > 25.0 else "right" if bearing < -25.0 else "centre"
+        if self._contact(robot.name, before.x, before.y) is None:
+            return replace(after, x=before.x, y=before.y)
+        return after  # already overlapping (placed so): let it move out
+
+    def _contact(self, name: str, x: float, y: float) -> tuple[float, float] | None:
+        """Direction (dx, dy) towards the first thing a robot at (x, y) would overlap, or None."""
+        r = kobuki.ROBOT_RADIUS
+        xmin, ymin, xmax, ymax = self.arena
+        if x - r < xmin:
+            return (-1.0, 0.0)
+        if x + r > xmax:
+            return (1.0, 0.0)
+        if y - r < ymin:
+            return (0.0, -1.0)
+        if y + r > ymax:
+            return (0.0, 1.0)
+        circles = [(o.x, o.y, o.radius) for o in self.obstacles]
+        circles += [(o.base.x, o.base.y, r) for o in self._robots.values() if o.name != name]
+        for cx, cy, cr in circles:
+            if math.hypot(cx - x, cy - y) < cr + r:
+                return (cx - x, cy - y)
+        return None
+
+    def _log(self, robot: _Robot) -> None:
+        b, o = robot.base, robot.odom
+        robot.trajectory.append(TrajectoryPoint(
+            round(self.time, 9), b.x, b.y, math.degrees(b.yaw), o.x, o.y, math.degrees(o.yaw)))
+
+    # ------------------------------------------------------------------ observation
+    def pose(self, name: str) -> tuple[float, float, float]:
+        """Ground-truth pose (x m, y m, yaw deg): for evaluation, never for the robot's own decisions."""
+        with self._lock:
+            b = self._robot(name).base
+            return b.x, b.y, math.degrees(b.yaw)
+
+    def odometry(self, name: str) -> odometry.Odometry:
+        with self._lock:
+            return self._robot(name).odom
+
+    def base_state(self, name: str) -> kobuki.BaseState:
+        with self._lock:
+            return self._robot(name).base
+
+    def encoders(self, name: str) -> tuple[int, int]:
+        with self._lock:
+            return self._robot(name).ticks
+
+    def trajectory(self, name: str) -> list[TrajectoryPoint]:
+        """Ground truth and odometry of ``name``, every ``log_interval`` simulated seconds."""
+        with self._lock:
+            return list(self._robot(name).trajectory)
+
+    def percepts(self, name: str) -> list[Percept]:
+        """What robot ``name`` perceives of its own body now (see ``robot_bridge.percepts``)."""
+        with self._lock:
+            robot = self._robot(name)
+            o = robot.odom
+            still = (abs(o.speed[0]) < self.limits.still_linear and abs(o.speed[1]) < self.limits.still_angular)
+            found = [vocabulary.odom(o.x, o.y, math.degrees(o.yaw)), vocabulary.encoders(*robot.ticks),
+                     vocabulary.motion_state(not still)]
+            if robot.bumper:
+                found.append(vocabulary.bumper(robot.bumper))
+            for wheel, flag in zip(("left", "right"), kobuki.over_current(robot.base, self.params)):
+                if flag:
+                    found.append(vocabulary.over_current(wheel))
+            if robot.camera is not None and self.time - robot.last_frame <= 3.0 / robot.camera.rate_hz:
+                found.append(vocabulary.camera_ok())
+            return found
+
+    # ------------------------------------------------------------------ cameras
+    def subscribe_camera(self, name: str, listener: Callable[[CameraFrame], None]) -> Callable[[], None]:
+        """Call ``listener`` with each frame robot ``name``'s camera renders at its rate; returns unsubscribe."""
+        with self._lock:
+            robot = self._robot(name)
+            if robot.camera is None:
+                raise ValueError(f"robot {name!r} has no camera (add it with camera=True)")
+            robot.camera_listeners.append(listener)
+            robot.next_frame = max(robot.next_frame, self.time)
+
+        def unsubscribe() -> None:
+            with self._lock:
+                if listener in robot.camera_listeners:
+                    robot.camera_listeners.remove(listener)
+        return unsubscribe
+
+    def camera_frame(self, name: str) -> CameraFrame:
+        """Render robot ``name``'s camera view now (on demand, outside the frame rate)."""
+        with self._lock:
+            robot = self._robot(name)
+            if robot.camera is None:
+                raise ValueError(f"robot {name!r} has no camera (add it with camera=True)")
+            return self._render(robot)
+
+    def _due_frames(self) -> list[tuple[list, CameraFrame]]:
+        frames = []
+        for robot in self._robots.values():
+            if robot.camera_listeners and self.time + 1e-9 >= robot.next_frame:
+                robot.next_frame += 1.0 / robot.camera.rate_hz
+                frames.append((list(robot.camera_listeners), self._render(robot)))
+        return frames
+
+    def _render(self, robot: _Robot) -> CameraFrame:
+        from robot_bridge.sim import scene   # the renderer is heavy; only worlds with cameras need it
+        robot.last_frame = self.time
+        mount = robot.camera
+        b = robot.base
+        pose = (b.x + mount.forward * math.cos(b.yaw), b.y + mount.forward * math.sin(b.yaw), b.yaw)
+        others = [(o.name, o.base.x, o.base.y, o.base.yaw) for o in self._robots.values() if o is not robot]
+        rgb, depth = scene.render_view(self, robot.name, pose, mount.height, others, robot.camera_rng)
+        return CameraFrame(robot.name, self.time, pose, rgb, depth)
