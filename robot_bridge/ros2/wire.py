@@ -9,7 +9,12 @@ rclpy here, so the format is testable and readable without ROS.
     {"agent_name":"faulty","id":17,"result":false,"reason":"timeout"}
     {"agent_name":"","perception_name":"robot","parameters":["helper","-12","1.35","90"],"update":true}
 
-A percept may also arrive as rason's whole literal: ``{"agent_name":"","literal":"robot(a,1,2,3)"}``.
+A percept may also arrive as rason's whole literal: ``{"agent_name":"","literal":"robot(a,1,2,3)"}``,
+or as a snapshot of everything one source perceives now, replacing that source's previous snapshot
+(rason's ``perception`` message; percepts like ``moving``/``stopped`` exclude each other), valid for
+``ttl`` seconds so that a silent sensor's percepts disappear:
+
+    {"agent_name":"","source":"base","literals":["odom(0.5,0.0,0.0)","stopped"],"ttl":1.0}
 """
 from __future__ import annotations
 
@@ -20,7 +25,7 @@ from dataclasses import dataclass
 
 from robot_bridge.protocol import Percept, Value
 
-__all__ = ["WireError", "ActionRequest", "ActionStatus", "Perception", "format_value",
+__all__ = ["WireError", "ActionRequest", "ActionStatus", "Perception", "PerceptSnapshot", "decode_percepts", "format_value",
            "parse_value", "parse_literal", "format_literal"]
 
 
@@ -135,6 +140,39 @@ class Perception:
 
     def percept(self) -> Percept:
         return Percept(self.perception_name, tuple(parse_value(p) for p in self.parameters))
+
+
+@dataclass(frozen=True)
+class PerceptSnapshot:
+    """Robot → agent: all percepts of ``source`` now; replaces the previous snapshot of ``source``."""
+
+    agent_name: str
+    source: str
+    percepts: tuple[Percept, ...]
+    ttl: float | None = None
+
+    def to_json(self) -> str:
+        data: dict = {"agent_name": self.agent_name, "source": self.source,
+                      "literals": [format_literal(p) for p in self.percepts]}
+        if self.ttl is not None:
+            data["ttl"] = self.ttl
+        return _dump(data)
+
+    @classmethod
+    def from_json(cls, text: str) -> "PerceptSnapshot":
+        data = _load(text, {"source": str, "literals": list})
+        ttl = data.get("ttl")
+        if ttl is not None and (isinstance(ttl, bool) or not isinstance(ttl, (int, float))):
+            raise WireError(f"field 'ttl' must be a number of seconds in {text!r}")
+        return cls(str(data.get("agent_name", "")), data["source"],
+                   tuple(parse_literal(str(lit)) for lit in data["literals"]),
+                   None if ttl is None else float(ttl))
+
+
+def decode_percepts(text: str) -> "Perception | PerceptSnapshot":
+    """Whatever arrived on ``jason/percepts``: a single perception or a source's snapshot."""
+    data = _load(text, {})
+    return PerceptSnapshot.from_json(text) if "literals" in data else Perception.from_json(text)
 
 
 # --- term text <-> protocol values ------------------------------------------------------------

@@ -1,0 +1,251 @@
+"""``Ros2Bridge``: the agent side of the jason_ros convention over real rclpy.
+
+Per robot, in namespace ``/<robot>`` (relative names): publishes ``jason/actions``, listens to
+``jason/actions_status`` and ``jason/percepts`` (JSON in ``std_msgs/String``, see
+:mod:`robot_bridge.ros2.wire`). Each action carries an explicit id; its future resolves when the
+status with that id arrives (completion-based: the motion has finished), or fails with ``timeout``
+when the robot does not answer in time. Malformed or unknown actions fail at once, checked by the
+same :mod:`robot_bridge.actions` as every bridge.
+
+jason_ros manifests (``actions_manifest=``, ``perceptions_manifest=``) map further actions and
+percepts to plain ROS topics or services; such an action completes when its message is published
+(or its service answers), since a plain topic has no completion to wait for.
+
+    bridge = Ros2Bridge("faulty", domain_id=17)
+    bridge.setup(timeout=10)              # TimeoutError names the topic nothing answers on
+    bridge.act(Action("move", (0.5,))).result()   # Completion(ok=True)
+"""
+from __future__ import annotations
+
+import threading
+import time
+from concurrent.futures import Future
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from robot_bridge import actions
+from robot_bridge.protocol import Action, Completion, Percept, RobotBridge, completed
+from robot_bridge.ros2 import wire
+from robot_bridge.ros2.manifest import ActionMapping, PerceptionMapping, load_actions, load_perceptions
+
+ANSWER_MARGIN_S = 3.0
+"""How much longer than the motion's own time bound the bridge waits for the robot's answer."""
+
+
+def answer_timeout(action: Action, margin: float = ANSWER_MARGIN_S) -> float:
+    """Seconds to wait for the status of a (valid) action before failing it with ``timeout``."""
+    from robot_bridge.sim import motion
+    from robot_bridge.sim.odometry import Odometry
+
+    spec, args = actions.normalize(action)
+    if spec.motion:
+        bound = motion.start(spec.name, args, Odometry(), 0.0, (0.7, 3.0))
+        return bound.deadline + margin
+    return margin
+
+
+@dataclass
+class _Pending:
+    action: Action
+    future: "Future[Completion]"
+    deadline: float
+
+
+class Ros2Bridge(RobotBridge):
+    """Drives one robot through its ROS 2 nodes (``motion_decomposer`` and the percept synthesizers).
+
+    Options: ``namespace`` (default ``/<robot>``), ``agent_name`` (default the robot name),
+    ``domain_id`` (default ``ROS_DOMAIN_ID``), ``action_timeout`` (seconds; default from the
+    action's time bound), ``actions_manifest`` and ``perceptions_manifest`` (jason_ros INI files),
+    ``wait_for_robot`` (default true: ``setup`` waits until a decomposer listens).
+    """
+
+    name: ClassVar[str] = "ros2"
+
+    def __init__(self, robot: str, **options: Any) -> None:
+        super().__init__(robot, **options)
+        self.namespace = str(options.get("namespace") or f"/{robot}")
+        self.agent_name = str(options.get("agent_name") or robot)
+        self.domain_id = options.get("domain_id")
+        self.action_timeout = options.get("action_timeout")
+        manifest = options.get("actions_manifest")
+        self.action_map: dict[str, ActionMapping] = load_actions(manifest) if manifest else {}
+        manifest = options.get("perceptions_manifest")
+        self.perception_map: dict[str, PerceptionMapping] = load_perceptions(manifest) if manifest else {}
+        self._lock = threading.Lock()
+        self._pending: dict[int, _Pending] = {}
+        self._single: dict[tuple[str, int], list[Percept]] = {}
+        self._snapshots: dict[str, tuple[tuple[Percept, ...], float]] = {}
+        self._ros = None
+        self._node = None
+        self._publishers: dict[str, Any] = {}
+        self._clients: dict[str, Any] = {}
+
+    # --- life cycle --------------------------------------------------------------------------
+    def setup(self, timeout: float = 5.0) -> None:
+        from robot_bridge.ros2.runtime import require_ros
+        require_ros()                         # RosUnavailable (an ImportError) with the install hint
+        from std_msgs.msg import String
+
+        from robot_bridge.ros2.motion_decomposer import RELIABLE
+        from robot_bridge.ros2.runtime import RosContext, wait_for
+
+        domain = None if self.domain_id is None else int(self.domain_id)
+        self._ros = RosContext(domain_id=domain)
+        node_name = f"faultmas_agent_{self.agent_name}".replace("-", "_")
+        import rclpy
+        self._node = node = rclpy.create_node(node_name, namespace=self.namespace, context=self._ros.context)
+        self._actions = node.create_publisher(String, "jason/actions", RELIABLE)
+        node.create_subscription(String, "jason/actions_status", self._on_status, RELIABLE)
+        node.create_subscription(String, "jason/percepts", self._on_percepts, 50)
+        for mapping in self.action_map.values():
+            cls = mapping.message_class()
+            if mapping.method == "service":
+                self._clients[mapping.action] = node.create_client(cls, mapping.name)
+            else:
+                self._publishers[mapping.action] = node.create_publisher(cls, mapping.name, self._qos(mapping))
+        for mapping in self.perception_map.values():
+            node.create_subscription(mapping.message_class(), mapping.name,
+                                     lambda msg, m=mapping: self._on_mapped(m, msg), 10)
+        node.create_timer(0.05, self._expire)
+        self._ros.add(node)
+        self._ros.start()
+        if self.options.get("wait_for_robot", True):
+            topic = f"{self.namespace.rstrip('/')}/jason/actions"
+            if not wait_for(lambda: self._actions.get_subscription_count() > 0, timeout):
+                self.shutdown()
+                raise TimeoutError(f"no robot listens on {topic} after {timeout:g} s "
+                                   f"(is motion_decomposer running in domain {domain}?)")
+
+    @staticmethod
+    def _qos(mapping: ActionMapping):
+        from rclpy.qos import DurabilityPolicy, QoSProfile
+        if mapping.latch:
+            return QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        return QoSProfile(depth=10)
+
+    def shutdown(self) -> None:
+        with self._lock:
+            pending, self._pending = list(self._pending.values()), {}
+        for item in pending:
+            _resolve(item.future, Completion.failure("shutdown", f"{item.action} still running"))
+        if self._ros is not None:
+            self._ros.close()
+            self._ros = None
+
+    # --- actions -----------------------------------------------------------------------------
+    def act(self, action: Action) -> "Future[Completion]":
+        if self._ros is None or not self._ros.ok():
+            return completed(Completion.failure("shutdown", "the bridge is not set up"))
+        if action.name in self.action_map:
+            return self._act_mapped(self.action_map[action.name], action)
+        failure = actions.check(action)
+        if failure is not None:
+            return completed(failure)
+        if self._actions.get_subscription_count() == 0:
+            return completed(Completion.failure(
+                "timeout", f"nothing listens on {self.namespace.rstrip('/')}/jason/actions"))
+        limit = float(self.action_timeout) if self.action_timeout else answer_timeout(action)
+        future: Future[Completion] = Future()
+        with self._lock:
+            self._pending[action.id] = _Pending(action, future, time.monotonic() + limit)
+        request = wire.ActionRequest(self.agent_name, action.name,
+                                     tuple(wire.format_value(a) for a in action.args), action.id)
+        from std_msgs.msg import String
+        self._actions.publish(String(data=request.to_json()))
+        return future
+
+    def _act_mapped(self, mapping: ActionMapping, action: Action) -> "Future[Completion]":
+        try:
+            msg = mapping.build(action.args)
+        except ValueError as exc:
+            return completed(Completion.failure("bad_args", str(exc)))
+        if mapping.method == "topic":
+            self._publishers[mapping.action].publish(msg)
+            return completed(Completion.success())
+        client = self._clients[mapping.action]
+        if not client.service_is_ready():
+            return completed(Completion.failure("timeout", f"service {mapping.name} is not available"))
+        future: Future[Completion] = Future()
+        limit = float(self.action_timeout) if self.action_timeout else ANSWER_MARGIN_S
+        with self._lock:
+            self._pending[action.id] = _Pending(action, future, time.monotonic() + limit)
+
+        def done(call) -> None:
+            with self._lock:
+                self._pending.pop(action.id, None)
+            error = call.exception()
+            _resolve(future, Completion.success() if error is None
+                     else Completion.failure("unsupported", f"{mapping.name}: {error}"))
+        client.call_async(msg).add_done_callback(done)
+        return future
+
+    def _on_status(self, msg) -> None:
+        try:
+            status = wire.ActionStatus.from_json(msg.data)
+        except wire.WireError as exc:
+            self._node.get_logger().error(f"jason/actions_status: {exc}")
+            return
+        if status.agent_name not in ("", self.agent_name):
+            return
+        with self._lock:
+            item = self._pending.pop(status.id, None)
+        if item is not None:
+            _resolve(item.future, Completion.success() if status.result
+                     else Completion.failure(status.reason or "failed", status.detail))
+
+    def _expire(self) -> None:
+        now = time.monotonic()
+        with self._lock:
+            late = [i for i, p in self._pending.items() if p.deadline <= now]
+            items = [self._pending.pop(i) for i in late]
+        for item in items:
+            _resolve(item.future, Completion.failure(
+                "timeout", f"{self.namespace} did not answer {item.action} in time"))
+
+    # --- percepts ----------------------------------------------------------------------------
+    def _on_percepts(self, msg) -> None:
+        try:
+            data = wire.decode_percepts(msg.data)
+        except wire.WireError as exc:
+            self._node.get_logger().error(f"jason/percepts: {exc}")
+            return
+        if data.agent_name not in ("", self.agent_name):
+            return
+        if isinstance(data, wire.PerceptSnapshot):
+            expires = time.monotonic() + data.ttl if data.ttl is not None else float("inf")
+            with self._lock:
+                self._snapshots[data.source] = (data.percepts, expires)
+        else:
+            self._store(data.percept(), data.update)
+
+    def _on_mapped(self, mapping: PerceptionMapping, msg) -> None:
+        self._store(Percept(mapping.perception, mapping.values(msg)), mapping.update)
+
+    def _store(self, percept: Percept, update: bool) -> None:
+        key = (percept.name, len(percept.args))
+        with self._lock:
+            if update:
+                self._single[key] = [percept]
+            elif percept not in self._single.setdefault(key, []):
+                self._single[key].append(percept)
+
+    def percepts(self) -> list[Percept]:
+        now = time.monotonic()
+        with self._lock:
+            result = [p for group in self._single.values() for p in group]
+            for source, (items, expires) in list(self._snapshots.items()):
+                if expires < now:
+                    del self._snapshots[source]
+                else:
+                    result.extend(items)
+        return result
+
+
+def _resolve(future: "Future[Completion]", completion: Completion) -> None:
+    if not future.done():
+        try:
+            future.set_result(completion)
+        except Exception:         # resolved concurrently
+            pass
+
