@@ -1,0 +1,301 @@
+"""What every transport does the same way: local registration, checks and drops, counters, presence.
+
+A concrete transport (Zenoh, in-memory) only moves bytes and presence events; this base decides what
+is accepted. Callbacks from the network run on foreign threads, so everything handed to the agent
+layer goes through ``on_envelope`` callbacks that must not block (``Inbox`` is the standard one).
+"""
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+from abc import ABC, abstractmethod
+from collections import Counter
+from typing import Any, Callable, Iterable
+
+from agents.transport.envelope import DEFAULT_MAX_SIZE, BadMessage, Envelope, decode
+from agents.transport.keys import check_name
+from agents.transport.status import AgentStatus
+
+log = logging.getLogger("faultmas.transport")
+
+OnEnvelope = Callable[[Envelope], None]
+OnPresence = Callable[[str, bool], None]
+OnControl = Callable[[dict[str, Any]], None]
+OnStatus = Callable[[AgentStatus], None]
+
+
+class Inbox:
+    """A thread-safe mailbox: the network thread puts, the agent's thread takes; ``wake`` is called
+    after each put (e.g. to set the event the agent's reasoning loop sleeps on)."""
+
+    def __init__(self, wake: Callable[[], None] | None = None) -> None:
+        self._queue: queue.SimpleQueue[Envelope] = queue.SimpleQueue()
+        self._wake = wake
+
+    def __call__(self, envelope: Envelope) -> None:
+        self._queue.put(envelope)
+        if self._wake is not None:
+            self._wake()
+
+    def get(self, timeout: float | None = None) -> Envelope | None:
+        """The next envelope, waiting up to ``timeout`` seconds (``None`` when none came)."""
+        try:
+            return self._queue.get(timeout=timeout)
+        except queue.Empty:
+            return None
+
+    def drain(self) -> list[Envelope]:
+        """Every envelope waiting now, oldest first, without blocking."""
+        items = []
+        while True:
+            try:
+                items.append(self._queue.get_nowait())
+            except queue.Empty:
+                return items
+
+    def __len__(self) -> int:
+        return self._queue.qsize()
+
+
+class Presence:
+    """The set of live agents, fed by join/leave events that may repeat; reports each change once."""
+
+    def __init__(self) -> None:
+        self._alive: set[str] = set()
+        self._callbacks: list[OnPresence] = []
+        self._changed = threading.Condition()
+
+    def update(self, agent: str, alive: bool) -> None:
+        with self._changed:
+            if (agent in self._alive) == alive:
+                return  # a join seen twice (token + history) is reported once
+            (self._alive.add if alive else self._alive.discard)(agent)
+            callbacks = list(self._callbacks)
+            self._changed.notify_all()
+        for callback in callbacks:
+            _call_safely(callback, agent, alive)
+
+    def subscribe(self, callback: OnPresence) -> None:
+        """Call ``callback(agent, alive)`` on every change, first once per agent alive now."""
+        with self._changed:
+            self._callbacks.append(callback)
+            now = sorted(self._alive)
+        for agent in now:
+            _call_safely(callback, agent, True)
+
+    def alive(self) -> frozenset[str]:
+        with self._changed:
+            return frozenset(self._alive)
+
+    def wait_for(self, agents: Iterable[str], timeout: float, alive: bool = True) -> bool:
+        """Block until every agent in ``agents`` is alive (or, with ``alive=False``, gone)."""
+        wanted = set(agents)
+        with self._changed:
+            return self._changed.wait_for(
+                lambda: wanted <= self._alive if alive else not (wanted & self._alive), timeout)
+
+
+class _Encoded:
+    """The wire bytes of one envelope, computed on first use (a broadcast encodes once)."""
+
+    __slots__ = ("envelope", "payload")
+
+    def __init__(self, envelope: Envelope) -> None:
+        self.envelope = envelope
+        self.payload: bytes | None = None
+
+    def __call__(self) -> bytes:
+        if self.payload is None:
+            self.payload = self.envelope.encode()
+        return self.payload
+
+
+def _call_safely(callback: Callable[..., Any], *args: Any) -> None:
+    try:
+        callback(*args)
+    except Exception:  # a broken callback must not kill a network thread
+        log.exception("callback %r failed", callback)
+
+
+class Transport(ABC):
+    """The interface the agent runtime uses; see ``ZenohTransport`` and ``LocalTransport``.
+
+    ``send`` counts one *sent* message per reachable receiver, delivery counts one *received*;
+    ``dropped`` counts refused messages by reason (see ``envelope.DROP_REASONS``).
+    """
+
+    def __init__(self, mas: str, *, max_message_size: int = DEFAULT_MAX_SIZE) -> None:
+        self.mas = check_name(mas, "MAS name")
+        self.max_message_size = max_message_size
+        self.dropped: Counter[str] = Counter()
+        self.sent: Counter[str] = Counter()       # by sender
+        self.received: Counter[str] = Counter()   # by receiver
+        self._counters = threading.Lock()
+        self._agents: dict[str, OnEnvelope] = {}
+        self._presence = Presence()
+        self._control_callbacks: list[OnControl] = []
+        self._status_callbacks: list[OnStatus] = []
+        self._opened = False
+
+    # -- life cycle ---------------------------------------------------------------------------
+    def open(self) -> "Transport":
+        if not self._opened:
+            self._open()
+            self._opened = True
+        return self
+
+    def close(self) -> None:
+        if self._opened:
+            for agent in list(self._agents):
+                self.unregister(agent)
+            self._close()
+            self._opened = False
+
+    def __enter__(self) -> "Transport":
+        return self.open()
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- agents ----------------------------------------------------------------------------------
+    def register(self, agent: str, on_envelope: OnEnvelope) -> None:
+        """Receive ``agent``'s messages through ``on_envelope`` (must not block) and announce it alive."""
+        check_name(agent)
+        if not self._opened:
+            raise RuntimeError("open the transport before registering agents")
+        if agent in self._agents:
+            raise ValueError(f"agent {agent!r} is already registered in this process")
+        self._agents[agent] = on_envelope
+        self._attach(agent)
+
+    def unregister(self, agent: str) -> None:
+        """Stop receiving for ``agent`` and withdraw its presence."""
+        if self._agents.pop(agent, None) is not None:
+            self._detach(agent)
+
+    def local_agents(self) -> tuple[str, ...]:
+        return tuple(self._agents)
+
+    # -- messages --------------------------------------------------------------------------------
+    def send(self, envelope: Envelope) -> tuple[str, ...]:
+        """Send ``envelope`` to each of its receivers; return the receivers nobody listens for."""
+        if envelope.mas != self.mas:
+            raise ValueError(f"envelope for MAS {envelope.mas!r} sent on the transport of MAS {self.mas!r}")
+        unreachable = []
+        encoded = _Encoded(envelope)
+        for receiver in envelope.receivers:
+            if self._is_local(receiver):
+                reached = self._deliver(receiver, envelope)
+            else:
+                reached = self._put(receiver, envelope, encoded)
+            if reached:
+                with self._counters:
+                    self.sent[envelope.sender] += 1
+            else:
+                unreachable.append(receiver)
+        return tuple(unreachable)
+
+    def _is_local(self, receiver: str) -> bool:
+        """Local receivers are served without the network (FIFO per pair holds: always this path)."""
+        return receiver in self._agents
+
+    def receive_bytes(self, agent: str, payload: bytes, where: str = "") -> None:
+        """Check bytes that arrived for ``agent`` and deliver them, or drop them with one log line."""
+        try:
+            envelope = decode(payload, self.max_message_size)
+        except BadMessage as bad:
+            self._drop(bad.reason, where or agent, bad.sender, bad.detail)
+            return
+        if envelope.mas != self.mas:
+            self._drop("foreign_mas", where or agent, envelope.sender, f"MAS {envelope.mas!r}")
+        elif agent not in envelope.receivers:
+            self._drop("not_addressed", where or agent, envelope.sender, f"to {list(envelope.receivers)}")
+        else:
+            self._deliver(agent, envelope)
+
+    def _deliver(self, agent: str, envelope: Envelope) -> bool:
+        callback = self._agents.get(agent)
+        if callback is None:
+            return False
+        with self._counters:
+            self.received[agent] += 1
+        _call_safely(callback, envelope)
+        return True
+
+    def _drop(self, reason: str, where: str, sender: str | None, detail: str = "") -> None:
+        with self._counters:
+            self.dropped[reason] += 1
+        log.warning("dropped message on %s from %s: %s%s", where, sender or "unknown sender", reason,
+                    f" ({detail})" if detail else "")
+
+    # -- presence --------------------------------------------------------------------------------
+    def on_presence(self, callback: OnPresence) -> None:
+        """``callback(agent, alive)`` on each join/leave in this MAS (reported once each); agents
+        already alive are reported at once."""
+        self._presence.subscribe(callback)
+
+    def alive_agents(self) -> frozenset[str]:
+        return self._presence.alive()
+
+    def wait_for_agents(self, agents: Iterable[str], timeout: float = 10.0, alive: bool = True) -> bool:
+        """Wait until all ``agents`` are alive (or all gone with ``alive=False``); False on timeout."""
+        return self._presence.wait_for(agents, timeout, alive)
+
+    # -- control and status ----------------------------------------------------------------------
+    def publish_control(self, command: str, **fields: Any) -> None:
+        """Send a MAS-wide command (e.g. ``stop``) to every process of the MAS, this one included."""
+        self._publish_control({"command": command, **fields})
+
+    def on_control(self, callback: OnControl) -> None:
+        self._control_callbacks.append(callback)
+
+    def status_of(self, agent: str, busy: bool) -> AgentStatus:
+        with self._counters:
+            return AgentStatus(agent, busy, self.sent[agent], self.received[agent])
+
+    def publish_status(self, agent: str, busy: bool) -> AgentStatus:
+        """Publish ``agent``'s idle/busy state with its counters; also kept for status queries."""
+        status = self.status_of(agent, busy)
+        self._publish_status(status)
+        return status
+
+    def on_status(self, callback: OnStatus) -> None:
+        self._status_callbacks.append(callback)
+
+    def _control_received(self, message: dict[str, Any]) -> None:
+        for callback in list(self._control_callbacks):
+            _call_safely(callback, message)
+
+    def _status_received(self, status: AgentStatus) -> None:
+        for callback in list(self._status_callbacks):
+            _call_safely(callback, status)
+
+    @abstractmethod
+    def collect_status(self, timeout: float = 1.0) -> list[AgentStatus]:
+        """The latest published status of every agent of the MAS, in all processes."""
+
+    # -- what a concrete transport provides ------------------------------------------------------
+    @abstractmethod
+    def _open(self) -> None: ...
+
+    @abstractmethod
+    def _close(self) -> None: ...
+
+    @abstractmethod
+    def _attach(self, agent: str) -> None:
+        """Start receiving for ``agent``, then announce its presence (in that order)."""
+
+    @abstractmethod
+    def _detach(self, agent: str) -> None: ...
+
+    @abstractmethod
+    def _put(self, receiver: str, envelope: Envelope, encoded: "_Encoded") -> bool:
+        """Send to a receiver outside this transport; False when nobody listens for it.
+        ``encoded()`` gives the wire bytes, encoded once per envelope."""
+
+    @abstractmethod
+    def _publish_control(self, message: dict[str, Any]) -> None: ...
+
+    @abstractmethod
+    def _publish_status(self, status: AgentStatus) -> None: ...

@@ -1,0 +1,52 @@
+"""The Zenoh key expressions of a MAS: everything lives under ``faultmas/<mas>/`` so two MAS on one
+network never see each other's traffic, and an access-control rule can name one MAS by prefix."""
+from __future__ import annotations
+
+from agents.transport.envelope import is_valid_name
+
+ROOT = "faultmas"
+
+
+def check_name(name: str, what: str = "agent name") -> str:
+    """Return ``name`` if it can be a key-expression chunk, else raise ``ValueError`` saying why."""
+    if not is_valid_name(name):
+        raise ValueError(f"invalid {what} {name!r}: it must be non-empty, without '/', '*', '$', '?', '#' "
+                         "or white space")
+    return name
+
+
+def mas_prefix(mas: str) -> str:
+    return f"{ROOT}/{check_name(mas, 'MAS name')}"
+
+
+def inbox_key(mas: str, agent: str) -> str:
+    """Where speech acts for ``agent`` are put."""
+    return f"{mas_prefix(mas)}/agent/{check_name(agent)}/inbox"
+
+
+def alive_key(mas: str, agent: str) -> str:
+    """The liveliness token of ``agent``: present while its process and session are up."""
+    return f"{mas_prefix(mas)}/alive/{check_name(agent)}"
+
+
+def alive_pattern(mas: str) -> str:
+    return f"{mas_prefix(mas)}/alive/*"
+
+
+def control_key(mas: str) -> str:
+    """MAS-wide commands (``stop``), seen by every process of the MAS."""
+    return f"{mas_prefix(mas)}/control"
+
+
+def status_key(mas: str, agent: str) -> str:
+    """Idle/busy state and message counters of ``agent`` (put on change, and queryable)."""
+    return f"{mas_prefix(mas)}/status/{check_name(agent)}"
+
+
+def status_pattern(mas: str) -> str:
+    return f"{mas_prefix(mas)}/status/*"
+
+
+def last_chunk(key: str) -> str:
+    """The agent name at the end of an ``alive``/``status`` key."""
+    return key.rsplit("/", 1)[-1]

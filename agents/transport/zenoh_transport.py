@@ -1,0 +1,164 @@
+"""The Zenoh transport: ONE Zenoh session per process, shared by every agent of that process.
+
+Per agent: a subscriber on ``faultmas/<mas>/agent/<name>/inbox`` and a liveliness token
+``faultmas/<mas>/alive/<name>`` (declared after the subscriber, so whoever sees the token can already
+reach the inbox). Per process: a liveliness subscriber with history (presence), a subscriber on
+``faultmas/<mas>/control``, one on ``faultmas/<mas>/status/*`` and a queryable there that answers
+with the latest status of the local agents. Messages are put reliably with congestion control
+BLOCK on a cached publisher per receiver; agents of this process are served without the network.
+"""
+from __future__ import annotations
+
+import json
+import threading
+from typing import Any, Callable
+
+from agents.transport import keys
+from agents.transport.base import Transport, log
+from agents.transport.config import ZenohOptions, build_config, listen_endpoints
+from agents.transport.envelope import DEFAULT_MAX_SIZE, Envelope
+from agents.transport.status import AgentStatus
+
+
+class ZenohTransport(Transport):
+    """A ``Transport`` over a Zenoh session (its own, or one the process already has)."""
+
+    def __init__(self, mas: str, options: ZenohOptions | None = None, *, session: Any = None,
+                 max_message_size: int = DEFAULT_MAX_SIZE) -> None:
+        super().__init__(mas, max_message_size=max_message_size)
+        self.options = options or ZenohOptions()
+        self.session = session
+        self._owns_session = session is None
+        self.endpoints: list[str] = []
+        self._publishers: dict[str, Any] = {}
+        self._publish_lock = threading.Lock()
+        self._inboxes: dict[str, Any] = {}
+        self._tokens: dict[str, Any] = {}
+        self._statuses: dict[str, AgentStatus] = {}
+        self._declared: list[Any] = []
+
+    def _open(self) -> None:
+        import zenoh
+
+        if self.session is None:
+            config = build_config(self.options)
+            self.endpoints = listen_endpoints(config)
+            self.session = zenoh.open(config)
+        liveliness = self.session.liveliness()
+        self._declared = [
+            liveliness.declare_subscriber(keys.alive_pattern(self.mas), self._on_alive, history=True),
+            self.session.declare_subscriber(keys.control_key(self.mas), self._on_control),
+            self.session.declare_subscriber(keys.status_pattern(self.mas), self._on_status),
+            self.session.declare_queryable(keys.status_pattern(self.mas), self._on_status_query),
+        ]
+        self._control_publisher = self.session.declare_publisher(
+            keys.control_key(self.mas), congestion_control=zenoh.CongestionControl.BLOCK,
+            reliability=zenoh.Reliability.RELIABLE)
+
+    def _close(self) -> None:
+        for entity in [*self._publishers.values(), self._control_publisher, *self._declared]:
+            try:
+                entity.undeclare()
+            except Exception:  # already gone with the session
+                pass
+        self._publishers.clear()
+        self._declared = []
+        if self._owns_session:
+            self.session.close()
+            self.session = None
+
+    # -- agents ----------------------------------------------------------------------------------
+    def _attach(self, agent: str) -> None:
+        key = keys.inbox_key(self.mas, agent)
+        self._inboxes[agent] = self.session.declare_subscriber(
+            key, lambda sample: self.receive_bytes(agent, sample.payload.to_bytes(), key))
+        self._tokens[agent] = self.session.liveliness().declare_token(keys.alive_key(self.mas, agent))
+
+    def _detach(self, agent: str) -> None:
+        for table in (self._tokens, self._inboxes):  # presence first: nobody should send any more
+            entity = table.pop(agent, None)
+            if entity is not None:
+                entity.undeclare()
+        self._statuses.pop(agent, None)
+
+    def _put(self, receiver: str, envelope: Envelope, encoded: Callable[[], bytes]) -> bool:
+        publisher = self._publishers.get(receiver)
+        if publisher is None:
+            publisher = self._publisher(receiver)
+        if not publisher.matching_status.matching:
+            return False
+        publisher.put(encoded())
+        return True
+
+    def _publisher(self, receiver: str) -> Any:
+        import zenoh
+
+        with self._publish_lock:  # agents of this process may send from several threads
+            publisher = self._publishers.get(receiver)
+            if publisher is None:
+                publisher = self.session.declare_publisher(
+                    keys.inbox_key(self.mas, receiver),
+                    congestion_control=zenoh.CongestionControl.BLOCK,
+                    reliability=zenoh.Reliability.RELIABLE)
+                self._publishers[receiver] = publisher
+            return publisher
+
+    def put_raw(self, receiver: str, payload: bytes) -> None:
+        """Put arbitrary bytes on ``receiver``'s inbox (for tests and probes of the receiving side)."""
+        self._publisher(receiver).put(payload)
+
+    # -- network callbacks (Zenoh threads: never block, never raise) -----------------------------
+    def _on_alive(self, sample: Any) -> None:
+        import zenoh
+
+        agent = keys.last_chunk(str(sample.key_expr))
+        self._presence.update(agent, sample.kind == zenoh.SampleKind.PUT)
+
+    def _on_control(self, sample: Any) -> None:
+        try:
+            message = json.loads(sample.payload.to_bytes())
+            if not isinstance(message, dict) or not isinstance(message.get("command"), str):
+                raise ValueError("expected an object with a string 'command'")
+        except ValueError as exc:
+            self._drop("bad_control", str(sample.key_expr), None, str(exc)[:80])
+            return
+        self._control_received(message)
+
+    def _on_status(self, sample: Any) -> None:
+        try:
+            status = AgentStatus.decode(sample.payload.to_bytes())
+        except ValueError as exc:
+            self._drop("bad_status", str(sample.key_expr), None, str(exc)[:80])
+            return
+        self._status_received(status)
+
+    def _on_status_query(self, query: Any) -> None:
+        import zenoh
+
+        asked = zenoh.KeyExpr(str(query.key_expr))
+        for agent in list(self._agents):
+            key = keys.status_key(self.mas, agent)
+            if asked.intersects(zenoh.KeyExpr(key)):
+                status = self._statuses.get(agent) or self.status_of(agent, busy=False)
+                query.reply(key, status.encode())
+
+    # -- control and status ----------------------------------------------------------------------
+    def _publish_control(self, message: dict[str, Any]) -> None:
+        self._control_publisher.put(json.dumps(message, separators=(",", ":")))
+
+    def _publish_status(self, status: AgentStatus) -> None:
+        self._statuses[status.agent] = status
+        self.session.put(keys.status_key(self.mas, status.agent), status.encode())
+
+    def collect_status(self, timeout: float = 1.0) -> list[AgentStatus]:
+        statuses = {}
+        for reply in self.session.get(keys.status_pattern(self.mas), timeout=timeout):
+            if reply.ok is None:
+                continue
+            try:
+                status = AgentStatus.decode(reply.ok.payload.to_bytes())
+            except ValueError as exc:
+                log.warning("ignored a bad status reply on %s: %s", reply.ok.key_expr, exc)
+                continue
+            statuses[status.agent] = status
+        return sorted(statuses.values(), key=lambda s: s.agent)
