@@ -1,0 +1,136 @@
+"""Integration: real rclpy nodes of two robots in one process, isolated by a ROS domain of their own.
+
+One ROS graph for the module (start-up is the expensive part): for each robot ``kobuki_sim``,
+``fault_injector`` and ``motion_decomposer``; the helper also has ``camera_sim`` and
+``visual_synthesizer``. Agents talk to them only through :class:`Ros2Bridge` (its own rclpy
+context, as a separate agent process would). Everything waits by polling, never by fixed sleeps.
+"""
+from __future__ import annotations
+
+import math
+import os
+
+import pytest
+
+pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'faultmas[ros2]')")
+
+from robot_bridge.protocol import Action  # noqa: E402
+from robot_bridge.ros2.runtime import RosContext, wait_for  # noqa: E402
+
+DOMAIN = 1 + os.getpid() % 100          # unique per test run; 0..101 keeps Fast DDS off ephemeral ports
+FAULTY_START = (1.5, 0.0, 0.0)          # ahead of the helper, back to its camera
+
+
+@pytest.fixture(scope="module")
+def graph():
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    from robot_bridge.ros2.fault_injector import FaultInjector
+    from robot_bridge.ros2.kobuki_sim import KobukiSim
+    from robot_bridge.ros2.motion_decomposer import MotionDecomposer
+
+    ros = RosContext(domain_id=DOMAIN).start()
+    ctx = ros.context
+    nodes = {}
+    for robot, (x, y, yaw) in (("faulty", FAULTY_START), ("helper", (0.0, 0.0, 0.0))):
+        nodes[robot, "base"] = ros.add(KobukiSim(f"/{robot}", context=ctx, x=x, y=y, yaw=yaw, seed=3))
+        nodes[robot, "injector"] = ros.add(FaultInjector(f"/{robot}", context=ctx))
+        nodes[robot, "decomposer"] = ros.add(MotionDecomposer(f"/{robot}", context=ctx))
+    try:
+        yield ros, nodes
+    finally:
+        ros.close()
+
+
+@pytest.fixture(scope="module")
+def bridges(graph):
+    from robot_bridge.ros2.bridge import Ros2Bridge
+    made = {robot: Ros2Bridge(robot, domain_id=DOMAIN) for robot in ("faulty", "helper")}
+    for bridge in made.values():
+        bridge.setup(timeout=15.0)
+    try:
+        yield made
+    finally:
+        for bridge in made.values():
+            bridge.shutdown()
+
+
+def percept(bridge, name):
+    found = [p for p in bridge.percepts() if p.name == name]
+    return found[0] if found else None
+
+
+def test_move_through_jason_actions_reaches_the_base_and_completes(graph, bridges):
+    _, nodes = graph
+    base = nodes["faulty", "base"]
+    x0 = base.state.x
+    completion = bridges["faulty"].act(Action("move", (0.5,))).result(timeout=20)
+    assert completion.ok, completion
+    assert base.state.x - x0 == pytest.approx(0.5, abs=0.03)          # ground truth: the base moved
+    assert wait_for(lambda: percept(bridges["faulty"], "stopped") is not None, 5)
+    odom = percept(bridges["faulty"], "odom")
+    assert odom.args[0] == pytest.approx(0.5, abs=0.02)                # the robot's belief, as a percept
+
+
+def test_with_encoders_injected_the_base_moves_but_odom_does_not(graph, bridges):
+    _, nodes = graph
+    base, faulty = nodes["faulty", "base"], bridges["faulty"]
+    assert faulty.act(Action("set_fault", ("encoders",))).result(timeout=10).ok
+    assert nodes["faulty", "injector"].fault.kind == "encoders"
+    assert wait_for(lambda: base.fault.kind == "encoders", 10)          # latched faults/active reached it
+    odom_before = percept(faulty, "odom")
+    x0, ticks0 = base.state.x, base.ticks
+    completion = faulty.act(Action("move", (0.5,))).result(timeout=20)
+    try:
+        assert not completion.ok and completion.reason == "no_progress", completion
+        assert base.state.x - x0 > 0.05                                 # it drove ...
+        assert base.ticks == ticks0                                     # ... the encoders saw nothing
+        assert percept(faulty, "odom") == odom_before                  # ... nor did odometry
+    finally:
+        assert faulty.act(Action("set_fault", ("none",))).result(timeout=10).ok
+
+
+def test_fault_parameter_rejects_an_unknown_fault(graph, bridges):
+    completion = bridges["faulty"].act(Action("set_fault", ("gremlins",))).result(timeout=5)
+    assert (completion.ok, completion.reason) == (False, "bad_args")   # checked before it is sent
+
+
+def test_left_actuator_fault_bends_a_straight_move(graph, bridges):
+    _, nodes = graph
+    base, helper = nodes["helper", "base"], bridges["helper"]
+    assert helper.act(Action("set_fault", ("left_actuator", 0.5))).result(timeout=10).ok
+    try:
+        yaw0 = base.state.yaw
+        helper.act(Action("move", (0.3,))).result(timeout=20)
+        assert base.state.yaw - yaw0 > math.radians(10)               # weak left wheel: curves left
+    finally:
+        assert helper.act(Action("set_fault", ("none",))).result(timeout=10).ok
+        helper.act(Action("move", (-0.3,))).result(timeout=20)
+
+
+def test_unknown_and_malformed_actions_fail_at_once(bridges):
+    faulty = bridges["faulty"]
+    assert faulty.act(Action("fly", (1,))).result(timeout=0).reason == "unknown_action"
+    assert faulty.act(Action("move", ("far",))).result(timeout=0).reason == "bad_args"
+
+
+def test_a_robot_that_never_answers_gives_timeout(graph):
+    from std_msgs.msg import String
+
+    from robot_bridge.ros2.bridge import Ros2Bridge
+    ros, _ = graph
+    import rclpy
+    mute = ros.add(rclpy.create_node("mute", namespace="/mute", context=ros.context))
+    mute.create_subscription(String, "jason/actions", lambda msg: None, 10)
+    bridge = Ros2Bridge("mute", domain_id=DOMAIN, action_timeout=0.3)
+    bridge.setup(timeout=15.0)
+    try:
+        assert bridge.act(Action("stop")).result(timeout=10).reason == "timeout"
+    finally:
+        bridge.shutdown()
+
+
+def test_setup_names_the_topic_nobody_listens_on():
+    from robot_bridge.ros2.bridge import Ros2Bridge
+    bridge = Ros2Bridge("nobody", domain_id=DOMAIN)
+    with pytest.raises(TimeoutError, match="/nobody/jason/actions"):
+        bridge.setup(timeout=0.3)
