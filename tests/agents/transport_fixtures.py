@@ -1,0 +1,88 @@
+"""Shared set-up for the transport tests (imported explicitly; not a conftest): child processes that
+run ``agents.transport.probe`` or ``agents.router`` with the venv's Python, and polling helpers."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import threading
+import time
+import uuid
+from pathlib import Path
+from typing import Callable, Sequence
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def unique_mas(prefix: str = "t") -> str:
+    """A MAS name no other test uses, so tests sharing a session never see each other."""
+    return f"{prefix}{uuid.uuid4().hex[:8]}"
+
+
+def poll(condition: Callable[[], object], timeout: float = 10.0, interval: float = 0.005) -> bool:
+    """True as soon as ``condition()`` is truthy; False after ``timeout`` seconds."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if condition():
+            return True
+        time.sleep(interval)
+    return bool(condition())
+
+
+class Child:
+    """A child Python process that prints ``READY <endpoints>`` when it can be reached."""
+
+    def __init__(self, args: Sequence[str], ready_timeout: float = 30.0) -> None:
+        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        self.process = subprocess.Popen([sys.executable, *args], cwd=REPO, env=env, text=True,
+                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        self.lines: list[str] = []
+        self._new_line = threading.Condition()
+        threading.Thread(target=self._read, daemon=True).start()
+        ready = self.wait_line("READY", ready_timeout)
+        if ready is None:
+            self.stop()
+            raise RuntimeError(f"child {args} not ready: {self.process.stderr.read()[-2000:]}")
+        self.endpoints: list[str] = json.loads(ready.split(" ", 1)[1]) if " " in ready else []
+
+    def _read(self) -> None:
+        for line in self.process.stdout:
+            with self._new_line:
+                self.lines.append(line.rstrip("\n"))
+                self._new_line.notify_all()
+
+    def wait_line(self, prefix: str, timeout: float = 30.0) -> str | None:
+        """The first output line starting with ``prefix`` (waiting for it), or ``None``."""
+        def found() -> str | None:
+            return next((line for line in self.lines if line.startswith(prefix)), None)
+        with self._new_line:
+            self._new_line.wait_for(lambda: found() is not None or self.process.poll() is not None, timeout)
+            return found()
+
+    @property
+    def pid(self) -> int:
+        return self.process.pid
+
+    def stop(self, timeout: float = 10.0) -> int:
+        """Close standard input (the polite stop), then kill if it lingers; the exit code."""
+        try:
+            self.process.stdin.close()
+        except OSError:
+            pass
+        try:
+            return self.process.wait(timeout)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            return self.process.wait()
+
+
+def probe(mode: str, mas: str, name: str, connect: Sequence[str] = (), *extra: str) -> Child:
+    args = ["-m", "agents.transport.probe", mode, "--mas", mas, "--name", name]
+    for endpoint in connect:
+        args += ["--connect", endpoint]
+    return Child([*args, *extra])
+
+
+def router(listen: str, *extra: str) -> Child:
+    return Child(["-m", "agents.router", "--listen", listen, *extra])
