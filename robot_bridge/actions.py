@@ -9,9 +9,9 @@ positive, as in ROS (REP 103).
 action                      meaning and completion
 =========================== ============================================================================
 ``move(M)``                 drive straight ``M`` metres (negative: backwards) at 0.2 m/s; succeeds when the
-``move(M, MPerS)``          robot's own odometry has driven ``|M|`` (within 1 cm)
+``move(M, MPerS)``          robot's own odometry has driven ``|M|`` (within 5 mm)
 ``turn(D)``                 rotate in place by ``D`` degrees at 45 deg/s; succeeds when odometry has turned
-``turn(D, DPerS)``          ``D`` (within 1 degree)
+``turn(D, DPerS)``          ``D`` (within 0.5 degree)
 ``rotate(DPerS)``           start a continuous rotation in place (searching for a partner): succeeds once
                             odometry shows the rotation under way; it goes on until ``stop`` or another
                             motion
