@@ -96,12 +96,11 @@ class RobotLook:
 
 @dataclass(frozen=True)
 class DepthSensor:
-    """Kinect v1 depth behaviour (Nguyen et al. 2012 axial noise; 1/8 px disparity steps)."""
+    """Kinect v1 depth behaviour: disparity noise (so depth noise grows as z^2), 1/8 px disparity steps."""
 
     min_m: float = 0.8
     max_m: float = 4.5
-    noise_a_m: float = 0.0012               # sigma(z) = a + b (z - 0.4)^2
-    noise_b_per_m: float = 0.0019
+    disparity_noise_px: float = 0.07        # ~ Nguyen et al. 2012: sigma_z = 0.0012 + 0.0019 (z - 0.4)^2
     noise_blur_px: float = 1.0              # spatial correlation of the noise (block matching)
     focal_baseline_px_m: float = 580.0 * 0.075
     subpixel: int = 8
@@ -201,8 +200,8 @@ class _Renderer:
         cam = rig.camera
         self.rig, self.cam, self.sensor = rig, cam, sensor
         h, w = cam.height, cam.width
-        self.tan_u = ((np.arange(w) - cam.cx) / cam.fx).astype(np.float64)          # x / z per column
-        self.k_v = ((np.arange(h) - cam.cy) / cam.fy).astype(np.float64)            # (down) / z per row
+        self.tan_u = ((np.arange(w) - cam.cx) / cam.fx).astype(np.float32)          # x / z per column
+        self.k_v = ((np.arange(h) - cam.cy) / cam.fy).astype(np.float32)            # (down) / z per row
         with np.errstate(divide="ignore"):
             floor = np.where(self.k_v > 0, rig.height_m / self.k_v, np.inf)
         self.floor_z = floor.astype(np.float32)[:, None]
@@ -216,8 +215,8 @@ class _Renderer:
         if sensor.noise_blur_px > 0:
             white = cv2.GaussianBlur(white, (0, 0), sensor.noise_blur_px)
             white /= white.std()
-        self.depth_bank = white
-        self.hole_bank = rng.random((h + extra, w + extra)) < sensor.dropout
+        self.disparity_bank = white * np.float32(sensor.disparity_noise_px * sensor.subpixel)
+        self.keep_bank = np.where(rng.random((h + extra, w + extra)) < sensor.dropout, 0, 255).astype(np.uint8)
         colour = rng.normal(0.0, 1.0, (h + extra, w, 3)).astype(np.float32)
         self.colour_bank_unit = colour
         self._colour_cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
@@ -234,6 +233,12 @@ class _Renderer:
 @lru_cache(maxsize=32)
 def _renderer(rig: CameraRig, sensor: DepthSensor) -> _Renderer:
     return _Renderer(rig, sensor)
+
+
+def _pack(rgb) -> np.ndarray:
+    """RGB values (..., 3), any real type, -> packed little-endian uint32 (R in the lowest byte)."""
+    c = np.clip(np.rint(np.asarray(rgb, np.float64)), 0, 255).astype(np.uint32)
+    return c[..., 0] | (c[..., 1] << 8) | (c[..., 2] << 16) | np.uint32(0xFF000000)
 
 
 def render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Scene,
@@ -258,43 +263,44 @@ def render_with_pixels(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose]
     h, w = cam.height, cam.width
     hc = rig.height_m
 
-    # walls: depth per column
+    gain = float(scene.gain)
+    # walls: depth per column; the background (floor rows, wall columns, backdrop) composited as
+    # packed 0xXXBBGGRR uint32 pixels, which numpy and OpenCV move far faster than 3-channel bytes
     wall_z, wall_idx = _wall_depths(r, camera_pose, scene.walls)
     wall_top = np.array([wl.height_m for wl in scene.walls] + [0.0])[wall_idx]
-    kz = r.k_v32 * wall_z[None, :].astype(np.float32)                      # (hc - height) at the wall
-    is_wall = (kz <= hc) & (kz >= (hc - wall_top)[None, :].astype(np.float32))
-    is_floor = ~is_wall & (r.k_v32 > 0)
-    depth = np.where(is_wall, wall_z[None, :].astype(np.float32), np.where(is_floor, r.floor_z, _FAR))
+    wz32 = wall_z.astype(np.float32)[None, :]
+    kz = r.k_v32 * wz32                                                    # (hc - height) at the wall
+    is_wall = ((kz <= hc) & (kz >= (hc - wall_top).astype(np.float32)[None, :])).view(np.uint8)
+    floor_row = np.where(r.k_v > 0, 1.0, 0.0)[:, None]
+    row_rgb = (floor_row * np.asarray(scene.floor_rgb) * r.floor_shade
+               + (1 - floor_row) * np.asarray(scene.backdrop_rgb))
+    packed = np.repeat(_pack(row_rgb * gain)[:, None], w, axis=1)
+    cv2.copyTo(np.tile(_pack(_wall_colours(r, camera_pose, scene.walls, wall_idx, wall_z) * gain)[None, :],
+                       (h, 1)).view(np.uint8).reshape(h, w, 4), is_wall, packed.view(np.uint8).reshape(h, w, 4))
+    depth = np.repeat(r.floor_z, w, axis=1)
+    cv2.copyTo(np.repeat(wz32, h, axis=0), is_wall, depth)
 
-    wall_rgb = _wall_colours(r, camera_pose, scene.walls, wall_idx, wall_z)               # W x 3
-    floor_rgb = (np.asarray(scene.floor_rgb, np.float32)[None, :] * r.floor_shade).astype(np.uint8)
-    sky = np.asarray(scene.backdrop_rgb, np.uint8)
-    back = np.where(is_floor[:, :, None], floor_rgb[:, None, :], sky[None, None, :])
-    image = np.where(is_wall[:, :, None], wall_rgb[None, :, :], back)
-
-    # objects: robots (body + markers) and props, nearest drawn last is not needed: depth test per pixel
+    # objects: robots (body + markers) and props, with a depth test per pixel
     prisms, n_labels = _prisms(rig, camera_pose, robots, scene)
     labels = np.zeros((h, w), np.int16) if n_labels else None
     full = np.zeros(n_labels + 1, np.int64)
     shadows: list[tuple[int, int, int, float]] = []
+    bands: dict[int, tuple[int, int, int, int]] = {}
     for p in prisms:
-        _draw_prism(r, p, depth, image, labels, full, shadows)
+        _draw_prism(r, p, depth, packed, labels, full, shadows, gain, bands)
 
-    # illumination and colour noise (saturating uint8 arithmetic)
-    if scene.gain != 1.0:
-        image = cv2.convertScaleAbs(image, alpha=scene.gain)
+    image = cv2.cvtColor(packed.view(np.uint8).reshape(h, w, 4), cv2.COLOR_RGBA2RGB)
     if scene.rgb_noise > 0:
         pos, neg = r.colour_noise(float(scene.rgb_noise))
         off = int(rng.integers(0, r.extra))
         image = cv2.subtract(cv2.add(image, pos[off:off + h]), neg[off:off + h])
 
     noisy = _depth_noise(r, depth, shadows, rng)
-    pixels = []
-    if labels is not None:
-        counts = np.bincount(labels.ravel(), minlength=n_labels + 1)
-        for i in range(len(robots)):
-            a, b = 1 + 2 * i, 2 + 2 * i
-            pixels.append(MarkerPixels(int(counts[a]), int(full[a]), int(counts[b]), int(full[b])))
+    visible = np.zeros(n_labels + 1, np.int64)
+    for label, (v0, v1, u0, u1) in bands.items():
+        visible[label] = int(np.count_nonzero(labels[v0:v1, u0:u1] == label))
+    pixels = [MarkerPixels(int(visible[1 + 2 * i]), int(full[1 + 2 * i]), int(visible[2 + 2 * i]),
+                           int(full[2 + 2 * i])) for i in range(len(robots))]
     return image, noisy, pixels
 
 
@@ -419,11 +425,12 @@ def _entry_exit(r: _Renderer, p: _Prism) -> tuple[int, int, np.ndarray, np.ndarr
         bad = t1 > t2
         t1 = np.where(bad, np.inf, t1)
         t2 = np.where(bad, -np.inf, t2)
-    return u0, u1, t1, t2
+    return u0, u1, t1.astype(np.float32), t2.astype(np.float32)
 
 
 def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, labels: np.ndarray | None,
-                full: np.ndarray, shadows: list) -> None:
+                full: np.ndarray, shadows: list, gain: float, bands: dict) -> None:
+    """Z-buffer one prism into the depth and packed-colour images (only its band of columns and rows)."""
     span = _entry_exit(r, p)
     if span is None:
         return
@@ -445,39 +452,42 @@ def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, l
         qa, qb = a / k, b / k
     pos, neg = k > 0, k < 0
     inside0 = (a <= 0) & (0 <= b)
-    lo = np.where(pos, qa, np.where(neg, qb, -np.inf if inside0 else np.inf))[:, None]
-    hi = np.where(pos, qb, np.where(neg, qa, np.inf if inside0 else -np.inf))[:, None]
+    lo = np.where(pos, qa, np.where(neg, qb, -np.inf if inside0 else np.inf)).astype(np.float32)[:, None]
+    hi = np.where(pos, qb, np.where(neg, qa, np.inf if inside0 else -np.inf)).astype(np.float32)[:, None]
     t1c, t2c = t1[None, :], t2[None, :]
     zhit = np.maximum(t1c, lo)
-    hit = (zhit <= np.minimum(t2c, hi)) & (zhit > _NEAR_M)
+    hit = zhit <= np.minimum(t2c, hi)
     if p.label:
-        full[p.label] += int(hit.sum())
+        full[p.label] += int(np.count_nonzero(hit))
+        bands[p.label] = (v0, v1, u0, u1)
     region = depth[v0:v1, u0:u1]
-    closer = hit & (zhit < region)
+    closer = (zhit < region) & hit
     if not closer.any():
         return
     face = t1c >= lo
     # shading: vertical faces by the angle between normal and view ray, caps flat
     tau = r.tan_u[u0:u1]
     if p.footprint == "circle":
-        xh, zh = t1 * tau, t1
+        t1f = np.where(np.isfinite(t1), t1, 0.0)
+        xh, zh = t1f * tau, t1f
         nx, nz = (xh - p.cam_xz[0]) / p.radius, (zh - p.cam_xz[1]) / p.radius
     else:
         ax, az = p.axis
         bx, bz = az, -ax
-        xh, zh = t1 * tau - p.cam_xz[0], t1 - p.cam_xz[1]
+        t1f = np.where(np.isfinite(t1), t1, 0.0)
+        xh, zh = t1f * tau - p.cam_xz[0], t1f - p.cam_xz[1]
         u_ax = xh * ax + zh * az
         u_bx = xh * bx + zh * bz
         on_len = np.abs(np.abs(u_ax) - p.half[0]) < np.abs(np.abs(u_bx) - p.half[1])
         nx = np.where(on_len, np.sign(u_ax) * ax, np.sign(u_bx) * bx)
         nz = np.where(on_len, np.sign(u_ax) * az, np.sign(u_bx) * bz)
-    view = np.nan_to_num(-(nx * tau + nz) / np.sqrt(1 + tau * tau))
-    face_shade = 0.62 + 0.38 * np.clip(view, 0, 1)
-    cap_shade = 0.9 if p.top < hc else 0.45            # a lit top, or an underside in shadow
-    shade = np.where(face, face_shade[None, :], cap_shade).astype(np.float32)
-    col = np.clip(shade[:, :, None] * np.asarray(p.rgb, np.float32)[None, None, :], 0, 255).astype(np.uint8)
-    region[closer] = zhit[closer].astype(np.float32)
-    image[v0:v1, u0:u1][closer] = col[closer]
+    with np.errstate(invalid="ignore"):
+        view = np.nan_to_num(-(nx * tau + nz) / np.sqrt(1 + tau * tau))
+    face_col = _pack((0.62 + 0.38 * np.clip(view, 0, 1))[:, None] * np.asarray(p.rgb) * gain)
+    cap_col = _pack(np.asarray(p.rgb) * ((0.9 if p.top < hc else 0.45) * gain))   # lit top / dark underside
+    region[closer] = zhit[closer]
+    out = image[v0:v1, u0:u1]
+    out[closer] = np.where(face, face_col[None, :], cap_col)[closer]
     if labels is not None:
         lab = labels[v0:v1, u0:u1]
         lab[closer] = p.label
@@ -486,6 +496,8 @@ def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, l
 
 def _depth_noise(r: _Renderer, depth: np.ndarray, shadows: list, rng: np.random.Generator) -> np.ndarray:
     """Kinect-like measurement of the true depth: shadows, noise, quantisation, holes, range limits."""
+    import cv2
+
     s = r.sensor
     h, w = depth.shape
     z = depth
@@ -503,18 +515,17 @@ def _depth_noise(r: _Renderer, depth: np.ndarray, shadows: list, rng: np.random.
             with np.errstate(divide="ignore"):
                 gap = s.focal_baseline_px_m * (1 / zf - 1 / blk)
             blk[(blk > zf + 0.05) & ((u_left - cols[a:u_left])[None, :] <= gap)] = np.inf
+
     oy, ox = int(rng.integers(0, r.extra)), int(rng.integers(0, r.extra))
-    noise = r.depth_bank[oy:oy + h, ox:ox + w]
-    d = z - np.float32(0.4)
-    sigma = np.float32(s.noise_a_m) + np.float32(s.noise_b_per_m) * d * d
-    with np.errstate(invalid="ignore", over="ignore"):
-        zn = z + sigma * noise
-        fb = np.float32(s.focal_baseline_px_m * s.subpixel)
-        disp = np.rint(fb / zn)
+    fb = np.float32(s.focal_baseline_px_m * s.subpixel)           # disparity in 1/subpixel steps
+    with np.errstate(divide="ignore"):
+        disp = fb / z                                               # no surface (inf) -> 0 disparity
+        disp += r.disparity_bank[oy:oy + h, ox:ox + w]
+        np.rint(disp, out=disp)
         zq = fb / disp
-    valid = np.isfinite(z) & (z >= s.min_m) & (z <= s.max_m) & (disp > 0)
-    valid &= ~r.hole_bank[oy:oy + h, ox:ox + w]
-    out = np.where(valid, zq, np.float32(0)).astype(np.float32)
+    valid = cv2.inRange(zq, float(s.min_m), float(s.max_m))        # also drops inf and negatives
+    valid = cv2.bitwise_and(valid, r.keep_bank[oy:oy + h, ox:ox + w])
+    out = cv2.copyTo(zq, valid)
     if s.registration_px:
         k = s.registration_px
         out[:, k:] = out[:, :-k].copy()
