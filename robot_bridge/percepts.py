@@ -67,7 +67,7 @@ def normalize_degrees(angle: float) -> float:
 
 def odom(x: float, y: float, yaw_deg: float) -> Percept:
     """``odom(X, Y, YawDeg)``: believed pose, rounded to 1 mm and 0.1 degree."""
-    return Percept("odom", (round(x, 3), round(y, 3), round(normalize_degrees(yaw_deg), 1)))
+    return Percept("odom", (round(float(x), 3), round(float(y), 3), round(normalize_degrees(float(yaw_deg)), 1)))
 
 
 def encoders(left_ticks: int, right_ticks: int) -> Percept:
