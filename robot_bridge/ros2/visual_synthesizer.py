@@ -51,6 +51,16 @@ def seen(detection: object, name: str) -> Percept:
                                -float(detection.yaw_deg))
 
 
+def _load_detector(logger):
+    """``perception.detect.detect``; without it the node still reports ``camera_ok`` (frames arrive)."""
+    try:
+        from perception.detect import detect
+    except ImportError as exc:
+        logger.error(f"perception.detect is not available ({exc}): reporting camera_ok only")
+        return lambda rgb, depth, camera: []
+    return detect
+
+
 class VisualSynthesizer(Node):
     """Detects the other robot's markers in every frame and reports what it sees."""
 
@@ -66,8 +76,7 @@ class VisualSynthesizer(Node):
         self.depth: np.ndarray | None = None
         self.frames = 0
         self.last: list[Percept] = []
-        from perception.detect import detect          # OpenCV; the perception engineer's detector
-        self._detect = detect
+        self._detect = _load_detector(self.get_logger())
         self.create_subscription(CameraInfo, "camera/rgb/camera_info", self._on_info, qos_profile_sensor_data)
         self.create_subscription(Image, "camera/depth_registered/image_raw", self._on_depth, qos_profile_sensor_data)
         self.create_subscription(Image, "camera/rgb/image_raw", self._on_rgb, qos_profile_sensor_data)

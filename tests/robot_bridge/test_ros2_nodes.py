@@ -134,3 +134,33 @@ def test_setup_names_the_topic_nobody_listens_on():
     bridge = Ros2Bridge("nobody", domain_id=DOMAIN)
     with pytest.raises(TimeoutError, match="/nobody/jason/actions"):
         bridge.setup(timeout=0.3)
+
+
+@pytest.fixture(scope="module")
+def camera(graph):
+    """The helper's camera and visual synthesizer, added to the running graph."""
+    from robot_bridge.ros2.camera_sim import CameraSim
+    from robot_bridge.ros2.visual_synthesizer import VisualSynthesizer
+    ros, nodes = graph
+    team = ["faulty", "helper"]
+    sim = ros.add(CameraSim("/helper", context=ros.context, robots=team, rate=5.0, seed=1))
+    synth = ros.add(VisualSynthesizer("/helper", context=ros.context, robots=team))
+    return sim, synth
+
+
+def test_a_camera_frame_reaches_visual_synthesizer_and_a_percept_comes_out(camera, bridges):
+    sim, synth = camera
+    assert wait_for(lambda: synth.frames > 0, 20), f"camera_sim rendered {sim.frames} frames"
+    assert wait_for(lambda: percept(bridges["helper"], "camera_ok") is not None, 10)
+    assert percept(bridges["faulty"], "camera_ok") is None           # the faulty robot has no camera here
+
+
+def test_the_helper_sees_the_faulty_robot_where_it_is(graph, camera, bridges):
+    pytest.importorskip("perception.detect", reason="the perception detector is not built yet")
+    _, nodes = graph
+    assert wait_for(lambda: percept(bridges["helper"], "robot_seen") is not None, 20)
+    seen = percept(bridges["helper"], "robot_seen")
+    helper, faulty = nodes["helper", "base"].state, nodes["faulty", "base"].state
+    assert seen.args[0] == "faulty"
+    assert seen.args[2] == pytest.approx(math.hypot(faulty.x - helper.x, faulty.y - helper.y), abs=0.2)
+    assert abs(seen.args[1]) < 10                                       # straight ahead
