@@ -33,18 +33,19 @@ def poll(condition: Callable[[], object], timeout: float = 10.0, interval: float
 class Child:
     """A child Python process that prints ``READY <endpoints>`` when it can be reached."""
 
-    def __init__(self, args: Sequence[str], ready_timeout: float = 30.0) -> None:
+    def __init__(self, args: Sequence[str], ready_prefix: str = "READY", ready_timeout: float = 30.0) -> None:
         env = dict(os.environ, PYTHONUNBUFFERED="1")
         self.process = subprocess.Popen([sys.executable, *args], cwd=REPO, env=env, text=True,
                                         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         self.lines: list[str] = []
         self._new_line = threading.Condition()
         threading.Thread(target=self._read, daemon=True).start()
-        ready = self.wait_line("READY", ready_timeout)
+        ready = self.wait_line(ready_prefix, ready_timeout)
         if ready is None:
             self.stop()
             raise RuntimeError(f"child {args} not ready: {self.process.stderr.read()[-2000:]}")
-        self.endpoints: list[str] = json.loads(ready.split(" ", 1)[1]) if " " in ready else []
+        self.endpoints: list[str] = (json.loads(ready.split(" ", 1)[1]) if ready.startswith("READY ")
+                                     else ready.split(" listening on ", 1)[-1].split())
 
     def _read(self) -> None:
         for line in self.process.stdout:
@@ -85,4 +86,4 @@ def probe(mode: str, mas: str, name: str, connect: Sequence[str] = (), *extra: s
 
 
 def router(listen: str, *extra: str) -> Child:
-    return Child(["-m", "agents.router", "--listen", listen, *extra])
+    return Child(["-m", "agents.router", "--listen", listen, *extra], ready_prefix="faultmas router")
