@@ -7,8 +7,12 @@ thread paces the shared clock (see ``runner.py`` for how simulated time relates 
 
 Options (all optional): ``world``, ``speed`` (0 = as fast as possible), ``seed``, ``x``, ``y``,
 ``yaw_deg`` (start pose, used when the robot is not in the world yet), ``fault`` (e.g.
-``"left_actuator:0.5"``), ``camera`` (mount a camera), ``drive`` (False: nobody runs the clock, the
-caller steps the world itself, for deterministic tests).
+``"left_actuator:0.5"``), ``camera`` (mount a camera and perceive through it), ``observed`` (the name
+to give a robot the camera sees: markers carry no name; default: the only other robot, else ``robot``),
+``drive`` (False: nobody runs the clock, the caller steps the world itself, for deterministic tests).
+
+With a camera, frames rendered at the camera's rate go through ``perception.detect`` exactly as a real
+camera's frames would, and each detection becomes a ``robot_seen`` percept that lasts ``FRAME_TTL_S``.
 """
 from __future__ import annotations
 
@@ -16,12 +20,15 @@ import logging
 from concurrent.futures import Future
 from typing import ClassVar
 
-from robot_bridge import actions
+from robot_bridge import actions, percepts
 from robot_bridge.protocol import Action, Completion, Percept, RobotBridge, completed
 from robot_bridge.sim.runner import WorldRunner, shared_runner
-from robot_bridge.sim.world import World
+from robot_bridge.sim.world import CameraFrame, World
 
 log = logging.getLogger(__name__)
+
+FRAME_TTL_S = 1.0
+"""Camera percepts vanish this long (simulated seconds) after the frame that produced them."""
 
 
 class SimBridge(RobotBridge):
@@ -31,20 +38,26 @@ class SimBridge(RobotBridge):
 
     def __init__(self, robot: str, world: World | None = None, speed: float = 0.0, seed: int = 0,
                  x: float = 0.0, y: float = 0.0, yaw_deg: float = 0.0, fault: str = "none",
-                 camera: bool = False, drive: bool = True, **options: object) -> None:
+                 camera: bool = False, observed: str = "", drive: bool = True, **options: object) -> None:
         super().__init__(robot, **options)
         if speed < 0:
             raise ValueError(f"speed must be >= 0 (0 = as fast as possible), got {speed!r}")
         self.world = world if world is not None else World(seed=seed)
         self.speed, self.drive = float(speed), drive
         self._placement = dict(x=float(x), y=float(y), yaw_deg=float(yaw_deg), fault=fault, camera=camera)
+        self.observed = observed
         self._runner: WorldRunner | None = None
         self._ready = False
+        self._seen: tuple[float, list[Percept]] = (-1.0, [])
+        self._unsubscribe = None
 
     def setup(self, timeout: float = 5.0) -> None:
         """Put the robot into the world (unless already there) and start the shared clock."""
         if self.robot not in self.world.robots:
             self.world.add_robot(self.robot, **self._placement)
+        if self._placement["camera"]:
+            self._detect = _load_detector()
+            self._unsubscribe = self.world.subscribe_camera(self.robot, self._on_frame)
         if self.drive:
             self._runner = shared_runner(self.world, self.speed)
             self._runner.acquire()
@@ -71,13 +84,42 @@ class SimBridge(RobotBridge):
     def percepts(self) -> list[Percept]:
         if not self._ready:
             return []
-        return self.world.percepts(self.robot)
+        found = self.world.percepts(self.robot)
+        taken, seen = self._seen
+        if seen and self.world.time - taken <= FRAME_TTL_S:
+            found += seen
+        return found
+
+    def _on_frame(self, frame: CameraFrame) -> None:
+        """A new camera frame: detect robots in its pixels, as a real camera's frame would be."""
+        name = self.observed or self._only_other() or "robot"
+        best = self._detect(frame.rgb, frame.depth, frame.camera)
+        self._seen = (frame.time, [percepts.robot_seen(name, -best.angle_deg, best.depth_m, -best.yaw_deg)]
+                      if best is not None else [])
+
+    def _only_other(self) -> str:
+        others = [r for r in self.world.robots if r != self.robot]
+        return others[0] if len(others) == 1 else ""
 
     def shutdown(self) -> None:
         if not self._ready:
             return
         self._ready = False
         self.world.cancel_all("shutdown", name=self.robot)
+        if self._unsubscribe is not None:
+            self._unsubscribe()
+            self._unsubscribe = None
         if self._runner is not None:
             self._runner.release()
             self._runner = None
+
+
+def _load_detector():
+    """The best robot in a frame per ``perception.detect`` (optical frame: angles positive to the right),
+    or None; without that module the camera reports ``camera_ok`` only."""
+    try:
+        from perception.detect import detect
+    except ImportError as exc:
+        log.warning("perception.detect is not available (%s): the camera reports camera_ok only", exc)
+        return lambda rgb, depth, camera: None
+    return lambda rgb, depth, camera: detect(rgb, depth, camera).detection

@@ -43,20 +43,20 @@ class CameraMount:
     """A camera on a robot, rendering at ``rate_hz`` simulated frames per second when someone listens."""
 
     rate_hz: float = 10.0
-    height: float = 0.5
-    """Optical centre above the floor (m); a Kinect on a TurtleBot 2 top plate."""
-    forward: float = 0.0
-    """Optical centre ahead of the robot centre (m)."""
+    rig: object | None = None
+    """A ``robot_bridge.sim.camera.CameraRig`` (intrinsics, height, offset); ``None``: the default Kinect."""
 
 
 @dataclass(frozen=True)
 class CameraFrame:
-    """One rendered image: RGB (H x W x 3 uint8) and depth (H x W float32 m, NaN = no data)."""
+    """One rendered image: RGB (H x W x 3 uint8) and registered depth (H x W float32 m, 0 = no reading)."""
 
     robot: str
     time: float
     pose: tuple[float, float, float]
-    """Camera pose in the world (x, y, yaw rad) when the frame was taken."""
+    """Pose of the optical centre in the world (x, y, yaw rad) when the frame was taken."""
+    camera: object
+    """The ``perception.camera.CameraModel`` (intrinsics) of the frame."""
     rgb: np.ndarray
     depth: np.ndarray
 
@@ -89,7 +89,6 @@ class _Robot:
     bumper: str | None = None
     camera: CameraMount | None = None
     camera_listeners: list[Callable[[CameraFrame], None]] = field(default_factory=list)
-    next_frame: float = 0.0
     last_frame: float = -math.inf
     trajectory: list[TrajectoryPoint] = field(default_factory=list)
 
@@ -99,7 +98,7 @@ class World:
 
     def __init__(self, seed: int = 0, dt: float = DEFAULT_DT, arena: tuple[float, float, float, float] =
                  (-5.0, -5.0, 5.0, 5.0), obstacles: tuple[Obstacle, ...] = (), noise: bool = True,
-                 log_interval: float = 0.05, params: kobuki.BaseParams = kobuki.KOBUKI,
+                 log_interval: float = 0.05, lighting: float = 1.0, params: kobuki.BaseParams = kobuki.KOBUKI,
                  limits: motion.MotionLimits = motion.DEFAULT_LIMITS) -> None:
         if dt <= 0:
             raise ValueError(f"dt must be positive, got {dt!r}")
@@ -108,7 +107,8 @@ class World:
             raise ValueError(f"arena (xmin, ymin, xmax, ymax) too small for a robot: {arena!r}")
         self.seed, self.dt, self.arena, self.obstacles = seed, dt, arena, tuple(obstacles)
         self.noise, self.params, self.limits = noise, params, limits
-        self.log_interval = log_interval
+        self.log_interval, self.lighting = log_interval, lighting
+        self._scene: object | None = None
         self._robots: dict[str, _Robot] = {}
         self._steps = 0
         self._lock = threading.RLock()
@@ -128,8 +128,7 @@ class World:
             base = kobuki.BaseState(x=x, y=y, yaw=math.radians(yaw_deg), time=self.time)
             ticks = kobuki.encoder_ticks(base)
             mount = CameraMount() if camera is True else (camera or None)
-            robot = _Robot(name, base, rng, np.random.default_rng([self.seed, key, 1]), fault, odometry.Odometry(ticks=ticks), ticks, camera=mount,
-                           next_frame=self.time)
+            robot = _Robot(name, base, rng, np.random.default_rng([self.seed, key, 1]), fault, odometry.Odometry(ticks=ticks), ticks, camera=mount)
             self._robots[name] = robot
             self._log(robot)
 
@@ -203,8 +202,8 @@ class World:
         """Advance the world by ``steps`` x ``dt`` simulated seconds."""
         for _ in range(steps):
             with self._lock:
+                frames = self._due_frames()      # what the cameras see at the start of the step
                 done = self._step_locked()
-                frames = self._due_frames()
                 self.changed.notify_all()
             for future, completion in done:
                 if not future.done():
@@ -342,7 +341,6 @@ class World:
             if robot.camera is None:
                 raise ValueError(f"robot {name!r} has no camera (add it with camera=True)")
             robot.camera_listeners.append(listener)
-            robot.next_frame = max(robot.next_frame, self.time)
 
         def unsubscribe() -> None:
             with self._lock:
@@ -359,19 +357,37 @@ class World:
             return self._render(robot)
 
     def _due_frames(self) -> list[tuple[list, CameraFrame]]:
+        """Frames due now: at simulated times that are multiples of the period (rounded to whole steps)."""
         frames = []
         for robot in self._robots.values():
-            if robot.camera_listeners and self.time + 1e-9 >= robot.next_frame:
-                robot.next_frame += 1.0 / robot.camera.rate_hz
-                frames.append((list(robot.camera_listeners), self._render(robot)))
+            if robot.camera_listeners:
+                every = max(1, round(1.0 / (robot.camera.rate_hz * self.dt)))
+                if self._steps % every == 0:
+                    frames.append((list(robot.camera_listeners), self._render(robot)))
         return frames
 
     def _render(self, robot: _Robot) -> CameraFrame:
-        from robot_bridge.sim import scene   # the renderer is heavy; only worlds with cameras need it
+        from robot_bridge.sim import camera   # the renderer (OpenCV) only for worlds with cameras
         robot.last_frame = self.time
-        mount = robot.camera
+        rig = robot.camera.rig or _default_rig()
         b = robot.base
-        pose = (b.x + mount.forward * math.cos(b.yaw), b.y + mount.forward * math.sin(b.yaw), b.yaw)
-        others = [(o.name, o.base.x, o.base.y, o.base.yaw) for o in self._robots.values() if o is not robot]
-        rgb, depth = scene.render_view(self, robot.name, pose, mount.height, others, robot.camera_rng)
-        return CameraFrame(robot.name, self.time, pose, rgb, depth)
+        pose = rig.pose_of((b.x, b.y, b.yaw))
+        others = [(o.base.x, o.base.y, o.base.yaw) for o in self._robots.values() if o is not robot]
+        rgb, depth = camera.render(rig, pose, others, self.scene(), robot.camera_rng)
+        return CameraFrame(robot.name, self.time, pose, rig.camera, rgb, depth)
+
+    def scene(self) -> object:
+        """What cameras see besides robots: the arena's walls, the obstacles, the lighting."""
+        if self._scene is None:
+            from robot_bridge.sim import camera
+            xmin, ymin, xmax, ymax = self.arena
+            corners = [(xmin, ymin), (xmax, ymin), (xmax, ymax), (xmin, ymax)]
+            walls = tuple(camera.Wall(*a, *b) for a, b in zip(corners, corners[1:] + corners[:1]))
+            props = tuple(camera.CylinderProp(o.x, o.y, o.radius, 0.0, o.height, o.rgb) for o in self.obstacles)
+            self._scene = camera.Scene(walls=walls, props=props, gain=self.lighting)
+        return self._scene
+
+
+def _default_rig() -> object:
+    from robot_bridge.sim import camera
+    return camera.CameraRig()

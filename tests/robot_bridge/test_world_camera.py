@@ -1,0 +1,98 @@
+"""Cameras in the world: frames only on demand or at their rate, markers where the pinhole model says."""
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from perception import markers
+from robot_bridge import Action, percepts
+from robot_bridge.sim.bridge import SimBridge
+from robot_bridge.sim.world import World
+
+
+@pytest.fixture(scope="module")
+def pair():
+    world = World(seed=5, noise=False)
+    world.add_robot("watcher", camera=True)
+    world.add_robot("faulty", x=2.0, yaw_deg=90.0)     # seen side-on, front marker to the left
+    return world
+
+
+def test_front_marker_appears_where_the_pinhole_model_says(pair):
+    frame = pair.camera_frame("watcher")
+    cam = frame.camera
+    assert frame.rgb.shape == (cam.height, cam.width, 3) and frame.rgb.dtype == np.uint8
+    # Optical frame of the camera (x right, z forward): the front cylinder's axis.
+    cx, cy, _ = frame.pose
+    x_right, z = -(0.0 + markers.FRONT_OFFSET_M - cy), 2.0 - cx
+    u = cam.fx * x_right / z + cam.cx
+    v_top = cam.cy + cam.fy * (0.30 - markers.CYLINDER_TOP_M) / z          # default rig: 0.30 m high
+    v_bottom = cam.cy + cam.fy * (0.30 - markers.CYLINDER_BOTTOM_M) / z
+    hsv = cv2.cvtColor(frame.rgb, cv2.COLOR_RGB2HSV)
+    mask = cv2.inRange(hsv, markers.ORANGE_HSV.lo, markers.ORANGE_HSV.hi)
+    rows, cols = np.nonzero(mask)
+    assert len(cols) > 100
+    assert cols.mean() == pytest.approx(u, abs=2.0)
+    # The camera sits below the robots' top plate: the nearer body edge hides the cylinder's foot.
+    v_body = cam.cy + cam.fy * (0.30 - markers.CYLINDER_BOTTOM_M) / (z - 0.177)
+    assert rows.min() == pytest.approx(v_top, abs=3.0)
+    assert rows.max() == pytest.approx(min(v_bottom, v_body), abs=3.0)
+    depth = frame.depth[rows, cols]
+    assert np.median(depth[depth > 0]) == pytest.approx(z - markers.CYLINDER_RADIUS_M, abs=0.05)
+    blue = cv2.inRange(hsv, markers.BLUE_HSV.lo, markers.BLUE_HSV.hi)
+    assert np.nonzero(blue)[1].mean() > cols.mean()                       # rear (blue) to the right
+
+
+def test_frames_are_rendered_only_when_someone_listens_and_at_the_rate():
+    world = World(noise=False)
+    world.add_robot("a", camera=True)
+    world.add_robot("b", x=2.0)
+    world.run(0.5)
+    assert "camera_ok" not in {p.name for p in world.percepts("a")}
+    times = []
+    unsubscribe = world.subscribe_camera("a", lambda frame: times.append(frame.time))
+    world.run(1.0)
+    assert len(times) == 10 and np.allclose(np.diff(times), 0.1)
+    assert "camera_ok" in {p.name for p in world.percepts("a")}
+    unsubscribe()
+    world.run(0.5)
+    assert len(times) == 10
+
+
+def test_frames_on_demand_do_not_change_the_physics():
+    def trajectory(peek):
+        world = World(seed=11)
+        world.add_robot("a", camera=True)
+        world.add_robot("b", x=2.0)
+        world.command("a", "turn", (45.0, 45.0))
+        for _ in range(100):
+            world.step()
+            if peek:
+                world.camera_frame("a")
+        return world.trajectory("a")
+    assert trajectory(False) == trajectory(True)
+
+
+def test_camera_bridge_perceives_through_the_pixels():
+    world = World(seed=4)
+    world.add_robot("helper", x=1.6, y=0.4, yaw_deg=180.0)
+    bridge = SimBridge("watcher", world=world, camera=True, drive=False)
+    bridge.setup()
+    try:
+        world.run(0.3)
+        found = bridge.percepts()
+        assert "camera_ok" in {p.name for p in found}
+        for p in found:
+            percepts.validate(p)
+        pytest.importorskip("perception.detect")
+        seen = [p for p in found if p.name == "robot_seen"]
+        assert len(seen) == 1
+        name, angle, depth, yaw = seen[0].args
+        assert name == "helper"
+        assert angle == pytest.approx(math.degrees(math.atan2(0.4, 1.6 - 0.1)), abs=3)   # left: positive
+        assert depth == pytest.approx(1.5, abs=0.15)
+        assert abs(yaw) == pytest.approx(180, abs=15)                                    # facing us
+        assert bridge.act(Action("turn", (angle,))).done() is False
+    finally:
+        bridge.shutdown()
