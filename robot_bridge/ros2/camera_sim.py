@@ -38,11 +38,11 @@ class CameraSim(Node):
 
     def __init__(self, namespace: str = "", options: object = None, context=None, **overrides) -> None:
         super().__init__("camera_sim", namespace=namespace, context=context)
-        mount = CameraMount()
+        mount, rig = CameraMount(), renderer.CameraRig()     # the embedded simulator's defaults
         p = {name: self.declare_parameter(name, overrides.get(name, default)).value for name, default in
              (("robots", [namespace.strip("/") or "robot"]), ("rate", mount.rate_hz), ("seed", 0),
               ("width", 640), ("height", 480), ("hfov_deg", 57.0), ("vfov_deg", 43.0),
-              ("camera_height", mount.height), ("camera_forward", mount.forward))}
+              ("camera_height", rig.height_m), ("camera_forward", rig.mount_x_m))}
         self.me = namespace.strip("/").split("/")[-1]
         model = CameraModel.from_fov(float(p["hfov_deg"]), float(p["vfov_deg"]), int(p["width"]), int(p["height"]))
         self.rig = renderer.CameraRig(camera=model, height_m=float(p["camera_height"]),

@@ -3,7 +3,7 @@
 
 Subscribes ``camera/rgb/image_raw`` (rgb8 or bgr8), ``camera/depth_registered/image_raw`` (16UC1 mm
 or 32FC1 m) and ``camera/rgb/camera_info`` with sensor-data QoS, runs :mod:`perception`'s detector
-on each RGB frame with the latest depth frame, and publishes on ``jason/percepts`` a snapshot of
+(``detect_all``) on each RGB frame with the latest depth frame, and publishes on ``jason/percepts`` a snapshot of
 source ``camera``: ``camera_ok`` plus one ``robot_seen(Name, AngleDeg, DepthM, YawDeg)`` per robot
 found (see :mod:`robot_bridge.percepts`). The markers do not say whose they are: ``Name`` is the
 parameter ``observed`` (default: the other robot of ``robots`` when there are two).
@@ -52,13 +52,14 @@ def seen(detection: object, name: str) -> Percept:
 
 
 def _load_detector(logger):
-    """``perception.detect.detect``; without it the node still reports ``camera_ok`` (frames arrive)."""
+    """Every robot ``perception.detect`` finds in a frame; without it the node still reports
+    ``camera_ok`` (frames arrive) and says so once."""
     try:
-        from perception.detect import detect
+        from perception.detect import detect_all
     except ImportError as exc:
         logger.error(f"perception.detect is not available ({exc}): reporting camera_ok only")
         return lambda rgb, depth, camera: []
-    return detect
+    return lambda rgb, depth, camera: detect_all(rgb, depth, camera).all
 
 
 class VisualSynthesizer(Node):

@@ -18,7 +18,7 @@ from robot_bridge.protocol import Action  # noqa: E402
 from robot_bridge.ros2.runtime import RosContext, wait_for  # noqa: E402
 
 DOMAIN = 1 + os.getpid() % 100          # unique per test run; 0..101 keeps Fast DDS off ephemeral ports
-FAULTY_START = (1.5, 0.0, 0.0)          # ahead of the helper, back to its camera
+FAULTY_START = (2.0, -0.4, math.pi / 2)  # ahead of the helper, side-on to its camera, driving across it
 
 
 @pytest.fixture(scope="module")
@@ -54,6 +54,10 @@ def bridges(graph):
             bridge.shutdown()
 
 
+def travelled(base, start) -> float:
+    return math.hypot(base.state.x - start[0], base.state.y - start[1])
+
+
 def percept(bridge, name):
     found = [p for p in bridge.percepts() if p.name == name]
     return found[0] if found else None
@@ -62,10 +66,10 @@ def percept(bridge, name):
 def test_move_through_jason_actions_reaches_the_base_and_completes(graph, bridges):
     _, nodes = graph
     base = nodes["faulty", "base"]
-    x0 = base.state.x
+    start = (base.state.x, base.state.y)
     completion = bridges["faulty"].act(Action("move", (0.5,))).result(timeout=20)
     assert completion.ok, completion
-    assert base.state.x - x0 == pytest.approx(0.5, abs=0.03)          # ground truth: the base moved
+    assert travelled(base, start) == pytest.approx(0.5, abs=0.03)      # ground truth: the base moved
     assert wait_for(lambda: percept(bridges["faulty"], "stopped") is not None, 5)
     odom = percept(bridges["faulty"], "odom")
     assert odom.args[0] == pytest.approx(0.5, abs=0.02)                # the robot's belief, as a percept
@@ -78,11 +82,11 @@ def test_with_encoders_injected_the_base_moves_but_odom_does_not(graph, bridges)
     assert nodes["faulty", "injector"].fault.kind == "encoders"
     assert wait_for(lambda: base.fault.kind == "encoders", 10)          # latched faults/active reached it
     odom_before = percept(faulty, "odom")
-    x0, ticks0 = base.state.x, base.ticks
+    start, ticks0 = (base.state.x, base.state.y), base.ticks
     completion = faulty.act(Action("move", (0.5,))).result(timeout=20)
     try:
         assert not completion.ok and completion.reason == "no_progress", completion
-        assert base.state.x - x0 > 0.05                                 # it drove ...
+        assert travelled(base, start) > 0.05                            # it drove ...
         assert base.ticks == ticks0                                     # ... the encoders saw nothing
         assert percept(faulty, "odom") == odom_before                  # ... nor did odometry
     finally:
@@ -102,9 +106,10 @@ def test_left_actuator_fault_bends_a_straight_move(graph, bridges):
         yaw0 = base.state.yaw
         helper.act(Action("move", (0.3,))).result(timeout=20)
         assert base.state.yaw - yaw0 > math.radians(10)               # weak left wheel: curves left
-    finally:
+    finally:                        # back to where it was, facing the faulty robot again
         assert helper.act(Action("set_fault", ("none",))).result(timeout=10).ok
         helper.act(Action("move", (-0.3,))).result(timeout=20)
+        helper.act(Action("turn", (math.degrees(yaw0 - base.state.yaw),))).result(timeout=20)
 
 
 def test_unknown_and_malformed_actions_fail_at_once(bridges):
@@ -161,6 +166,30 @@ def test_the_helper_sees_the_faulty_robot_where_it_is(graph, camera, bridges):
     assert wait_for(lambda: percept(bridges["helper"], "robot_seen") is not None, 20)
     seen = percept(bridges["helper"], "robot_seen")
     helper, faulty = nodes["helper", "base"].state, nodes["faulty", "base"].state
+    lens = camera[0].rig.mount_x_m
+    along = (faulty.x - helper.x) * math.cos(helper.yaw) + (faulty.y - helper.y) * math.sin(helper.yaw) - lens
+    bearing = math.degrees(math.atan2(faulty.y - helper.y, faulty.x - helper.x) - helper.yaw)
     assert seen.args[0] == "faulty"
-    assert seen.args[2] == pytest.approx(math.hypot(faulty.x - helper.x, faulty.y - helper.y), abs=0.2)
-    assert abs(seen.args[1]) < 10                                       # straight ahead
+    assert seen.args[2] == pytest.approx(along, abs=0.1)               # depth along the optical axis
+    assert seen.args[1] == pytest.approx(bearing, abs=4)                # left positive, as turn()
+
+
+def test_the_ros2_bridge_perceives_what_the_sim_bridge_perceives(graph, bridges):
+    from robot_bridge import percepts as vocabulary
+    from robot_bridge.sim.bridge import SimBridge
+    ros_bridge = bridges["helper"]
+    assert ros_bridge.act(Action("reset_odometry")).result(timeout=5).ok
+    assert ros_bridge.act(Action("turn", (90,))).result(timeout=20).ok
+    sim = SimBridge("helper", seed=3)
+    sim.setup()
+    try:
+        assert sim.act(Action("turn", (90,))).result(timeout=20).ok
+        sim_now = {(p.name, len(p.args)): p for p in sim.percepts()}
+    finally:
+        sim.shutdown()
+    assert wait_for(lambda: percept(ros_bridge, "stopped") is not None, 5)
+    ros_now = {(p.name, len(p.args)): p for p in ros_bridge.percepts() if p.name != "camera_ok"}
+    for p in ros_now.values():
+        vocabulary.validate(p)
+    assert set(ros_now) == set(sim_now)
+    assert ros_now["odom", 3].args == pytest.approx(sim_now["odom", 3].args, abs=1.5)
