@@ -154,3 +154,23 @@ def test_the_bridge_builds_offline():
     bridge = Ros2Bridge("faulty")                 # no I/O before setup()
     assert bridge.namespace == "/faulty"
     assert bridge.act(Action("move", (0.5,))).result(0).reason == "shutdown"
+
+
+def test_a_node_without_ros_installed_prints_a_one_line_hint(tmp_path):
+    import subprocess
+    import sys
+    script = ("import sys, runpy; sys.modules['rclpy'] = None; "
+              "runpy.run_module('robot_bridge.ros2.kobuki_sim', run_name='__main__')")
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 2
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and "pip install 'faultmas[ros2]'" in lines[0], run.stderr
+
+
+def test_the_bridge_without_ros_raises_an_import_error_with_the_hint(monkeypatch):
+    import sys
+    from robot_bridge.ros2.bridge import Ros2Bridge
+    from robot_bridge.ros2.runtime import RosUnavailable
+    monkeypatch.setitem(sys.modules, "rclpy", None)
+    with pytest.raises(RosUnavailable, match=r"faultmas\[ros2\]"):
+        Ros2Bridge("faulty").setup(timeout=0.1)
