@@ -11,7 +11,8 @@ send nothing) and, once, the ``Completion`` of the action.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
+from typing import NamedTuple
 
 from robot_bridge.protocol import Completion
 from robot_bridge.sim.kobuki import KOBUKI, BaseParams, WheelSpeeds, twist_to_wheels
@@ -45,9 +46,11 @@ class MotionLimits:
 DEFAULT_LIMITS = MotionLimits()
 
 
-@dataclass(frozen=True)
-class MotionState:
-    """A motion in progress: its goal, progress bookkeeping and the smoothed velocity command."""
+class MotionState(NamedTuple):
+    """A motion in progress: its goal, progress bookkeeping and the smoothed velocity command.
+
+    A NamedTuple rather than a frozen dataclass: ``_replace`` is cheap enough for every control step.
+    """
 
     kind: str
     goal: float
@@ -113,7 +116,7 @@ def control(motion: MotionState, odom: Odometry, now: float, dt: float, bumper: 
             return None, WheelSpeeds(0.0, 0.0), Completion.success()
         if now > motion.deadline:
             return None, WheelSpeeds(0.0, 0.0), Completion.failure("timeout", "the robot did not come to rest")
-        return replace(motion, linear=linear, angular=angular), twist_to_wheels(linear, angular, params), None
+        return motion._replace(linear=linear, angular=angular), twist_to_wheels(linear, angular, params), None
 
     if motion.kind in ("move", "turn") and motion.goal == 0.0:
         return None, None, Completion.success()
@@ -126,12 +129,12 @@ def control(motion: MotionState, odom: Odometry, now: float, dt: float, bumper: 
     if motion.kind == "rotate":
         angular = _ramp(motion.angular, motion.goal, limits.angular_accel, dt)
         linear = _ramp(motion.linear, 0.0, limits.linear_accel, dt)
-        nxt = replace(motion, best=best, best_time=best_time, linear=linear, angular=angular)
+        nxt = motion._replace(best=best, best_time=best_time, linear=linear, angular=angular)
         command = twist_to_wheels(linear, angular, params)
         if motion.finished:
             return nxt, command, None
         if motion.goal == 0.0 or progress >= limits.rotate_confirm:
-            return replace(nxt, finished=True), command, Completion.success()
+            return nxt._replace(finished=True), command, Completion.success()
         failure = _stalled(motion, now, best_time, limits)
         return (None, WheelSpeeds(0.0, 0.0), failure) if failure else (nxt, command, None)
 
@@ -155,7 +158,7 @@ def control(motion: MotionState, odom: Odometry, now: float, dt: float, bumper: 
     else:
         linear = _ramp(motion.linear, 0.0, limits.linear_accel, dt)
         angular = _ramp(motion.angular, desired, accel, dt)
-    nxt = replace(motion, best=best, best_time=best_time, linear=linear, angular=angular)
+    nxt = motion._replace(best=best, best_time=best_time, linear=linear, angular=angular)
     return nxt, twist_to_wheels(linear, angular, params), None
 
 

@@ -255,8 +255,10 @@ class World:
 
     def _collide(self, robot: _Robot, before: kobuki.BaseState, after: kobuki.BaseState) -> kobuki.BaseState:
         """Keep the robot out of walls, obstacles and other robots; wheels slip, the bumper reports."""
-        contact = self._contact(robot.name, after.x, after.y)
         robot.bumper = None
+        if after.x == before.x and after.y == before.y:
+            return after           # turning in place or at rest: nothing new to bump into
+        contact = self._contact(robot.name, after.x, after.y)
         if contact is None:
             return after
         # Bumpers are at the front: report the side of the contact direction relative to the heading.
@@ -280,11 +282,16 @@ class World:
             return (0.0, -1.0)
         if y + r > ymax:
             return (0.0, 1.0)
-        circles = [(o.x, o.y, o.radius) for o in self.obstacles]
-        circles += [(o.base.x, o.base.y, r) for o in self._robots.values() if o.name != name]
-        for cx, cy, cr in circles:
-            if math.hypot(cx - x, cy - y) < cr + r:
-                return (cx - x, cy - y)
+        for o in self.obstacles:
+            if math.hypot(o.x - x, o.y - y) < o.radius + r:
+                return (o.x - x, o.y - y)
+        reach = 2 * r
+        for other in self._robots.values():   # plain loop with cheap rejection: this runs every step
+            dx = other.base.x - x
+            if -reach < dx < reach and other.name != name:
+                dy = other.base.y - y
+                if dx * dx + dy * dy < reach * reach:
+                    return (dx, dy)
         return None
 
     def _log(self, robot: _Robot) -> None:
