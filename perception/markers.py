@@ -27,9 +27,10 @@ class HsvRange:
 
 
 # Wider in V than the seed paper's orange (0,136,159)-(29,255,255) so that dim scenes (gain 0.5) pass;
-# S stays high, which is what separates the markers from floor, walls and skin-coloured clutter.
-ORANGE_HSV = HsvRange((0, 120, 60), (24, 255, 255))
-BLUE_HSV = HsvRange((98, 120, 40), (128, 255, 255))
+# higher in S (painted markers are S > 0.85), which keeps cardboard, wood and skin (S ~ 0.4-0.6) out.
+# H starts at 5, not 0, so that red things (H 170-179 and 0-3) are not orange.
+ORANGE_HSV = HsvRange((5, 170, 60), (24, 255, 255))
+BLUE_HSV = HsvRange((98, 150, 40), (128, 255, 255))
 GREEN_HSV = HsvRange((41, 81, 63), (66, 215, 255))     # the seed paper's green, for its colour scheme
 
 FRONT_COLOUR = "orange"

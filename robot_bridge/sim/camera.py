@@ -491,7 +491,8 @@ def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, l
     if labels is not None:
         lab = labels[v0:v1, u0:u1]
         lab[closer] = p.label
-    shadows.append((u0 + int(np.argmax(hit_cols)), v0, v1, zmin))
+    first = int(np.argmax(hit_cols))
+    shadows.append((u0 + first, v0, v1, float(t1[first])))
 
 
 def _depth_noise(r: _Renderer, depth: np.ndarray, shadows: list, rng: np.random.Generator) -> np.ndarray:

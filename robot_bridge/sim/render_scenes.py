@@ -72,8 +72,10 @@ def random_scene(seed: int, *, rig: CameraRig | None = None, distance_m: tuple[f
     props: list[CylinderProp | BoxProp] = []
 
     def free(x: float, y: float, clearance: float) -> bool:
+        """Clear of the robots and the camera, and not on the line of sight to the target."""
         return (all(math.hypot(x - rx, y - ry) > clearance + 0.2 for rx, ry, _ in robots)
-                and math.hypot(x - cx, y - cy) > clearance + 0.3)
+                and math.hypot(x - cx, y - cy) > clearance + 0.3
+                and _segment_distance(x, y, cx, cy, tx, ty) > clearance + 0.3)
 
     for _ in range(int(rng.integers(0, clutter + 1))):
         for _ in range(10):
@@ -143,11 +145,19 @@ def _occluder(rng: np.random.Generator, rig: CameraRig, cam_pose: Pose, robot: P
     dx, dy = mx - cx, my - cy
     n = math.hypot(dx, dy)
     side = (-dy / n, dx / n)
-    rad = float(rng.uniform(0.012, 0.05))
-    shift = float(rng.uniform(-1.0, 1.0)) * (rad + markers.CYLINDER_RADIUS_M * frac)
+    # thin enough near the camera not to hide both cylinders; its edge falls on the chosen marker
+    rad = float(rng.uniform(0.01, max(0.012, min(0.05, 0.06 * frac))))
+    shift = (1 if rng.random() < 0.5 else -1) * (rad + float(rng.uniform(-1.0, 1.0)) * markers.CYLINDER_RADIUS_M * frac)
     px, py = px + side[0] * shift, py + side[1] * shift
     rgb = PROP_COLOURS[int(rng.integers(len(PROP_COLOURS)))]
     if rng.random() < 0.7:
         return CylinderProp(px, py, rad, 0.0, float(rng.uniform(0.45, 2.0)), rgb)
-    return BoxProp(px, py, float(rng.uniform(-math.pi, math.pi)), 2 * rad, float(rng.uniform(0.05, 0.3)),
+    return BoxProp(px, py, float(rng.uniform(-math.pi, math.pi)), 2 * rad, float(rng.uniform(0.03, 0.12)),
                    float(rng.uniform(0.0, 0.5)), float(rng.uniform(0.6, 1.5)), rgb)
+
+
+def _segment_distance(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> float:
+    """Distance from point p to segment a-b."""
+    ex, ey = bx - ax, by - ay
+    t = max(0.0, min(1.0, ((px - ax) * ex + (py - ay) * ey) / (ex * ex + ey * ey)))
+    return math.hypot(px - ax - t * ex, py - ay - t * ey)
