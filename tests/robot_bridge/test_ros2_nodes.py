@@ -193,3 +193,31 @@ def test_the_ros2_bridge_perceives_what_the_sim_bridge_perceives(graph, bridges)
         vocabulary.validate(p)
     assert set(ros_now) == set(sim_now)
     assert ros_now["odom", 3].args == pytest.approx(sim_now["odom", 3].args, abs=1.5)
+
+
+def test_jason_ros_manifests_map_actions_and_percepts_to_plain_topics(graph, tmp_path):
+    from robot_bridge.ros2.bridge import Ros2Bridge
+    _, nodes = graph
+    actions_manifest = tmp_path / "actions_manifest"
+    actions_manifest.write_text(
+        "[cmd_vel]\nmethod = topic\nname = commands/velocity_raw\nmsg_type = Twist\n"
+        "dependencies = geometry_msgs.msg\nparams_name = linear.x, angular.z\nparams_type = float, float\n")
+    perceptions_manifest = tmp_path / "perceptions_manifest"
+    perceptions_manifest.write_text(
+        "[DEFAULT]\nrate = 10\n\n[wheels]\nname = joint_states\nmsg_type = sensor_msgs/JointState\n"
+        "args = name, velocity\nbuf = update\n")
+    bridge = Ros2Bridge("helper", domain_id=DOMAIN, agent_name="helper_manifest",
+                        actions_manifest=actions_manifest, perceptions_manifest=perceptions_manifest)
+    bridge.setup(timeout=15.0)
+    base = nodes["helper", "base"]
+    try:
+        assert bridge.act(Action("cmd_vel", ("fast", 0.0))).result(timeout=0).reason == "bad_args"
+        assert wait_for(lambda: bridge._publishers["cmd_vel"].get_subscription_count() > 0, 15)
+        assert bridge.act(Action("cmd_vel", (0.1, 0.0))).result(timeout=5).ok
+        assert wait_for(lambda: base.state.left_speed > 0, 5)            # the command reached the base
+        assert wait_for(lambda: percept(bridge, "wheels") is not None, 15)
+        wheels = percept(bridge, "wheels")
+        assert wheels.args[0] == ("wheel_left_joint", "wheel_right_joint")
+    finally:
+        bridge.shutdown()
+        assert wait_for(lambda: base.state.left_speed == 0, 5)           # 0.6 s without commands: it stops
