@@ -28,7 +28,8 @@ def parse_script(text: str) -> list[Action]:
         found.append(Action(name, values))
         pos = match.end()
         if pos < len(text) and text[pos] != ";":
-            raise ValueError(f"--script, column {pos + 1}: expected ';' between actions, got {text[pos:pos + 20]!r}")
+            raise ValueError(f"--script, column {pos + 1}: expected ';' between actions, "
+                             f"got {text[pos:pos + 20]!r}")
         pos += 1
     return found
 
@@ -65,7 +66,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                              description=__doc__.splitlines()[0])
     run.add_argument("--script", default="move(1.0); turn(90); move(0.5)",
                      help="actions for the first robot, separated by ';' (default: %(default)s)")
-    run.add_argument("--robots", default="faulty,helper", help="comma-separated robot names (default: %(default)s)")
+    run.add_argument("--robots", default="faulty,helper",
+                     help="comma-separated robot names (default: %(default)s)")
     run.add_argument("--fault", default="none",
                      help="fault of the first robot: none, encoders, both_actuators, left_actuator[:FRACTION], "
                           "right_actuator[:FRACTION], stuck_wheels (default: %(default)s)")
@@ -152,7 +154,8 @@ def plot(world, path: str) -> None:
     for name in world.robots:
         log = world.trajectory(name)
         line, = ax.plot([p.x for p in log], [p.y for p in log], label=f"{name} truth")
-        x0, y0, c, s = log[0].x, log[0].y, math.cos(math.radians(log[0].yaw_deg)), math.sin(math.radians(log[0].yaw_deg))
+        x0, y0, yaw0 = log[0].x, log[0].y, math.radians(log[0].yaw_deg)
+        c, s = math.cos(yaw0), math.sin(yaw0)
         ax.plot([x0 + c * p.odom_x - s * p.odom_y for p in log], [y0 + s * p.odom_x + c * p.odom_y for p in log],
                 "--", color=line.get_color(), label=f"{name} odometry (placed at its start)")
         ax.plot([x0], [y0], "o", color=line.get_color())

@@ -128,7 +128,8 @@ class World:
             base = kobuki.BaseState(x=x, y=y, yaw=math.radians(yaw_deg), time=self.time)
             ticks = kobuki.encoder_ticks(base)
             mount = CameraMount() if camera is True else (camera or None)
-            robot = _Robot(name, base, rng, np.random.default_rng([self.seed, key, 1]), fault, odometry.Odometry(ticks=ticks), ticks, camera=mount)
+            robot = _Robot(name, base, rng, np.random.default_rng([self.seed, key, 1]), fault,
+                           odometry.Odometry(ticks=ticks), ticks, camera=mount)
             self._robots[name] = robot
             self._log(robot)
 

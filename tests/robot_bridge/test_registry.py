@@ -17,7 +17,8 @@ def test_builtin_bridges_are_found_by_name():
 
 
 def test_unknown_name_lists_the_known_ones():
-    with pytest.raises(registry.UnknownBridgeError, match=r"unknown robot bridge 'simm'; known bridges: .*ros2.*sim"):
+    with pytest.raises(registry.UnknownBridgeError,
+                       match=r"unknown robot bridge 'simm'; known bridges: .*ros2.*sim"):
         registry.load("simm")
 
 
