@@ -395,7 +395,8 @@ def _measure(sub: np.ndarray, x0: int, y0: int, v_c: float, depth: np.ndarray, c
 def _size_plausible(w: int, h: int, area: int, rng_m: float, cam: CameraModel, cfg: DetectorConfig) -> bool:
     exp_w = 2 * cam.fx * cfg.radius_m / rng_m
     exp_h = cam.fy * cfg.height_m / max(rng_m - cfg.radius_m, 0.05)
-    return (w <= cfg.max_size_ratio * exp_w + 3 and h <= cfg.max_size_ratio * exp_h + 4
+    # a partly hidden cylinder is narrower, never wider: width is the sharp test, height a loose one
+    return (w <= 1.25 * exp_w + 2 and h <= cfg.max_size_ratio * exp_h + 4
             and area <= cfg.max_size_ratio * exp_w * exp_h + 30)
 
 
