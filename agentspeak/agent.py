@@ -1,0 +1,967 @@
+"""One AgentSpeak agent and its reasoning cycle, following Jason's transition system.
+
+Each ``cycle()`` is Jason's: **sense** (perceive and update beliefs, action feedback, timers, ONE
+message), **deliberate** (select ONE event, find its relevant then applicable plans, first applicable
+in source order, push the intended means), **act** (select ONE intention round-robin, execute ONE
+body formula, then clear finished intended means). Method names follow the rules of the formal
+semantics (``sel_ev``, ``appl_pl``, ``exec_int``, ``clr_int``).
+
+The agent does no I/O of its own: perception, actions, messages and printing go through its
+architecture (``agentspeak.arch.AgentArch``), so the same agent runs in-process, over Zenoh, or on a
+robot bridge.
+"""
+from __future__ import annotations
+
+import heapq
+import itertools
+import logging
+import time
+from collections import deque
+from concurrent.futures import Future
+from types import GeneratorType
+from typing import Any, Callable, Iterator
+
+from agentspeak import program as P
+from agentspeak.beliefs import PERCEPT, SELF, SOURCE_PERCEPT, SOURCE_SELF, BeliefBase, has_source, source
+from agentspeak.intentions import Event, Frame, IntendedMeans, Intention, PlanLibrary
+from agentspeak.program import ACHIEVE, ADD, BEL, DEL, TEST, Plan, PlanTerm, Program, Rule, Trigger
+from agentspeak.solver import SolveError, solve, solve_first
+from agentspeak.stdlib.registry import STDLIB, IAError, Registry, Suspend
+from agentspeak.terms import (
+    ArithmeticError_, Literal, Term, Var, is_ground, rename, resolve, to_str, variables,
+)
+from agentspeak.unify import undo, unify
+
+log = logging.getLogger("faultmas.agentspeak")
+
+_TRUE = Literal("true")
+_seq = itertools.count()
+
+
+class IAContext:
+    """What an internal action sees: the agent, the calling intention, and the bindings."""
+
+    __slots__ = ("agent", "intention", "im", "b", "trail")
+
+    def __init__(self, agent: "Agent", intention: Intention | None, im: IntendedMeans | None,
+                 b: dict, trail: list) -> None:
+        self.agent, self.intention, self.im, self.b, self.trail = agent, intention, im, b, trail
+
+    def unify(self, a: Term, c: Term) -> bool:
+        mark = len(self.trail)
+        if unify(a, c, self.b, self.trail):
+            return True
+        undo(self.b, self.trail, mark)
+        return False
+
+    def resolve(self, t: Term) -> Term:
+        return resolve(t, self.b)
+
+    def solve(self, formula: Term) -> Iterator[None]:
+        return solve(self.agent, formula, self.b, self.trail)
+
+
+class Agent:
+    """An AgentSpeak agent: belief base, plan library, events, intentions and a mailbox."""
+
+    def __init__(self, name: str, program: Program | None = None, arch: Any = None,
+                 registry: Registry = STDLIB, tro: bool = True, source_file: str = "") -> None:
+        from agentspeak.arch import AgentArch  # local import: arch depends on agent's types only
+
+        self.name = name
+        self.arch = arch if arch is not None else AgentArch()
+        self.registry = registry
+        self.tro = tro
+        self.bb = BeliefBase()
+        self.plans = PlanLibrary()
+        self.events: deque[Event] = deque()
+        self.running: deque[Intention] = deque()
+        self.suspended: dict[int, Intention] = {}
+        self.mailbox: deque = deque()          # appended from any thread
+        self.feedback: deque = deque()         # callables run in the sense phase (thread-safe append)
+        self.timers: list = []                 # heap of (when, seq, callback)
+        self.event_waiters: list = []          # (trigger pattern, intention, suspend)
+        self.condition_waiters: list = []      # (intention, suspend)
+        self.pending_futures = 0               # actions / awaited results in flight
+        self.pending_asks: dict[str, Any] = {}
+        self.atomic_intention: Intention | None = None
+        self.percepts: set[Literal] = set()
+        self.source_file = source_file
+        self.stopped = False
+        self.cycles = 0
+        self.failures_unhandled = 0
+        self.dropped: dict[str, int] = {}
+        if program is not None:
+            self.load(program)
+
+    # ------------------------------------------------------------------ loading
+    def load(self, program: Program) -> None:
+        """Add a program's beliefs (posting +b events), rules, plans and initial goals."""
+        for plan in program.plans:
+            self.plans.add(plan)
+        for rule in program.rules:
+            self.bb.add_rule(rule)
+        for warning in program.warnings:
+            log.warning(warning)
+        for lit in program.beliefs:
+            self.add_initial_belief(lit)
+        for goal in program.goals:
+            self.add_initial_goal(goal)
+
+    def add_initial_belief(self, lit: Literal) -> None:
+        if not has_source(lit):
+            lit = lit.add_annot(SOURCE_SELF)
+        added = self.bb.add(lit, at_end=True)
+        if added is not None:
+            self.post_external(Trigger(ADD, BEL, added))
+
+    def add_initial_goal(self, goal: Literal) -> None:
+        goal = self._fresh_goal(goal, {})
+        self.post_external(Trigger(ADD, ACHIEVE, goal), force=True)
+
+    # ------------------------------------------------------------------ knowledge base (for the solver)
+    def candidates(self, lit: Literal, b: dict) -> list:
+        return self.bb.candidates(lit, b)
+
+    def rules_for(self, lit: Literal) -> list:
+        return self.bb.rules_for(lit)
+
+    def call_internal(self, lit: Literal, b: dict, trail: list) -> Iterator[None]:
+        """An internal action used inside a formula (context, rule, test): a solution generator."""
+        spec = self.registry.get(lit.functor)
+        if spec is None:
+            raise SolveError("ia_failed", f"unknown internal action {lit.functor}")
+        args = tuple(resolve(a, b) for a in lit.args)
+        self._check_arity(spec, lit, args)
+        ctx = IAContext(self, None, None, b, trail)
+        try:
+            result = spec.function(ctx, *args)
+        except IAError as exc:
+            raise SolveError(exc.error, exc.message) from None
+        if isinstance(result, GeneratorType):
+            return result
+        if isinstance(result, Suspend):
+            raise SolveError("ia_failed", f"{lit.functor} cannot be used in a formula (it suspends)")
+        return iter((None,)) if result is None or result is True else iter(())
+
+    @staticmethod
+    def _check_arity(spec, lit: Literal, args: tuple) -> None:
+        n = len(args)
+        if n < spec.min_args or (spec.max_args is not None and n > spec.max_args):
+            want = (f"{spec.min_args}" if spec.max_args == spec.min_args
+                    else f"{spec.min_args} to {spec.max_args if spec.max_args is not None else 'any'}")
+            raise IAError("wrong_arguments", f"{lit.functor} takes {want} arguments, got {n}")
+
+    # ------------------------------------------------------------------ events
+    def post_external(self, trigger: Trigger, force: bool = False) -> None:
+        """An event that starts a new intention (percepts, messages, ``!!g``, initial goals)."""
+        self._notify_waiters(trigger)
+        if force or self.plans.relevant(trigger):
+            self.events.append(Event(trigger))
+        elif trigger.kind != BEL:
+            self.events.append(Event(trigger))  # a goal without plan still fails visibly
+
+    def post_internal(self, trigger: Trigger, intention: Intention) -> None:
+        """An event on ``intention``, which waits until the event is handled."""
+        self._notify_waiters(trigger)
+        self.events.append(Event(trigger, intention))
+        intention.suspended = "event"
+
+    def _notify_waiters(self, trigger: Trigger) -> None:
+        if not self.event_waiters:
+            return
+        for entry in list(self.event_waiters):
+            pattern, intention, susp = entry
+            b = dict(intention.stack[-1].b) if intention.stack else {}
+            trail: list = []
+            if pattern.op == trigger.op and pattern.kind == trigger.kind and unify(pattern.literal, trigger.literal, b, trail):
+                self.event_waiters.remove(entry)
+                im = intention.stack[-1]
+                im.b.update(b)
+                self._resume(intention, True, susp)
+
+    # ------------------------------------------------------------------ the reasoning cycle
+    def cycle(self) -> bool:
+        """One reasoning cycle. Returns True if anything happened."""
+        self.cycles += 1
+        did = self.sense()
+        if self.events and self.deliberate():
+            did = True
+        if self.running:
+            self.act()
+            did = True
+        if self.condition_waiters:
+            self._check_conditions()
+        return did
+
+    def has_work(self) -> bool:
+        return bool(self.events or self.running or self.mailbox or self.feedback)
+
+    def is_idle(self) -> bool:
+        """Nothing to do now and nothing that will happen by itself (timers, results in flight)."""
+        return not (self.has_work() or self.timers or self.pending_futures)
+
+    def next_timer(self) -> float | None:
+        return self.timers[0][0] if self.timers else None
+
+    # -- sense
+    def sense(self) -> bool:
+        did = False
+        percepts = self.arch.perceive(self)
+        if percepts is not None:
+            self.buf(percepts)
+            did = True
+        while self.feedback:
+            self.feedback.popleft()()
+            did = True
+        if self.timers and self.timers[0][0] <= time.monotonic():
+            now = time.monotonic()
+            while self.timers and self.timers[0][0] <= now:
+                _, _, callback = heapq.heappop(self.timers)
+                callback()
+            did = True
+        if self.mailbox:
+            from agentspeak.communication import receive_message
+            receive_message(self, self.mailbox.popleft())
+            did = True
+        return did
+
+    def buf(self, percepts) -> None:
+        """Belief update function: add new percepts, remove those no longer perceived."""
+        current = set()
+        for p in percepts:
+            plain = p.without_annots() if p.annots else p
+            current.add(plain)
+        for gone in self.percepts - current:
+            removed = self.bb.remove(Literal(gone.functor, gone.args, (SOURCE_PERCEPT,), gone.neg))
+            if removed is not None:
+                self.post_external(Trigger(DEL, BEL, removed))
+        for new in current - self.percepts:
+            added = self.bb.add(Literal(new.functor, new.args, (SOURCE_PERCEPT,), new.neg))
+            if added is not None:
+                self.post_external(Trigger(ADD, BEL, added))
+        self.percepts = current
+
+    # -- deliberate
+    def sel_ev(self) -> Event | None:
+        events = self.events
+        atomic = self.atomic_intention
+        if atomic is not None and not atomic.dropped:
+            for i, ev in enumerate(events):
+                if ev.intention is atomic:
+                    del events[i]
+                    return ev
+            return None
+        return events.popleft()
+
+    def deliberate(self) -> bool:
+        ev = self.sel_ev()
+        if ev is None:
+            return False
+        trigger = ev.trigger
+        intention = ev.intention
+        if intention is not None and intention.dropped:
+            return True
+        relevant = self.plans.relevant(trigger)
+        if not relevant:
+            self._no_plan(ev, "no_relevant", f"found a goal for which there is no relevant plan: {trigger}")
+            return True
+        lit = trigger.literal
+        for plan in relevant:
+            b: dict = {}
+            trail: list = []
+            if not unify(plan.trigger.literal, lit, b, trail):
+                continue
+            if plan.context is not None:
+                try:
+                    if not solve_first(self, plan.context, b):
+                        continue
+                except SolveError as exc:
+                    log.warning("[%s] error in the context of the plan at %s:%s: %s", self.name,
+                                plan.source_file, plan.line, exc.message)
+                    continue
+            self.push_im(ev, plan, b)
+            return True
+        self._no_plan(ev, "no_applicable", f"found a goal for which there is no applicable plan: {trigger}")
+        return True
+
+    def _no_plan(self, ev: Event, error: str, message: str) -> None:
+        trigger = ev.trigger
+        intention = ev.intention
+        if trigger.kind == BEL or trigger.op != ADD:
+            if intention is not None:  # internal +b/-b event with no plan: the intention just goes on
+                if trigger.kind == BEL:
+                    self._requeue(intention)
+                else:
+                    log.warning("[%s] no applicable failure-handling plan for %s; dropping %r",
+                                self.name, trigger, intention)
+                    self.drop_intention(intention)
+            return
+        if intention is None:
+            intention = Intention()
+            log.warning("[%s] %s", self.name, message)
+            self.failures_unhandled += 1
+            return
+        # an internal subgoal without a plan: fail it (its -!g plan, or the callers')
+        lit = trigger.literal
+        annots = self._failure_annots(error, message, self._current_instr(intention))
+        fkey_lit = lit
+        if self.plans.relevant(Trigger(DEL, trigger.kind, fkey_lit)):
+            self.post_internal(Trigger(DEL, trigger.kind, _add_annots(lit, annots)), intention)
+            return
+        self._fail(intention, error, message, annots=annots)
+
+    def push_im(self, ev: Event, plan: Plan, b: dict) -> None:
+        """Rule AddIM (with tail-recursion optimisation)."""
+        im = IntendedMeans(plan, b, ev.trigger.literal)
+        intention = ev.intention
+        if intention is None:
+            intention = Intention()
+        else:
+            if ev.handles is not None or (ev.trigger.op == DEL and ev.trigger.kind != BEL):
+                im.handles = ev.handles if ev.handles is not None else _PENDING_GOAL
+            elif self.tro and ev.trigger.op == ADD and ev.trigger.kind == ACHIEVE and intention.stack:
+                top = intention.stack[-1]
+                tt = top.plan.trigger
+                if (tt.op == ADD and tt.kind == ACHIEVE and top.handles is None and top.at_last_step()
+                        and type(tt.literal) is Literal and type(plan.trigger.literal) is Literal
+                        and tt.literal.functor == plan.trigger.literal.functor
+                        and len(tt.literal.args) == len(plan.trigger.literal.args)
+                        and not plan.atomic and not top.plan.atomic):
+                    # Tail call: the finished caller is replaced; the callee reports its result
+                    # directly to the caller's caller, so the stack stays flat.
+                    im.result = resolve(top.result, top.b)
+                    intention.stack.pop()
+        intention.stack.append(im)
+        if plan.atomic:
+            intention.atomic += 1
+            self.atomic_intention = intention
+        self._requeue(intention)
+
+    # -- act
+    def sel_int(self) -> Intention:
+        atomic = self.atomic_intention
+        if atomic is not None:
+            if atomic.dropped or atomic.atomic == 0:
+                self.atomic_intention = None
+            elif atomic.suspended is None:
+                try:
+                    self.running.remove(atomic)
+                except ValueError:
+                    pass
+                return atomic
+            else:
+                return None
+        return self.running.popleft()
+
+    def act(self) -> None:
+        intention = self.sel_int()
+        if intention is None or intention.dropped or not intention.stack:
+            return
+        intention.suspended = None
+        self.exec_int(intention)
+        if intention.suspended is None and intention.stack and not intention.dropped:
+            self.running.append(intention)
+
+    def _requeue(self, intention: Intention) -> None:
+        if intention.dropped:
+            return
+        intention.suspended = None
+        self.suspended.pop(intention.id, None)
+        if intention not in self.running:
+            self.running.append(intention)
+
+    def _suspend(self, intention: Intention, reason: str) -> None:
+        intention.suspended = reason
+        self.suspended[intention.id] = intention
+
+    # ------------------------------------------------------------------ executing one formula
+    def exec_int(self, intention: Intention) -> None:
+        """Rule ExecInt: execute one formula of the top intended means, then ClrInt."""
+        im = intention.stack[-1]
+        frame = im.frames[-1]
+        if frame.pc >= len(frame.body):
+            if frame.kind != "body":
+                self._loop_step(intention, im, frame)
+            self.clr_int(intention)
+            return
+        instr = frame.body[frame.pc]
+        handler = _DISPATCH.get(type(instr))
+        try:
+            handler(self, intention, im, frame, instr)
+        except IAError as exc:
+            self._fail(intention, exc.error, exc.message, instr)
+            return
+        except SolveError as exc:
+            self._fail(intention, exc.error, exc.message, instr)
+            return
+        except ArithmeticError_ as exc:
+            self._fail(intention, "wrong_arguments", str(exc), instr)
+            return
+        if intention.suspended is None and not intention.dropped:
+            self.clr_int(intention)
+
+    def clr_int(self, intention: Intention) -> None:
+        """Rule ClrInt: pop finished intended means, and let the caller go on after its ``!g``."""
+        stack = intention.stack
+        while stack:
+            im = stack[-1]
+            frames = im.frames
+            while len(frames) > 1 and frames[-1].pc >= len(frames[-1].body) and frames[-1].kind == "body":
+                frames.pop()
+            if not im.is_finished():
+                return
+            stack.pop()
+            if im.plan.atomic:
+                intention.atomic -= 1
+            if im.handles is not None:
+                # a failure-handling plan finished: drop everything down to the goal that failed
+                if im.handles is not _PENDING_GOAL:
+                    while stack:
+                        gone = stack.pop()
+                        if gone.plan.atomic:
+                            intention.atomic -= 1
+                        if gone is im.handles:
+                            break
+                if stack:
+                    self._advance(stack[-1])
+                continue
+            if not stack:
+                break
+            caller = stack[-1]
+            instr = caller.current()
+            value = resolve(im.result, im.b)
+            if instr is not None and type(instr) in (P.Achieve, P.Test):
+                trail: list = []
+                if type(instr.term) is Literal or type(instr.term) is Var:
+                    unify(instr.term, _strip_for_caller(value), caller.b, trail)
+            self._advance(caller)
+        # the intention is finished
+        self._finished(intention)
+
+    def _finished(self, intention: Intention) -> None:
+        intention.dropped = True
+        if self.atomic_intention is intention:
+            self.atomic_intention = None
+        self.suspended.pop(intention.id, None)
+        if intention.fork is not None:
+            intention.fork.branch_done(self, intention, True)
+
+    @staticmethod
+    def _advance(im: IntendedMeans) -> None:
+        im.frames[-1].pc += 1
+
+    # -- loops
+    def _loop_step(self, intention: Intention, im: IntendedMeans, frame: Frame) -> None:
+        """The end of a while/for block: decide (one step, as Jason's .loop/.foreach) whether to go on."""
+        b = im.b
+        for v in frame.reset:
+            b.pop(v, None)
+        if frame.kind == "while":
+            if solve_first(self, frame.loop.cond, b):
+                frame.pc = 0
+                return
+        else:  # for
+            if frame.index < len(frame.solutions):
+                b.update(frame.solutions[frame.index])
+                frame.index += 1
+                frame.pc = 0
+                return
+        im.frames.pop()
+
+    # ------------------------------------------------------------------ failure
+    def _failure_annots(self, error: str, message: str, instr=None, extra: tuple = ()) -> tuple:
+        annots = [Literal("error", (Literal(error),)), Literal("error_msg", (message,))]
+        if instr is not None:
+            code = instr.term if hasattr(instr, "term") else Literal(str(instr))
+            annots.append(Literal("code", (code if isinstance(code, (Literal, Var)) else str(instr),)))
+            annots.append(Literal("code_src", (self.source_file or "",)))
+            annots.append(Literal("code_line", (getattr(instr, "line", 0),)))
+        annots.extend(extra)
+        return tuple(annots)
+
+    def _current_instr(self, intention: Intention):
+        return intention.stack[-1].current() if intention.stack else None
+
+    def _fail(self, intention: Intention, error: str, message: str, instr=None, annots: tuple | None = None,
+              extra: tuple = ()) -> None:
+        """Plan failure: post ``-!g`` for the nearest goal below that has a failure plan (Jason 2.5
+        cascade), or drop the intention with a warning naming the plan and line."""
+        if annots is None:
+            annots = self._failure_annots(error, message, instr or self._current_instr(intention), extra)
+        stack = intention.stack
+        skip_to = None
+        for i in range(len(stack) - 1, -1, -1):
+            im = stack[i]
+            if skip_to is not None:
+                if im is skip_to:
+                    skip_to = None
+                continue
+            if im.handles is not None:
+                skip_to = im.handles if im.handles is not _PENDING_GOAL else None
+                if skip_to is None:
+                    # the handler's goal has no intended means: the caller below has failed
+                    continue
+                continue
+            trig = im.plan.trigger
+            if trig.op == ADD and trig.kind != BEL:
+                lit = resolve(trig.literal, im.b)
+                if type(lit) is Literal and self.plans.relevant(Trigger(DEL, trig.kind, lit)):
+                    self.events.append(Event(Trigger(DEL, trig.kind, _add_annots(lit, annots)), intention, im))
+                    self._notify_waiters(self.events[-1].trigger)
+                    self._suspend(intention, "event")
+                    return
+        top = stack[-1] if stack else None
+        where = f" (plan {top.plan.trigger} at {top.plan.source_file}:{top.plan.line})" if top else ""
+        line = getattr(instr, "line", None)
+        at = f", line {line}" if line else ""
+        self.failures_unhandled += 1
+        log.warning("[%s] no failure event was generated for %s%s: %s (%s%s)", self.name,
+                    top.plan.trigger if top else "?", where, message, error, at)
+        self.drop_intention(intention)
+
+    def drop_intention(self, intention: Intention) -> None:
+        intention.dropped = True
+        intention.stack.clear()
+        try:
+            self.running.remove(intention)
+        except ValueError:
+            pass
+        self.suspended.pop(intention.id, None)
+        if self.atomic_intention is intention:
+            self.atomic_intention = None
+        self.event_waiters = [w for w in self.event_waiters if w[1] is not intention]
+        self.condition_waiters = [w for w in self.condition_waiters if w[0] is not intention]
+        if intention.fork is not None:
+            intention.fork.branch_done(self, intention, False)
+
+    # ------------------------------------------------------------------ suspension and resumption
+    def suspend_on(self, intention: Intention, im: IntendedMeans, susp: Suspend, instr) -> None:
+        """Suspend ``intention`` until ``susp`` says it may go on (then the formula succeeds or fails)."""
+        self._suspend(intention, susp.reason)
+        intention.waiting = susp
+        done = [False]
+
+        def finish(ok: bool, error: str = "ia_failed", message: str = "") -> None:
+            if done[0] or intention.dropped:
+                return
+            done[0] = True
+            intention.waiting = None
+            if ok:
+                self._advance(im)
+                self._requeue(intention)
+                self.clr_int(intention)
+            else:
+                self._requeue(intention)
+                self._fail(intention, error, message or f"{instr} failed", instr)
+
+        susp.finish = finish  # type: ignore[attr-defined]
+        ctx = IAContext(self, intention, im, im.b, [])
+        if susp.future is not None:
+            self.pending_futures += 1
+
+            def on_done(fut: Future) -> None:
+                def apply() -> None:
+                    self.pending_futures -= 1
+                    if done[0]:
+                        return
+                    try:
+                        value = fut.result()
+                    except Exception as exc:  # the awaited work failed: the formula fails with its reason
+                        finish(False, "ia_failed", f"{instr}: {exc}")
+                        return
+                    try:
+                        ok = susp.on_result(ctx, value) if susp.on_result else True
+                    except IAError as exc:
+                        finish(False, exc.error, exc.message)
+                        return
+                    finish(bool(ok) or ok is None)
+                self.feedback.append(apply)
+                self.arch.wake(self)
+            susp.future.add_done_callback(on_done)
+        if susp.timeout is not None:
+            def on_timeout() -> None:
+                if done[0]:
+                    return
+                if susp.on_timeout is not None:
+                    try:
+                        ok = susp.on_timeout(ctx)
+                    except IAError as exc:
+                        finish(False, exc.error, exc.message)
+                        return
+                    finish(bool(ok), "timeout", f"{instr} timed out")
+                else:
+                    finish(False, "timeout", f"{instr} timed out after {susp.timeout} s")
+                if susp.future is not None and not susp.future.done():
+                    susp.future.cancel()
+            self.add_timer(susp.timeout, on_timeout)
+        if susp.event is not None:
+            self.event_waiters.append((susp.event, intention, susp))
+        if susp.until is not None:
+            self.condition_waiters.append((intention, susp))
+
+    def _resume(self, intention: Intention, ok: bool, susp: Suspend) -> None:
+        finish = getattr(susp, "finish", None)
+        if finish is not None:
+            finish(ok)
+
+    def _check_conditions(self) -> None:
+        for entry in list(self.condition_waiters):
+            intention, susp = entry
+            try:
+                holds = susp.until()
+            except Exception:  # a broken condition must not stop the agent
+                holds = False
+            if holds:
+                self.condition_waiters.remove(entry)
+                self._resume(intention, True, susp)
+
+    def add_timer(self, seconds: float, callback: Callable[[], None]) -> None:
+        heapq.heappush(self.timers, (time.monotonic() + max(0.0, seconds), next(_seq), callback))
+        self.arch.wake(self)
+
+    def post_feedback(self, callback: Callable[[], None]) -> None:
+        """Run ``callback`` in this agent's next sense phase (safe to call from any thread)."""
+        self.feedback.append(callback)
+        self.arch.wake(self)
+
+    def deliver(self, message: Any) -> None:
+        """Put a message in the mailbox (safe to call from any thread)."""
+        self.mailbox.append(message)
+        self.arch.wake(self)
+
+    # ------------------------------------------------------------------ trust and bookkeeping
+    def accepts_plans_from(self, sender: str) -> bool:
+        """May ``sender`` give us plans (tellHow)? Asked of the architecture (the MAS knows)."""
+        policy = getattr(self.arch, "accepts_plans_from", None)
+        return True if policy is None else bool(policy(self, sender))
+
+    def count_dropped(self, reason: str) -> None:
+        self.dropped[reason] = self.dropped.get(reason, 0) + 1
+
+    # ------------------------------------------------------------------ goals as data (for stdlib)
+    def _fresh_goal(self, lit: Term, b: dict) -> Term:
+        """Apply bindings, rename unbound variables apart (binding the caller's to the new ones),
+        and add ``source(self)``: the literal of a goal event (Jason's prepareBodyForEvent)."""
+        value = resolve(lit, b)
+        if type(value) is Literal:
+            if value.args or value.annots or value.annot_tail is not None:
+                vs = variables(value)
+                if vs:
+                    mapping: dict = {}
+                    value = rename(value, mapping)
+                    for old, new in mapping.items():
+                        b[old] = new
+            if not value.annots or not has_source(value):
+                value = value.add_annot(SOURCE_SELF)
+        elif type(value) is Var:
+            raise IAError("wrong_arguments", f"unbound variable {value.name} used as a goal")
+        return value
+
+    def intentions(self) -> list[Intention]:
+        seen: dict[int, Intention] = {}
+        for i in list(self.running) + list(self.suspended.values()):
+            if not i.dropped:
+                seen[i.id] = i
+        for ev in self.events:
+            if ev.intention is not None and not ev.intention.dropped:
+                seen[ev.intention.id] = ev.intention
+        if self.atomic_intention is not None and not self.atomic_intention.dropped:
+            seen[self.atomic_intention.id] = self.atomic_intention
+        return sorted(seen.values(), key=lambda i: i.id)
+
+
+class _PendingGoal:
+    """Marks a failure plan whose failed goal never got an intended means (no plan for it)."""
+
+    def __repr__(self) -> str:
+        return "<pending goal>"
+
+
+_PENDING_GOAL = _PendingGoal()
+
+
+def _add_annots(lit: Literal, annots: tuple) -> Literal:
+    for a in annots:
+        lit = lit.add_annot(a)
+    return lit
+
+
+def _strip_for_caller(value: Term) -> Term:
+    return value
+
+
+# ---------------------------------------------------------------------- body formulas
+def _exec_achieve(ag: Agent, intention: Intention, im: IntendedMeans, frame: Frame, instr) -> None:
+    lit = ag._fresh_goal(instr.term, im.b)
+    ag.post_internal(Trigger(ADD, ACHIEVE, lit), intention)
+
+
+def _exec_achieve_new(ag: Agent, intention, im, frame, instr) -> None:
+    lit = ag._fresh_goal(instr.term, im.b)
+    ag.post_external(Trigger(ADD, ACHIEVE, lit), force=True)
+    frame.pc += 1
+
+
+def _exec_test(ag: Agent, intention, im, frame, instr) -> None:
+    query = instr.term
+    if solve_first(ag, query, im.b):
+        frame.pc += 1
+        return
+    value = resolve(query, im.b)
+    if type(value) is Literal and ag.plans.relevant(Trigger(ADD, TEST, value)):
+        lit = ag._fresh_goal(value, im.b)
+        ag.post_internal(Trigger(ADD, TEST, lit), intention)
+        return
+    raise IAError("test_goal_failed", f"test goal '{to_str(value)}' failed")
+
+
+def _belief_literal(term: Term, b: dict) -> Literal:
+    lit = resolve(term, b)
+    if type(lit) is not Literal:
+        raise IAError("wrong_arguments", f"'{to_str(lit)}' is not a literal")
+    if not is_ground(lit):
+        raise IAError("wrong_arguments", f"belief '{to_str(lit)}' is not ground")
+    if not has_source(lit):
+        lit = lit.add_annot(SOURCE_SELF)
+    return lit
+
+
+def _exec_add_bel(ag: Agent, intention, im, frame, instr, at_end: bool = False, new_focus: bool = False) -> None:
+    lit = _belief_literal(instr.term, im.b)
+    added = ag.bb.add(lit, at_end=at_end)
+    frame.pc += 1
+    if added is not None:
+        trigger = Trigger(ADD, BEL, added)
+        if new_focus:
+            ag.post_external(trigger)
+        elif ag.plans.relevant(trigger):
+            ag.post_internal(trigger, intention)
+        else:
+            ag._notify_waiters(trigger)
+
+
+def _exec_add_bel_end(ag, intention, im, frame, instr) -> None:
+    _exec_add_bel(ag, intention, im, frame, instr, at_end=True)
+
+
+def _exec_add_bel_new(ag, intention, im, frame, instr) -> None:
+    _exec_add_bel(ag, intention, im, frame, instr, new_focus=True)
+
+
+def _find_belief(ag: Agent, pattern: Literal, b: dict) -> Literal | None:
+    """The first stored belief matching ``pattern`` (bindings made in ``b``)."""
+    for fact in ag.bb.candidates(pattern, b):
+        trail: list = []
+        if unify(pattern.without_annots(), fact.without_annots(), b, trail):
+            if pattern.annots:
+                t2: list = []
+                if not unify(pattern, fact, b, t2):
+                    undo(b, t2, 0)
+                    undo(b, trail, 0)
+                    continue
+            return fact
+        undo(b, trail, 0)
+    return None
+
+
+def _exec_del_bel(ag: Agent, intention, im, frame, instr, new_focus: bool = False) -> None:
+    pattern = resolve(instr.term, im.b)
+    if type(pattern) is not Literal:
+        raise IAError("wrong_arguments", f"'{to_str(pattern)}' is not a literal")
+    if not has_source(pattern):
+        pattern = pattern.add_annot(SOURCE_SELF)
+    frame.pc += 1
+    found = _find_belief(ag, pattern, im.b)
+    if found is None:
+        return
+    removed = ag.bb.remove(resolve(pattern, im.b))
+    if removed is not None:
+        trigger = Trigger(DEL, BEL, removed)
+        if new_focus:
+            ag.post_external(trigger)
+        elif ag.plans.relevant(trigger):
+            ag.post_internal(trigger, intention)
+        else:
+            ag._notify_waiters(trigger)
+
+
+def _exec_del_bel_new(ag, intention, im, frame, instr) -> None:
+    _exec_del_bel(ag, intention, im, frame, instr, new_focus=True)
+
+
+def _exec_upd_bel(ag: Agent, intention, im, frame, instr) -> None:
+    """``-+b(args)``: remove the first ``b(_,..,_)[source(self)]`` (external -b event), add ``b(args)``."""
+    lit = _belief_literal(instr.term, im.b)
+    anon = Literal(lit.functor, tuple(Var("_") for _ in lit.args), (SOURCE_SELF,), lit.neg)
+    b2: dict = {}
+    found = _find_belief(ag, anon, b2)
+    if found is not None:
+        removed = ag.bb.remove(Literal(found.functor, found.args, (SOURCE_SELF,), found.neg))
+        if removed is not None:
+            ag.post_external(Trigger(DEL, BEL, removed))
+    _exec_add_bel(ag, intention, im, frame, instr)
+
+
+def _exec_action(ag: Agent, intention, im, frame, instr) -> None:
+    action = resolve(instr.term, im.b)
+    result = ag.arch.act(ag, action)
+    if result is None:
+        raise IAError("action_failed", f"no environment configured to execute the action {to_str(action)}")
+    if isinstance(result, Future):
+        def on_result(ctx, value) -> bool:
+            ok, reason = _action_outcome(value)
+            if not ok:
+                raise IAError("action_failed", f"action {to_str(action)} failed" + (f": {reason}" if reason else ""))
+            return True
+        ag.suspend_on(intention, im, Suspend(future=result, on_result=on_result, reason="action"), instr)
+        return
+    ok, reason = _action_outcome(result)
+    if not ok:
+        raise IAError("action_failed", f"action {to_str(action)} failed" + (f": {reason}" if reason else ""))
+    frame.pc += 1
+
+
+def _action_outcome(value) -> tuple[bool, str]:
+    if isinstance(value, bool):
+        return value, ""
+    ok = getattr(value, "ok", None)
+    if ok is not None:
+        return bool(ok), getattr(value, "reason", "") or ""
+    return bool(value), ""
+
+
+def _exec_internal(ag: Agent, intention, im, frame, instr) -> None:
+    lit = instr.term
+    spec = ag.registry.get(lit.functor)
+    if spec is None:
+        raise IAError("ia_failed", f"unknown internal action {lit.functor}")
+    b = im.b
+    args = tuple(resolve(a, b) for a in lit.args) if lit.args else ()
+    ag._check_arity(spec, lit, args)
+    trail: list = []
+    ctx = IAContext(ag, intention, im, b, trail)
+    result = spec.function(ctx, *args)
+    if result is None or result is True:
+        frame.pc += 1
+        return
+    if result is False:
+        raise IAError("ia_failed", f"internal action {to_str(resolve(lit, b))} failed")
+    if isinstance(result, GeneratorType):
+        for _ in result:
+            frame.pc += 1
+            return
+        raise IAError("ia_failed", f"internal action {to_str(resolve(lit, b))} failed")
+    if isinstance(result, Suspend):
+        ag.suspend_on(intention, im, result, instr)
+        return
+    frame.pc += 1
+
+
+def _exec_constraint(ag: Agent, intention, im, frame, instr) -> None:
+    if solve_first(ag, instr.term, im.b):
+        frame.pc += 1
+        return
+    raise IAError("constraint_failed", f"constraint {to_str(resolve(instr.term, im.b))} is false")
+
+
+def _exec_var(ag: Agent, intention, im, frame, instr) -> None:
+    value = resolve(instr.term, im.b)
+    if isinstance(value, PlanTerm) and value.body is not None:
+        frame.pc += 1
+        im.frames.append(Frame(value.body))
+        return
+    if isinstance(value, Literal):
+        # a variable bound to a literal is executed as that formula
+        klass = P.InternalAction if "." in value.functor else P.Action
+        handler = _DISPATCH[klass]
+        handler(ag, intention, im, frame, klass(value, instr.line))
+        return
+    raise IAError("wrong_arguments", f"'{to_str(value)}' cannot be executed as a formula")
+
+
+def _loop_reset_vars(im: IntendedMeans, cond: Term, body: tuple) -> tuple:
+    vs = variables(cond)
+    P.body_variables(body, vs)
+    return tuple(v for v in vs if v not in im.b)
+
+
+def _exec_if(ag: Agent, intention, im, frame, instr) -> None:
+    frame.pc += 1
+    for cond, body in instr.branches:
+        if solve_first(ag, cond, im.b):
+            if body:
+                im.frames.append(Frame(body))
+            return
+    if instr.else_body:
+        im.frames.append(Frame(instr.else_body))
+
+
+def _exec_while(ag: Agent, intention, im, frame, instr) -> None:
+    frame.pc += 1
+    reset = _loop_reset_vars(im, instr.cond, instr.body)
+    if solve_first(ag, instr.cond, im.b):
+        im.frames.append(Frame(instr.body, "while", instr, reset=reset))
+
+
+def _exec_for(ag: Agent, intention, im, frame, instr) -> None:
+    frame.pc += 1
+    reset = _loop_reset_vars(im, instr.cond, instr.body)
+    cond_vars = [v for v in variables(instr.cond) if v not in im.b]
+    solutions = []
+    b = im.b
+    for _ in solve(ag, instr.cond, b):
+        solutions.append({v: resolve(v, b) for v in cond_vars})
+    for v in cond_vars:
+        b.pop(v, None)
+    if solutions:
+        b.update(solutions[0])
+        f = Frame(instr.body, "for", instr, solutions, reset=reset)
+        f.index = 1
+        im.frames.append(f)
+
+
+def _exec_add_plan(ag: Agent, intention, im, frame, instr) -> None:
+    term = resolve(instr.term, im.b)
+    from agentspeak.stdlib.plans import add_plan_term
+    add_plan_term(ag, term, SELF, at_end=instr.at_end)
+    frame.pc += 1
+
+
+def _exec_remove_plan(ag: Agent, intention, im, frame, instr) -> None:
+    term = resolve(instr.term, im.b)
+    plan = term.as_plan() if isinstance(term, PlanTerm) else None
+    if plan is not None and plan.label is not None:
+        ag.plans.remove(plan.label)
+    elif isinstance(term, PlanTerm) and term.rule is not None:
+        ag.bb.remove_rule(term.rule)
+    frame.pc += 1
+
+
+def _exec_fork(ag: Agent, intention, im, frame, instr) -> None:
+    from agentspeak.fork import start_fork
+    start_fork(ag, intention, im, frame, instr)
+
+
+def _exec_pycall(ag: Agent, intention, im, frame, instr) -> None:
+    if instr.fn(IAContext(ag, intention, im, im.b, [])) is False:
+        raise IAError("ia_failed", f"{instr} failed")
+    frame.pc += 1
+
+
+def _exec_trigger(ag: Agent, intention, im, frame, instr) -> None:
+    raise IAError("wrong_arguments", f"a trigger ({instr}) is not a body formula")
+
+
+_DISPATCH: dict = {
+    P.Achieve: _exec_achieve, P.AchieveNew: _exec_achieve_new, P.Test: _exec_test,
+    P.AddBel: _exec_add_bel, P.AddBelEnd: _exec_add_bel_end, P.AddBelNew: _exec_add_bel_new,
+    P.DelBel: _exec_del_bel, P.DelBelNew: _exec_del_bel_new, P.UpdBel: _exec_upd_bel,
+    P.Action: _exec_action, P.InternalAction: _exec_internal, P.Constraint: _exec_constraint,
+    P.ExecVar: _exec_var, P.If: _exec_if, P.While: _exec_while, P.For: _exec_for,
+    P.AddPlan: _exec_add_plan, P.RemovePlan: _exec_remove_plan, P.Fork: _exec_fork,
+    P.TriggerInstr: _exec_trigger, P.PyCall: _exec_pycall,
+}
+
+__all__ = ["Agent", "IAContext"]
+_ = (source, PERCEPT, Rule, DEL)

@@ -1,0 +1,226 @@
+"""The belief base: ground literals indexed by (negated, functor, arity) and by first argument, plus rules.
+
+Jason's model: the same literal with different annotations is ONE belief whose annotation sets are
+merged; adding a belief that is already there with no new annotation changes nothing (no event);
+a belief disappears when its last ``source(...)`` annotation is removed. ``+b`` adds at the start
+of its functor's list, ``+>b`` and initial beliefs at the end, so queries see Jason's order.
+"""
+from __future__ import annotations
+
+import itertools
+from typing import Iterable, Iterator
+
+from agentspeak.program import Rule
+from agentspeak.terms import Literal, Term, Var, resolve
+
+_SOURCE = "source"
+
+
+def _first_arg_key(lit: Literal):
+    if not lit.args:
+        return None
+    a = lit.args[0]
+    t = type(a)
+    if t is int or t is float or t is str:
+        return a
+    if t is Literal and not a.args:
+        return ("atom", a.functor, a.neg)
+    return None  # structures, lists: no first-argument index (still found by full scan)
+
+
+class _Entry:
+    __slots__ = ("seq", "lit")
+
+    def __init__(self, seq: int, lit: Literal) -> None:
+        self.seq, self.lit = seq, lit
+
+
+class _Bucket:
+    """Beliefs of one key, ordered by ``seq``; sorted views are cached until the next change."""
+
+    __slots__ = ("entries", "by_arg", "_sorted", "_sorted_by_arg")
+
+    def __init__(self) -> None:
+        self.entries: dict[Literal, _Entry] = {}          # literal without annotations -> entry
+        self.by_arg: dict[object, dict[Literal, _Entry]] = {}
+        self._sorted: list[Literal] | None = None
+        self._sorted_by_arg: dict[object, list[Literal]] = {}
+
+    def changed(self) -> None:
+        self._sorted = None
+        self._sorted_by_arg.clear()
+
+    def all(self) -> list[Literal]:
+        s = self._sorted
+        if s is None:
+            s = self._sorted = [e.lit for e in sorted(self.entries.values(), key=lambda e: e.seq)]
+        return s
+
+    def with_first_arg(self, key) -> list[Literal]:
+        s = self._sorted_by_arg.get(key)
+        if s is None:
+            d = self.by_arg.get(key)
+            s = [e.lit for e in sorted(d.values(), key=lambda e: e.seq)] if d else []
+            self._sorted_by_arg[key] = s
+        return s
+
+
+class BeliefBase:
+    """Facts and rules of one agent."""
+
+    def __init__(self) -> None:
+        self._facts: dict[tuple, _Bucket] = {}
+        self._rules: dict[tuple, list[Rule]] = {}
+        self._front = itertools.count(-1, -1)
+        self._back = itertools.count(1)
+        self.size = 0
+
+    # -- facts -------------------------------------------------------------------------------
+    def add(self, lit: Literal, at_end: bool = False) -> Literal | None:
+        """Add (or merge annotations of) a ground literal. Returns the literal as it should be
+        reported in the ``+b`` event (only the new annotations), or None if nothing changed."""
+        key = lit.key
+        bucket = self._facts.get(key)
+        if bucket is None:
+            bucket = self._facts[key] = _Bucket()
+        plain = lit.without_annots()
+        entry = bucket.entries.get(plain)
+        if entry is None:
+            entry = _Entry(next(self._back) if at_end else next(self._front), lit)
+            bucket.entries[plain] = entry
+            ak = _first_arg_key(lit)
+            if ak is not None:
+                bucket.by_arg.setdefault(ak, {})[plain] = entry
+            bucket.changed()
+            self.size += 1
+            return lit
+        old = entry.lit
+        new_annots = [a for a in lit.annots or () if not old.annots or a not in old.annots]
+        if not new_annots:
+            return None
+        entry.lit = Literal(old.functor, old.args, (old.annots or ()) + tuple(new_annots), old.neg)
+        bucket.changed()
+        return Literal(old.functor, old.args, tuple(new_annots), old.neg)
+
+    def remove(self, lit: Literal) -> Literal | None:
+        """Remove ``lit``'s annotations from the stored belief (all of it if ``lit`` has none).
+        Returns the literal for the ``-b`` event (the removed annotations), or None."""
+        bucket = self._facts.get(lit.key)
+        if bucket is None:
+            return None
+        plain = lit.without_annots()
+        entry = bucket.entries.get(plain)
+        if entry is None:
+            return None
+        old = entry.lit
+        if not lit.annots:
+            removed = old
+            remaining: tuple = ()
+        else:
+            gone = tuple(a for a in lit.annots if old.annots and a in old.annots)
+            if not gone:
+                return None
+            remaining = tuple(a for a in old.annots or () if a not in gone)
+            removed = Literal(old.functor, old.args, gone, old.neg)
+        if not any(isinstance(a, Literal) and a.functor == _SOURCE for a in remaining):
+            del bucket.entries[plain]
+            ak = _first_arg_key(old)
+            if ak is not None:
+                d = bucket.by_arg.get(ak)
+                if d is not None:
+                    d.pop(plain, None)
+            self.size -= 1
+        else:
+            entry.lit = Literal(old.functor, old.args, remaining, old.neg)
+        bucket.changed()
+        return removed
+
+    def get(self, lit: Literal) -> Literal | None:
+        """The stored belief equal to ``lit`` without annotations."""
+        bucket = self._facts.get(lit.key)
+        if bucket is None:
+            return None
+        e = bucket.entries.get(lit.without_annots())
+        return e.lit if e else None
+
+    def candidates(self, lit: Literal, b: dict) -> list[Literal]:
+        """Stored beliefs that may unify with ``lit`` (first-argument index when it is bound)."""
+        bucket = self._facts.get(lit.key)
+        if bucket is None:
+            return []
+        if lit.args:
+            a = lit.args[0]
+            while type(a) is Var:
+                v = b.get(a)
+                if v is None:
+                    break
+                a = v
+            t = type(a)
+            if t is int or t is float or t is str:
+                return bucket.with_first_arg(a)
+            if t is Literal and not a.args:
+                return bucket.with_first_arg(("atom", a.functor, a.neg))
+        return bucket.all()
+
+    def literals(self) -> Iterator[Literal]:
+        for bucket in self._facts.values():
+            yield from bucket.all()
+
+    def of_key(self, key: tuple) -> list[Literal]:
+        bucket = self._facts.get(key)
+        return bucket.all() if bucket else []
+
+    def clear_percepts(self) -> None:
+        for lit in list(self.literals()):
+            if any(isinstance(a, Literal) and a.functor == _SOURCE and a.args and a.args[0] == PERCEPT for a in lit.annots or ()):
+                self.remove(Literal(lit.functor, lit.args, (Literal(_SOURCE, (PERCEPT,)),), lit.neg))
+
+    # -- rules -------------------------------------------------------------------------------
+    def add_rule(self, rule: Rule, at_end: bool = True) -> None:
+        rules = self._rules.setdefault(rule.head.key, [])
+        if at_end:
+            rules.append(rule)
+        else:
+            rules.insert(0, rule)
+
+    def remove_rule(self, rule: Rule) -> bool:
+        rules = self._rules.get(rule.head.key, [])
+        for i, r in enumerate(rules):
+            if str(r) == str(rule):
+                del rules[i]
+                return True
+        return False
+
+    def rules_for(self, lit: Literal) -> list[Rule]:
+        return self._rules.get(lit.key, ())
+
+    def rules(self) -> Iterable[Rule]:
+        for rules in self._rules.values():
+            yield from rules
+
+    def __len__(self) -> int:
+        return self.size
+
+
+SELF = Literal("self")
+PERCEPT = Literal("percept")
+
+
+def source(who: Term) -> Literal:
+    return Literal(_SOURCE, (who,))
+
+
+SOURCE_SELF = source(SELF)
+SOURCE_PERCEPT = source(PERCEPT)
+
+
+def has_source(lit: Literal) -> bool:
+    return any(isinstance(a, Literal) and a.functor == _SOURCE and len(a.args) == 1 for a in lit.annots or ())
+
+
+def with_source(lit: Literal, who: Term) -> Literal:
+    return lit.add_annot(source(who))
+
+
+__all__ = ["BeliefBase", "SELF", "PERCEPT", "SOURCE_SELF", "SOURCE_PERCEPT", "source", "has_source",
+           "with_source", "resolve"]

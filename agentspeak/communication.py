@@ -1,0 +1,223 @@
+"""Speech acts with Jason's semantics (KQML performatives), independent of the transport.
+
+A ``Message`` carries a performative and content (a term). ``receive_message`` is what the
+receiving agent does with it, one message per reasoning cycle, as Jason's default ``kqmlPlans.asl``
+(written here in Python, which is Jason's own "fast path"). A program can override the semantics
+of any performative, or add new ones, with plans for ``+!kqml_received(Sender, Performative,
+Content, MsgId)``: when such a plan is relevant, the message becomes that goal instead.
+"""
+from __future__ import annotations
+
+import itertools
+import logging
+import os
+import uuid
+from dataclasses import dataclass, field
+from typing import Any
+
+from agentspeak.beliefs import SELF, SOURCE_SELF, has_source, source
+from agentspeak.program import ACHIEVE, ADD, BEL, DEL, Plan, PlanTerm, Trigger
+from agentspeak.solver import SolveError, solve
+from agentspeak.terms import NIL, Cons, Literal, Term, Var, is_ground, list_items, make_list, resolve, to_str
+
+log = logging.getLogger("faultmas.agentspeak")
+
+PERFORMATIVES = ("tell", "untell", "achieve", "unachieve", "askOne", "askAll", "tellHow",
+                 "untellHow", "askHow", "signal")
+
+_ids = itertools.count(1)
+_prefix = f"{os.getpid():x}{uuid.uuid4().hex[:6]}"
+
+
+def new_message_id() -> str:
+    """Unique across processes (pid + random prefix + counter)."""
+    return f"mid{_prefix}{next(_ids)}"
+
+
+@dataclass
+class Message:
+    sender: str
+    receiver: str
+    performative: str
+    content: Term
+    msg_id: str = field(default_factory=new_message_id)
+    in_reply_to: str | None = None
+
+    def __str__(self) -> str:
+        return f"<{self.msg_id},{self.sender},{self.performative},{self.receiver},{to_str(self.content)}>"
+
+
+def _items(content: Term) -> list:
+    if isinstance(content, Cons) or content is NIL:
+        try:
+            return list_items(content)
+        except TypeError:
+            return [content]
+    return [content]
+
+
+def _strip_self_source(lit: Literal) -> Literal:
+    if not lit.annots:
+        return lit
+    kept = tuple(a for a in lit.annots if a != SOURCE_SELF)
+    return Literal(lit.functor, lit.args, kept or None, lit.neg)
+
+
+def _annotate(lit: Term, who: Term) -> Term:
+    if isinstance(lit, Literal):
+        return Literal(lit.functor, lit.args, lit.annots, lit.neg).add_annot(source(who))
+    return lit
+
+
+def receive_message(agent: Any, msg: Message) -> None:
+    """Apply the semantics of one received message."""
+    sender = Literal(msg.sender) if msg.sender != agent.name else SELF
+    perf = msg.performative
+    # replies to a pending ask resume the asking intention
+    if msg.in_reply_to is not None and msg.in_reply_to in agent.pending_asks:
+        agent.pending_asks.pop(msg.in_reply_to)(msg)
+        return
+    if agent.plans.relevant(Trigger(ADD, ACHIEVE, Literal("kqml_received", (Var(), Var(), Var(), Var())))):
+        goal = Literal("kqml_received", (sender, Literal(perf), msg.content, msg.msg_id), (SOURCE_SELF,))
+        agent.post_external(Trigger(ADD, ACHIEVE, goal), force=True)
+        return
+    handler = _HANDLERS.get(perf)
+    if handler is None:
+        log.warning("[%s] message from %s dropped: unknown performative '%s'", agent.name, msg.sender, perf)
+        agent.count_dropped("unknown_performative")
+        return
+    try:
+        handler(agent, msg, sender)
+    except (SolveError, TypeError, ValueError) as exc:
+        log.warning("[%s] message from %s dropped: %s", agent.name, msg.sender, exc)
+
+
+def _tell(agent, msg: Message, sender: Term) -> None:
+    for item in _items(msg.content):
+        if not isinstance(item, Literal) or not is_ground(item):
+            log.warning("[%s] tell from %s ignored: '%s' is not a ground literal", agent.name, msg.sender, to_str(item))
+            continue
+        added = agent.bb.add(_annotate(item, sender))
+        if added is not None:
+            agent.post_external(Trigger(ADD, BEL, added))
+
+
+def _untell(agent, msg: Message, sender: Term) -> None:
+    for item in _items(msg.content):
+        if not isinstance(item, Literal):
+            continue
+        b: dict = {}
+        for fact in list(agent.bb.candidates(item, b)):
+            from agentspeak.unify import unifies
+            if unifies(item.without_annots(), fact.without_annots(), {}):
+                removed = agent.bb.remove(Literal(fact.functor, fact.args, (source(sender),), fact.neg))
+                if removed is not None:
+                    agent.post_external(Trigger(DEL, BEL, removed))
+                break
+
+
+def _achieve(agent, msg: Message, sender: Term) -> None:
+    for item in _items(msg.content):
+        if isinstance(item, Literal):
+            agent.post_external(Trigger(ADD, ACHIEVE, _annotate(item, sender)), force=True)
+
+
+def _unachieve(agent, msg: Message, sender: Term) -> None:
+    from agentspeak.stdlib.bdi import drop_desire
+    for item in _items(msg.content):
+        if isinstance(item, Literal):
+            drop_desire(agent, item)
+
+
+def _signal(agent, msg: Message, sender: Term) -> None:
+    for item in _items(msg.content):
+        if isinstance(item, Literal):
+            agent.post_external(Trigger(ADD, BEL, _annotate(item, sender)), force=False)
+
+
+def _answer(agent, msg: Message, performative: str, content: Term) -> None:
+    reply = Message(agent.name, msg.sender, performative, content, in_reply_to=msg.msg_id)
+    agent.arch.send(agent, reply)
+
+
+def _ask_one(agent, msg: Message, sender: Term) -> None:
+    query = msg.content
+    b: dict = {}
+    for _ in solve(agent, query, b):
+        _answer(agent, msg, "tell", _strip_self_source(resolve(query, b)) if isinstance(query, Literal) else resolve(query, b))
+        return
+    # no belief: try a +?q plan, answering when it finishes
+    if isinstance(query, Literal) and agent.plans.relevant(Trigger(ADD, "?", query)):
+        _ask_by_plan(agent, msg, query)
+        return
+    _answer(agent, msg, "untell", query)
+
+
+def _ask_by_plan(agent, msg: Message, query: Literal) -> None:
+    """Run ``?query`` in a new intention (through its +?q plan) and send the answer when it is done."""
+    from agentspeak.intentions import IntendedMeans, Intention
+    from agentspeak.program import PyCall, Test
+
+    def reply(ctx) -> bool:
+        _answer(agent, msg, "tell", _strip_self_source(ctx.resolve(query)))
+        return True
+
+    plan = Plan(Trigger(ADD, ACHIEVE, Literal("kqml_ask_answer")), None, (Test(query, 0), PyCall(reply, 0)))
+    intention = Intention()
+    intention.stack.append(IntendedMeans(plan, {}, plan.trigger.literal))
+    agent._requeue(intention)
+
+
+def _ask_all(agent, msg: Message, sender: Term) -> None:
+    query = msg.content
+    b: dict = {}
+    answers = []
+    for _ in solve(agent, query, b):
+        value = resolve(query, b)
+        answers.append(_strip_self_source(value) if isinstance(value, Literal) else value)
+    _answer(agent, msg, "tell", make_list(answers))
+
+
+def _tell_how(agent, msg: Message, sender: Term) -> None:
+    if not agent.accepts_plans_from(msg.sender):
+        log.warning("[%s] tellHow from %s refused: sender not allowed to send plans", agent.name, msg.sender)
+        agent.count_dropped("tellHow_refused")
+        return
+    from agentspeak.stdlib.plans import add_plan_term
+    for item in _items(msg.content):
+        add_plan_term(agent, item, sender, at_end=True)
+
+
+def _untell_how(agent, msg: Message, sender: Term) -> None:
+    for item in _items(msg.content):
+        label = item if isinstance(item, Literal) else None
+        if isinstance(item, str):
+            label = Literal(item)
+        if label is not None:
+            agent.plans.remove(label)
+
+
+def _ask_how(agent, msg: Message, sender: Term) -> None:
+    content = msg.content
+    trigger = content.as_trigger() if isinstance(content, PlanTerm) else None
+    if trigger is None and isinstance(content, str):
+        from agentspeak.parser import parse_term
+        parsed = parse_term("{" + content + "}")
+        trigger = parsed.as_trigger() if isinstance(parsed, PlanTerm) else None
+    plans = []
+    if trigger is not None:
+        from agentspeak.unify import unifies
+        for p in agent.plans.relevant(trigger):
+            if unifies(p.trigger.literal, trigger.literal, {}) or unifies(trigger.literal, p.trigger.literal, {}):
+                plans.append(PlanTerm(plan=p))
+    _answer(agent, msg, "tellHow", make_list(plans))
+
+
+_HANDLERS = {
+    "tell": _tell, "untell": _untell, "achieve": _achieve, "unachieve": _unachieve,
+    "askOne": _ask_one, "askAll": _ask_all, "tellHow": _tell_how, "untellHow": _untell_how,
+    "askHow": _ask_how, "signal": _signal,
+}
+
+__all__ = ["Message", "receive_message", "PERFORMATIVES", "new_message_id"]
+_ = (BEL, has_source)

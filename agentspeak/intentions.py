@@ -1,0 +1,174 @@
+"""Events, intended means and intentions (Jason's Circumstance data), and the plan library.
+
+An intended means (``IntendedMeans``) is one running instance of a plan: the plan (shared, never
+copied), its own bindings dict, and a stack of frames (the plan body plus any ``if``/``while``/
+``for`` block being executed). An intention is a stack of intended means.
+"""
+from __future__ import annotations
+
+import itertools
+from collections import deque
+from typing import Iterator
+
+from agentspeak.program import ACHIEVE, ADD, BEL, DEL, Plan, Trigger
+from agentspeak.terms import Literal, Term
+
+_intention_ids = itertools.count(1)
+
+
+class Event:
+    """A trigger waiting to be handled. ``intention`` is None for external events.
+
+    ``handles`` is set on ``-!g`` failure events: the intended means of the goal that failed.
+    """
+
+    __slots__ = ("trigger", "intention", "handles")
+
+    def __init__(self, trigger: Trigger, intention: "Intention | None" = None, handles=None) -> None:
+        self.trigger, self.intention, self.handles = trigger, intention, handles
+
+    def __repr__(self) -> str:
+        return f"Event({self.trigger})"
+
+
+class Frame:
+    """A body being executed: the plan body, or a block of ``if``/``while``/``for``."""
+
+    __slots__ = ("body", "pc", "kind", "loop", "solutions", "index", "reset")
+
+    def __init__(self, body: tuple, kind: str = "body", loop=None, solutions=None, reset=()) -> None:
+        self.body = body
+        self.pc = 0
+        self.kind = kind            # "body" | "while" | "for"
+        self.loop = loop            # the While/For instruction
+        self.solutions = solutions  # for: the list of solution bindings
+        self.index = 0
+        self.reset = reset          # variables unbound again before each iteration
+
+
+class IntendedMeans:
+    __slots__ = ("plan", "b", "frames", "result", "handles", "event_literal")
+
+    def __init__(self, plan: Plan, b: dict, event_literal: Term) -> None:
+        self.plan = plan
+        self.b = b
+        self.frames = [Frame(plan.body)]
+        self.result = plan.trigger.literal  # what the caller unifies with (changed by TRO)
+        self.handles: IntendedMeans | None = None
+        self.event_literal = event_literal
+
+    @property
+    def trigger(self) -> Trigger:
+        return self.plan.trigger
+
+    def is_finished(self) -> bool:
+        frames = self.frames
+        return len(frames) == 1 and frames[0].pc >= len(frames[0].body)
+
+    def current(self):
+        """The body formula about to run (None between frames)."""
+        f = self.frames[-1]
+        return f.body[f.pc] if f.pc < len(f.body) else None
+
+    def at_last_step(self) -> bool:
+        """True when the step being executed is the last one of the plan (for tail calls)."""
+        return len(self.frames) == 1 and self.frames[0].pc == len(self.frames[0].body) - 1
+
+    def __repr__(self) -> str:
+        return f"IM({self.plan.trigger} @ {self.plan.source_file}:{self.plan.line})"
+
+
+class Intention:
+    __slots__ = ("id", "stack", "suspended", "atomic", "waiting", "fork", "dropped", "__weakref__")
+
+    def __init__(self) -> None:
+        self.id = next(_intention_ids)
+        self.stack: list[IntendedMeans] = []
+        self.suspended: str | None = None   # why it is not in the running queue (None = running)
+        self.atomic = 0                     # number of [atomic] plans on the stack
+        self.waiting = None                 # the Suspend (or event) it waits for
+        self.fork = None                    # ForkGroup it belongs to, for |&| and |||
+        self.dropped = False
+
+    def __repr__(self) -> str:
+        return f"intention {self.id}: " + " / ".join(repr(im) for im in reversed(self.stack))
+
+    def goal_ims(self) -> Iterator[IntendedMeans]:
+        return reversed(self.stack)
+
+
+class PlanLibrary:
+    """Plans in source order, indexed by trigger (op, kind, functor/arity); variable triggers last-bound."""
+
+    def __init__(self) -> None:
+        self.plans: list[Plan] = []
+        self._index: dict[tuple, list[Plan]] | None = None
+        self._var_plans: dict[tuple, list[Plan]] = {}
+
+    def add(self, plan: Plan, at_end: bool = True) -> None:
+        plan.ensure_label()
+        if at_end:
+            self.plans.append(plan)
+        else:
+            self.plans.insert(0, plan)
+        self._index = None
+
+    def remove(self, label: Literal) -> list[Plan]:
+        removed = [p for p in self.plans if p.label is not None and p.label.functor == label.functor]
+        if removed:
+            self.plans = [p for p in self.plans if p not in removed]
+            self._index = None
+        return removed
+
+    def by_label(self, name: str) -> Plan | None:
+        for p in self.plans:
+            if p.label is not None and p.label.functor == name:
+                return p
+        return None
+
+    def _build(self) -> dict:
+        index: dict[tuple, list[Plan]] = {}
+        var_plans: dict[tuple, list[Plan]] = {}
+        for p in self.plans:
+            key = p.trigger.key
+            if key is None:
+                var_plans.setdefault((p.trigger.op, p.trigger.kind), []).append(p)
+            else:
+                index.setdefault(key, []).append(p)
+        if var_plans:  # merge variable-trigger plans into every list, keeping source order
+            order = {id(p): i for i, p in enumerate(self.plans)}
+            for key, plans in index.items():
+                extra = var_plans.get((key[0], key[1]))
+                if extra:
+                    plans.extend(extra)
+                    plans.sort(key=lambda p: order[id(p)])
+        self._var_plans = var_plans
+        self._index = index
+        return index
+
+    def relevant(self, trigger: Trigger) -> list[Plan]:
+        index = self._index if self._index is not None else self._build()
+        key = trigger.key
+        if key is None:
+            return [p for p in self.plans if p.trigger.op == trigger.op and p.trigger.kind == trigger.kind]
+        found = index.get(key)
+        if found is not None:
+            return found
+        return self._var_plans.get((trigger.op, trigger.kind), [])
+
+    def has_candidates(self, op: str, kind: str, lit: Term) -> bool:
+        return bool(self.relevant(Trigger(op, kind, lit)))
+
+    def __len__(self) -> int:
+        return len(self.plans)
+
+    def __iter__(self):
+        return iter(self.plans)
+
+
+class EventQueue(deque):
+    """FIFO of events (Jason's default ``selectEvent``)."""
+
+
+__all__ = ["Event", "Frame", "IntendedMeans", "Intention", "PlanLibrary", "EventQueue",
+           "ADD", "DEL", "BEL", "ACHIEVE"]

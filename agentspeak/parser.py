@@ -1,0 +1,610 @@
+"""Parse AgentSpeak text into a ``Program`` (grammar in ``agentspeak.lark``; this module only transforms).
+
+Errors are ``AslSyntaxError`` naming ``file:line:col``, quoting the line with a caret under the
+column, and saying what was expected. ``parse_program_all_errors`` keeps going after an error
+(re-synchronising at the next clause) so ``faultmas asl check`` can report every error at once.
+"""
+from __future__ import annotations
+
+import os
+import re
+import threading
+from pathlib import Path
+
+from lark import Lark, Token, Transformer
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
+
+from agentspeak.errors import AslSyntaxError
+from agentspeak.program import (
+    ACHIEVE, ADD, BEL, DEL, META, TEST, Achieve, AchieveNew, Action, AddBel, AddBelEnd, AddBelNew,
+    AddPlan, Constraint, DelBel, DelBelNew, ExecVar, Fork, If, Instr, InternalAction, Plan, PlanTerm,
+    Program, RemovePlan, Rule, Test, Trigger, TriggerInstr, UpdBel, While, For, body_variables,
+)
+from agentspeak.terms import (
+    NIL, And, Arith, Cons, Literal, Not, Or, Rel, Term, Var, is_ground, make_list, resolve, variables,
+)
+
+_GRAMMAR = Path(__file__).with_name("agentspeak.lark")
+
+# human names for the grammar's terminals, used in "expected ..." messages
+TOKEN_LABELS = {
+    "DOT": "'.'", "COMMA": "','", "SEMICOLON": "';'", "COLON": "':'", "ARROW": "'<-'", "LPAR": "'('",
+    "RPAR": "')'", "LSQB": "'['", "RSQB": "']'", "LBRACE": "'{'", "RBRACE": "'}'", "ATOM": "an atom",
+    "VAR": "a variable", "UNNAMED_VAR": "a variable", "NUMBER": "a number", "STRING": "a string",
+    "IA_NAME": "an internal action", "QATOM": "a quoted atom", "BANG": "'!'", "QMARK": "'?'",
+    "PLUS": "'+'", "MINUS": "'-'", "NEG": "'-'", "TILDE": "'~'", "AT": "'@'", "BAR": "'|'", "AND": "'&'",
+    "REL": "a relational operator", "ADD": "'+' or '-'", "MUL": "'*', '/', 'div' or 'mod'", "POW": "'**'",
+    "NOT": "'not'", "IF": "'if'", "ELSE": "'else'", "ELIF": "'elif'", "WHILE": "'while'", "FOR": "'for'",
+    "__ANON_0": "':-'", "$END": "end of file", "CIRCUMFLEX": "'^'",
+}
+
+_INFIX = {  # operator -> (precedence, right-assoc)
+    "|": (1, False), "&": (2, False),
+    "<": (4, False), "<=": (4, False), ">": (4, False), ">=": (4, False), "==": (4, False),
+    "\\==": (4, False), "=": (4, False), "=..": (4, False),
+    "+": (5, False), "-": (5, False), "*": (6, False), "/": (6, False), "div": (6, False),
+    "mod": (6, False), "**": (7, True),
+}
+_PREFIX_NOT_PREC = 3      # `not` binds looser than relational operators (Jason's log_expr_factor)
+_INFIX_TYPES = {"BAR", "AND", "REL", "ADD", "MUL", "POW"}
+_PREFIX_TYPES = {"NOT", "NEG", "PLUS"}
+
+
+def _is_ia_name(name: str) -> bool:
+    return "." in name
+
+
+class _ToProgram(Transformer):
+    """One method per grammar rule; builds runtime objects directly (no parse tree kept)."""
+
+    def __init__(self, source_file: str) -> None:
+        super().__init__(visit_tokens=False)
+        self.source_file = source_file
+        self.vars: dict[str, Var] = {}
+        self.line = 0
+        self.warnings: list[str] = []
+
+    # -- helpers -----------------------------------------------------------------------------
+    def _var(self, name: str) -> Var:
+        if name == "_":
+            return Var("_")
+        v = self.vars.get(name)
+        if v is None:
+            v = self.vars[name] = Var(name)
+        return v
+
+    def _end_clause(self) -> None:
+        self.vars = {}
+
+    # -- top level -----------------------------------------------------------------------------
+    def start(self, items):
+        return items
+
+    def belief(self, c):
+        lit = c[0]
+        self._end_clause()
+        return ("belief", lit, self.line)
+
+    def rule(self, c):
+        head, body = c
+        self._end_clause()
+        return ("rule", Rule(head, body, self.source_file, self.line), self.line)
+
+    def initial_goal(self, c):
+        self._end_clause()
+        return ("goal", c[0], self.line)
+
+    def directive(self, c):
+        self._end_clause()
+        return ("directive", c[0], self.line)
+
+    def directive_begin(self, c):
+        self._end_clause()
+        return ("begin", c[1], self.line)
+
+    def directive_end(self, c):
+        return ("end", None, self.line)
+
+    def plan(self, c):
+        label, trigger, context, _arrow, body = c
+        plan = Plan(trigger, context, body or (), label, self.source_file, trigger_line(trigger, self))
+        self._end_clause()
+        return ("plan", plan, plan.line)
+
+    def label_named(self, c):
+        return c[0]
+
+    def label_anon(self, c):
+        annots = c[0]
+        return Literal("", (), annots[0] or None, False, annots[1])
+
+    # triggers
+    def _trig(op, kind):  # noqa: N805 - a factory used in the class body
+        def build(self, c):
+            self.trigger_line = self.line
+            return Trigger(op, kind, c[0])
+        return build
+
+    trig_add_bel = _trig(ADD, BEL)
+    trig_del_bel = _trig(DEL, BEL)
+    trig_add_achieve = _trig(ADD, ACHIEVE)
+    trig_del_achieve = _trig(DEL, ACHIEVE)
+    trig_add_test = _trig(ADD, TEST)
+    trig_del_test = _trig(DEL, TEST)
+    trig_meta_achieve = _trig(META, ACHIEVE)
+    trig_meta_test = _trig(META, TEST)
+
+    # -- bodies ---------------------------------------------------------------------------------
+    def body(self, c):
+        out = []
+        for instr in c:
+            if instr is None:
+                continue
+            if isinstance(instr, Trigger):
+                instr = TriggerInstr(instr, self.line)
+            out.append(instr)
+        return tuple(out)
+
+    def _branch(self, x):
+        if isinstance(x, Trigger):
+            x = TriggerInstr(x, self.line)
+        return (x,) if x is not None else ()
+
+    def fork_or(self, c):
+        return Fork("or", tuple(self._as_body(x) for x in c), self.line)
+
+    def fork_and(self, c):
+        return Fork("and", tuple(self._as_body(x) for x in c), self.line)
+
+    def _as_body(self, x):
+        if isinstance(x, Fork) and x.kind == "and":
+            return (x,)
+        return self._branch(x)
+
+    def _one(cls):  # noqa: N805
+        def build(self, c):
+            return cls(c[0], self.line)
+        return build
+
+    achieve = _one(Achieve)
+    achieve_new = _one(AchieveNew)
+    test = _one(Test)
+    add_bel = _one(AddBel)
+    add_bel_end = _one(AddBelEnd)
+    add_bel_new = _one(AddBelNew)
+    del_bel = _one(DelBel)
+    del_bel_new = _one(DelBelNew)
+    upd_bel = _one(UpdBel)
+    remove_plan = _one(RemovePlan)
+
+    def add_plan(self, c):
+        return AddPlan(c[0], False, self.line)
+
+    def add_plan_end(self, c):
+        return AddPlan(c[0], True, self.line)
+
+    def formula(self, c):
+        t = c[0]
+        if isinstance(t, Literal):
+            if t.functor == "true" and not t.args and not t.neg:
+                return None
+            if _is_ia_name(t.functor):
+                return InternalAction(t, self.line)
+            return Action(t, self.line)
+        if isinstance(t, Var):
+            return ExecVar(t, self.line)
+        if isinstance(t, PlanTerm) and t.body is not None:
+            return ExecVar(t, self.line)
+        if isinstance(t, (Rel, And, Or, Not)):
+            return Constraint(t, self.line)
+        raise _BadInput(f"'{t}' is not a body formula (expected an action, a goal, a belief update or a test)")
+
+    def if_stmt(self, c):
+        cond, block = c[0], c[1]
+        branches = [(cond, block)]
+        else_body = None
+        for part in c[2:]:
+            if part is None:
+                continue
+            if part[0] == "elif":
+                branches.append((part[1], part[2]))
+            else:
+                else_body = part[1]
+        return If(tuple(branches), else_body, self.line)
+
+    def elif_part(self, c):
+        return ("elif", c[0], c[1])
+
+    def else_part(self, c):
+        return ("else", c[0])
+
+    def while_stmt(self, c):
+        return While(c[0], c[1], self.line)
+
+    def for_stmt(self, c):
+        return For(c[0], c[1], self.line)
+
+    def block(self, c):
+        return c[0] or ()
+
+    # -- plan terms -------------------------------------------------------------------------------
+    def plan_term_full(self, c):
+        label, trigger, context, _arrow, body = c
+        return PlanTerm(plan=Plan(trigger, context, body or (), label, self.source_file, self.line))
+
+    def plan_term_ctx(self, c):
+        label, trigger, context = c
+        return PlanTerm(plan=Plan(trigger, context, (), label, self.source_file, self.line))
+
+    def plan_term_body(self, c):
+        body = c[0]
+        if len(body) == 1 and isinstance(body[0], TriggerInstr):
+            return PlanTerm(plan=Plan(body[0].trigger, None, (), None, self.source_file, self.line))
+        return PlanTerm(body=body)
+
+    def plan_term_rule(self, c):
+        return PlanTerm(rule=Rule(c[0], c[1], self.source_file, self.line))
+
+    # -- expressions -------------------------------------------------------------------------------
+    def expr(self, c):
+        pos = [0]
+
+        def operand():
+            tok = c[pos[0]]
+            if isinstance(tok, Token) and tok.type in _PREFIX_TYPES:
+                pos[0] += 1
+                if tok.type == "NOT":
+                    return Not(climb(_PREFIX_NOT_PREC))
+                inner = climb(8)
+                if tok.type == "PLUS":
+                    return inner
+                if type(inner) in (int, float):
+                    return -inner
+                return Arith("-", inner)
+            pos[0] += 1
+            return tok
+
+        def climb(min_prec):
+            left = operand()
+            while pos[0] < len(c):
+                tok = c[pos[0]]
+                op = str(tok)
+                prec, right_assoc = _INFIX[op]
+                if prec < min_prec:
+                    break
+                pos[0] += 1
+                right = climb(prec if right_assoc else prec + 1)
+                left = _binary(op, left, right)
+            return left
+
+        return climb(0)
+
+    log_expr = expr
+    list_elem = expr
+    log_expr_nm = expr
+
+    def paren(self, c):
+        return c[0]
+
+    def number(self, c):
+        text = str(c[0])
+        if "." in text or "e" in text or "E" in text:
+            value = float(text)
+            return int(value) if value.is_integer() and abs(value) < 2 ** 53 else value
+        return int(text)
+
+    def string(self, c):
+        # Jason's lexer unescapes only \n and \" (other escapes stay as written)
+        return str(c[0])[1:-1].replace("\\n", "\n").replace('\\"', '"')
+
+    # -- literals and terms ---------------------------------------------------------------------
+    def literal(self, c):
+        return c[0]
+
+    def neg_literal(self, c):
+        lit = c[0]
+        return Literal(lit.functor, lit.args, lit.annots, True, lit.annot_tail)
+
+    def var_literal(self, c):
+        tok, annots = c
+        v = self._var(str(tok))
+        if annots is not None and (annots[0] or annots[1] is not None):
+            return AnnotatedVar(v, annots[0], annots[1])
+        return v
+
+    def atomic_formula(self, c):
+        functor = c[0]
+        annots = c[-1]
+        args = tuple(a for a in c[1:-1] if a is not None) if len(c) > 2 else ()
+        if annots is not None:
+            return Literal(functor, args, annots[0] or None, False, annots[1])
+        return Literal(functor, args)
+
+    def functor(self, c):
+        tok = c[0]
+        self.line = tok.line
+        text = str(tok)
+        if tok.type == "QATOM":
+            return text[1:-1]
+        return text
+
+    def annotations(self, c):
+        items, tail = self._items(c)
+        return (tuple(items), tail)
+
+    def list(self, c):
+        items, tail = self._items(c)
+        return make_list(items, tail)
+
+    def _items(self, c):
+        items = []
+        tail = None
+        it = iter(c)
+        for x in it:
+            if isinstance(x, Token) and x.type == "BAR":
+                t = next(it)
+                if isinstance(t, Token):
+                    tail = self._var(str(t))
+                else:
+                    tail = t
+                break
+            if x is not None:
+                items.append(x)
+        return items, tail
+
+
+def trigger_line(trigger: Trigger, t: _ToProgram) -> int:
+    return getattr(t, "trigger_line", t.line)
+
+
+def _binary(op: str, left: Term, right: Term) -> Term:
+    if op == "|":
+        return Or(left, right)
+    if op == "&":
+        return And(left, right)
+    if op in ("+", "-", "*", "/", "div", "mod", "**"):
+        return Arith(op, left, right)
+    return Rel(op, left, right)
+
+
+class AnnotatedVar(Var):
+    """A variable with annotations, ``X[a]``: unifies with a literal whose annotations include ``a``."""
+
+    __slots__ = ("var", "annots", "annot_tail")
+
+    def __init__(self, var: Var, annots: tuple, tail: Var | None) -> None:
+        super().__init__(var.name)
+        self.var, self.annots, self.annot_tail = var, annots, tail
+
+    def resolve(self, b):
+        value = resolve(self.var, b)
+        if isinstance(value, Literal):
+            extra = tuple(resolve(a, b) for a in self.annots)
+            merged = value
+            for a in extra:
+                merged = merged.add_annot(a)
+            return merged
+        return value
+
+
+class _BadInput(Exception):
+    """A clause that parses but is not valid AgentSpeak (raised inside the transformer)."""
+
+
+def parse_program(text: str, source_file: str = "<string>", base_dir: str | None = None,
+                  _seen: set | None = None) -> Program:
+    """Parse a whole agent program; raise ``AslSyntaxError`` at the first error."""
+    program, errors = _parse(text, source_file, stop_at_first=True)
+    if errors:
+        raise errors[0]
+    return _expand_includes(program, source_file, base_dir, _seen)
+
+
+def parse_program_all_errors(text: str, source_file: str = "<string>") -> tuple[Program, list[AslSyntaxError]]:
+    """Parse, collecting every syntax error (for ``faultmas asl check``)."""
+    program, errors = _parse(text, source_file, stop_at_first=False)
+    if not errors:
+        try:
+            program = _expand_includes(program, source_file, None, None)
+        except AslSyntaxError as exc:
+            errors.append(exc)
+    return program, errors
+
+
+_CLAUSE_START = re.compile(r"^(?=[+\-@!^a-z~{])", re.M)
+
+
+def _parse(text: str, source_file: str, stop_at_first: bool) -> tuple[Program, list]:
+    program = Program(source_file=source_file)
+    errors: list[AslSyntaxError] = []
+    offset_line = 0
+    remaining = text
+    while True:
+        try:
+            items = _parse_items(remaining, source_file)
+            _collect(items, program, offset_line)
+            break
+        except (UnexpectedInput, _BadInputAt) as exc:
+            err = _to_syntax_error(exc, text, remaining, source_file, offset_line)
+            errors.append(err)
+            if stop_at_first:
+                break
+            # re-synchronise: go on at the next line, after the error, that can start a clause
+            lines = remaining.split("\n")
+            next_start = None
+            for i in range(max((err.line or 1) - offset_line, 1), len(lines)):
+                if _CLAUSE_START.match(lines[i]):
+                    next_start = i
+                    break
+            if next_start is None:
+                break
+            offset_line += next_start
+            remaining = "\n".join(lines[next_start:])
+    return program, errors
+
+
+class _BadInputAt(Exception):
+    def __init__(self, message: str, line: int) -> None:
+        super().__init__(message)
+        self.message, self.line = message, line
+
+
+_PARSE_LOCK = threading.Lock()
+_TRANSFORMER = _ToProgram("<none>")
+_INLINE_PARSER: Lark | None = None
+
+
+def _parse_items(text: str, source_file: str) -> list:
+    """Parse with the transformer called during parsing (LALR: no tree is built, which is faster).
+
+    One parser and one transformer per process, reset before each parse (a lock keeps threads apart).
+    """
+    global _INLINE_PARSER
+    with _PARSE_LOCK:
+        if _INLINE_PARSER is None:
+            _INLINE_PARSER = Lark(_GRAMMAR.read_text(), parser="lalr", lexer="contextual",
+                                  maybe_placeholders=True, transformer=_TRANSFORMER)
+        t = _TRANSFORMER
+        t.source_file, t.vars, t.line, t.trigger_line = source_file, {}, 0, 0
+        try:
+            return _INLINE_PARSER.parse(text)
+        except _BadInput as exc:
+            raise _BadInputAt(str(exc), t.line) from exc
+
+
+def _collect(items, program: Program, offset_line: int) -> None:
+    for kind, value, line in items:
+        if kind == "belief":
+            lit = value
+            if not isinstance(lit, Literal):
+                raise _BadInputAt(f"a belief must be a literal, not '{lit}'", line)
+            if is_ground(lit):
+                program.beliefs.append(resolve(lit, {}))
+            else:
+                program.rules.append(Rule(lit, Literal("true"), program.source_file, line + offset_line))
+        elif kind == "rule":
+            value.line += offset_line
+            program.rules.append(value)
+        elif kind == "goal":
+            program.goals.append(value)
+        elif kind == "plan":
+            value.line += offset_line
+            program.plans.append(value)
+        elif kind == "directive":
+            program_directive(program, value, line + offset_line)
+        elif kind in ("begin", "end"):
+            program.warnings.append(
+                f"{program.source_file}:{line + offset_line}: directive '{{ {kind} ... }}' is not supported; its content is loaded as usual")
+
+
+def program_directive(program: Program, lit: Literal, line: int) -> None:
+    if isinstance(lit, Literal) and lit.functor == "include" and lit.args and isinstance(lit.args[0], str):
+        program.__dict__.setdefault("includes", []).append((lit.args[0], line))
+    else:
+        program.warnings.append(f"{program.source_file}:{line}: unknown directive '{lit}' ignored")
+
+
+def _expand_includes(program: Program, source_file: str, base_dir: str | None, seen: set | None) -> Program:
+    includes = program.__dict__.pop("includes", [])
+    if not includes:
+        return program
+    seen = set() if seen is None else seen
+    seen.add(os.path.abspath(source_file))
+    base = base_dir or (os.path.dirname(source_file) if source_file and not source_file.startswith("<") else ".")
+    for rel, line in includes:
+        path = rel if os.path.isabs(rel) else os.path.join(base, rel)
+        if os.path.abspath(path) in seen:
+            continue
+        try:
+            text = Path(path).read_text()
+        except OSError as exc:
+            raise AslSyntaxError(f"cannot include '{rel}': {exc.strerror or exc}", source_file, line) from exc
+        sub = parse_program(text, path, os.path.dirname(path), seen)
+        program.beliefs.extend(sub.beliefs)
+        program.rules.extend(sub.rules)
+        program.goals.extend(sub.goals)
+        program.plans.extend(sub.plans)
+        program.warnings.extend(sub.warnings)
+    return program
+
+
+def _to_syntax_error(exc: Exception, full_text: str, text: str, source_file: str, offset_line: int) -> AslSyntaxError:
+    lines = full_text.split("\n")
+    if isinstance(exc, _BadInputAt):
+        line = exc.line + offset_line
+        src = lines[line - 1] if 0 < line <= len(lines) else None
+        return AslSyntaxError(exc.message, source_file, line, None, src)
+    line = getattr(exc, "line", None)
+    column = getattr(exc, "column", None)
+    if isinstance(exc, UnexpectedEOF) or line in (None, -1):
+        # at end of input: point after the last non-blank character
+        stripped = full_text.rstrip()
+        line = stripped.count("\n") + 1
+        column = len(stripped.split("\n")[-1]) + 1
+        message = "unexpected end of file: " + _expected_text(getattr(exc, "expected", None) or [])
+        if "." in _expected_text(getattr(exc, "expected", []) or []):
+            message = "unexpected end of file: missing '.' at the end of the last clause?"
+        return AslSyntaxError(message, source_file, line, column, lines[line - 1] if line <= len(lines) else None)
+    line += offset_line
+    src = lines[line - 1] if 0 < line <= len(lines) else None
+    if isinstance(exc, UnexpectedCharacters):
+        ch = text[exc.pos_in_stream] if exc.pos_in_stream < len(text) else ""
+        if ch == '"':
+            message = "unclosed string (a string must end with \" on the same line)"
+        elif ch == "'":
+            message = "unclosed quoted atom"
+        else:
+            allowed = getattr(exc, "allowed", None) or []
+            message = f"unexpected character {ch!r}" + (f"; expected {_expected_text(allowed)}" if allowed else "")
+        return AslSyntaxError(message, source_file, line, column, src)
+    assert isinstance(exc, UnexpectedToken)
+    tok = exc.token
+    expected = set(exc.expected or ())
+    if tok.type == "$END":
+        stripped = full_text.rstrip()
+        line = stripped.count("\n") + 1
+        column = len(stripped.split("\n")[-1]) + 1
+        src = stripped.split("\n")[-1]
+        if "DOT" in expected:
+            return AslSyntaxError("unexpected end of file: missing '.' at the end of the last clause",
+                                  source_file, line, column, src)
+        return AslSyntaxError("unexpected end of file; expected " + _expected_text(expected), source_file,
+                              line, column, src)
+    found = f"'{tok}'"
+    if "DOT" in expected and tok.column == 1 or ("DOT" in expected and tok.type in ("PLUS", "MINUS", "AT", "BANG")):
+        message = f"unexpected {found}: missing '.' at the end of the previous clause?"
+    else:
+        message = f"unexpected {found}; expected {_expected_text(expected)}"
+    return AslSyntaxError(message, source_file, line, column, src)
+
+
+def _expected_text(expected) -> str:
+    labels = sorted({TOKEN_LABELS.get(e, f"'{e}'" if len(e) <= 3 else e.lower()) for e in expected})
+    if len(labels) > 8:
+        labels = labels[:8] + ["..."]
+    return "one of " + ", ".join(labels) if len(labels) > 1 else (labels[0] if labels else "nothing")
+
+
+# -- single terms -----------------------------------------------------------------------------
+def parse_literal(text: str) -> Term:
+    """Parse one term, e.g. message content ``price(10)[a]`` (raises ``AslSyntaxError``)."""
+    program = parse_program(f"__t__({text}).", "<term>") if text.strip() else None
+    if program is None:
+        raise AslSyntaxError("empty term", "<term>", 1, 1, text)
+    if program.beliefs:
+        return program.beliefs[0].args[0]
+    return program.rules[0].head.args[0]
+
+
+def parse_term(text: str) -> Term:
+    return parse_literal(text)
+
+
+def parse_body(text: str) -> tuple:
+    """Parse a plan body (used by ``.add_plan`` of strings and by tests)."""
+    program = parse_program(f"+!__b__ <- {text}.", "<body>")
+    return program.plans[0].body
+
+
+def parse_plans(text: str, source_file: str = "<string>") -> list[Plan]:
+    return parse_program(text, source_file).plans

@@ -1,0 +1,514 @@
+"""What a parsed agent program is made of: triggers, plans, rules, body instructions, plan terms.
+
+These are plain data, built by ``agentspeak.parser`` and run by ``agentspeak.agent``. Every body
+instruction keeps the source line it came from so failures can say ``code_line``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+from agentspeak.terms import (
+    Bindings, Cons, Literal, Term, Var, rename, resolve, to_str, variables,
+)
+
+# trigger operators and types, as Jason names them
+ADD, DEL, META = "+", "-", "^"
+BEL, ACHIEVE, TEST = "", "!", "?"
+
+
+class Trigger:
+    """``+b``, ``-b``, ``+!g``, ``-!g``, ``+?g``, ``-?g``, ``^!g``."""
+
+    __slots__ = ("op", "kind", "literal")
+
+    def __init__(self, op: str, kind: str, literal: Term) -> None:
+        self.op, self.kind, self.literal = op, kind, literal
+
+    @property
+    def key(self) -> tuple:
+        """Index key in the plan library: (op, kind, negated, functor, arity), or None for a variable."""
+        lit = self.literal
+        if isinstance(lit, Literal):
+            return (self.op, self.kind, lit.neg, lit.functor, len(lit.args))
+        return None
+
+    def is_goal(self) -> bool:
+        return self.kind != BEL
+
+    def __eq__(self, other: object) -> bool:
+        return (isinstance(other, Trigger) and self.op == other.op and self.kind == other.kind
+                and self.literal == other.literal)
+
+    def __hash__(self) -> int:
+        return hash((self.op, self.kind, self.literal))
+
+    def resolve(self, b: Bindings) -> "Trigger":
+        return Trigger(self.op, self.kind, resolve(self.literal, b))
+
+    def rename(self, mapping: dict) -> "Trigger":
+        return Trigger(self.op, self.kind, rename(self.literal, mapping))
+
+    def subterms(self) -> list:
+        return [self.literal]
+
+    def unify_with(self, other: object, b: Bindings, trail: list) -> bool:
+        from agentspeak.unify import unify
+        return (isinstance(other, Trigger) and self.op == other.op and self.kind == other.kind
+                and unify(self.literal, other.literal, b, trail))
+
+    def __str__(self) -> str:
+        return f"{self.op}{self.kind}{to_str(self.literal)}"
+
+    __repr__ = __str__
+
+
+# -- body instructions ----------------------------------------------------------------------
+class Instr:
+    """A body formula. ``line`` is its source line (for error annotations)."""
+
+    __slots__ = ("line",)
+    text_prefix = ""
+
+    def terms(self) -> list:
+        return []
+
+    def map_terms(self, f: Callable[[Term], Term]) -> "Instr":
+        raise NotImplementedError
+
+    def __str__(self) -> str:
+        return self.text_prefix + ",".join(to_str(t) for t in self.terms())
+
+    __repr__ = __str__
+
+
+class _OneTerm(Instr):
+    __slots__ = ("term",)
+
+    def __init__(self, term: Term, line: int = 0) -> None:
+        self.term = term
+        self.line = line
+
+    def terms(self) -> list:
+        return [self.term]
+
+    def map_terms(self, f):
+        return type(self)(f(self.term), self.line)
+
+    def __eq__(self, other: object) -> bool:
+        return type(other) is type(self) and self.term == other.term
+
+    def __hash__(self) -> int:
+        return hash((type(self).__name__, self.term))
+
+
+class Achieve(_OneTerm):
+    """``!g`` (same intention)."""
+    __slots__ = ()
+    text_prefix = "!"
+
+
+class AchieveNew(_OneTerm):
+    """``!!g`` (a new intention; the current plan goes on at once)."""
+    __slots__ = ()
+    text_prefix = "!!"
+
+
+class Test(_OneTerm):
+    """``?q``: the belief base first, then ``+?q`` plans."""
+    __slots__ = ()
+    text_prefix = "?"
+
+
+class AddBel(_OneTerm):
+    """``+b`` / ``+<b`` (at the start of the belief base)."""
+    __slots__ = ()
+    text_prefix = "+"
+
+
+class AddBelEnd(_OneTerm):
+    """``+>b`` (at the end)."""
+    __slots__ = ()
+    text_prefix = "+>"
+
+
+class AddBelNew(_OneTerm):
+    """``++b`` (the +b event starts a new intention)."""
+    __slots__ = ()
+    text_prefix = "++"
+
+
+class DelBel(_OneTerm):
+    __slots__ = ()
+    text_prefix = "-"
+
+
+class DelBelNew(_OneTerm):
+    __slots__ = ()
+    text_prefix = "--"
+
+
+class UpdBel(_OneTerm):
+    """``-+b``: remove the first ``b(_,...)`` then add ``b(...)``."""
+    __slots__ = ()
+    text_prefix = "-+"
+
+
+class Action(_OneTerm):
+    """An environment action (executed by the agent architecture's ``act``)."""
+    __slots__ = ()
+
+
+class InternalAction(_OneTerm):
+    """``.name(args)`` or ``lib.name(args)``."""
+    __slots__ = ()
+
+
+class Constraint(_OneTerm):
+    """A relational or logical formula executed as a test (``X = Y + 1``, ``X > 3``)."""
+    __slots__ = ()
+
+
+class ExecVar(_OneTerm):
+    """A variable bound to a plan body, executed in place."""
+    __slots__ = ()
+
+
+class AddPlan(Instr):
+    """``+{plan}`` / ``+>{plan}``."""
+    __slots__ = ("term", "at_end")
+
+    def __init__(self, term: Term, at_end: bool = False, line: int = 0) -> None:
+        self.term, self.at_end, self.line = term, at_end, line
+
+    def terms(self) -> list:
+        return [self.term]
+
+    def map_terms(self, f):
+        return AddPlan(f(self.term), self.at_end, self.line)
+
+    def __str__(self) -> str:
+        return ("+>" if self.at_end else "+") + to_str(self.term)
+
+
+class RemovePlan(_OneTerm):
+    __slots__ = ()
+    text_prefix = "-"
+
+
+class If(Instr):
+    """``if (c) {..} elif (c) {..} else {..}``: branches is a tuple of (condition, body)."""
+    __slots__ = ("branches", "else_body")
+
+    def __init__(self, branches: tuple, else_body: tuple | None, line: int = 0) -> None:
+        self.branches, self.else_body, self.line = branches, else_body, line
+
+    def terms(self) -> list:
+        return [c for c, _ in self.branches]
+
+    def map_terms(self, f):
+        return If(tuple((f(c), map_body(b, f)) for c, b in self.branches),
+                  map_body(self.else_body, f) if self.else_body is not None else None, self.line)
+
+    def __str__(self) -> str:
+        parts = []
+        for i, (c, b) in enumerate(self.branches):
+            parts.append(("if" if i == 0 else " elif") + f" ({to_str(c)}) {{ {body_str(b)} }}")
+        if self.else_body is not None:
+            parts.append(f" else {{ {body_str(self.else_body)} }}")
+        return "".join(parts)
+
+
+class While(Instr):
+    __slots__ = ("cond", "body")
+
+    def __init__(self, cond: Term, body: tuple, line: int = 0) -> None:
+        self.cond, self.body, self.line = cond, body, line
+
+    def terms(self) -> list:
+        return [self.cond]
+
+    def map_terms(self, f):
+        return While(f(self.cond), map_body(self.body, f), self.line)
+
+    def __str__(self) -> str:
+        return f"while ({to_str(self.cond)}) {{ {body_str(self.body)} }}"
+
+
+class For(Instr):
+    __slots__ = ("cond", "body")
+
+    def __init__(self, cond: Term, body: tuple, line: int = 0) -> None:
+        self.cond, self.body, self.line = cond, body, line
+
+    def terms(self) -> list:
+        return [self.cond]
+
+    def map_terms(self, f):
+        return For(f(self.cond), map_body(self.body, f), self.line)
+
+    def __str__(self) -> str:
+        return f"for ({to_str(self.cond)}) {{ {body_str(self.body)} }}"
+
+
+class Fork(Instr):
+    """``A |&| B`` (join: wait for all, kind "and") or ``A ||| B`` (wait for one, kind "or")."""
+    __slots__ = ("kind", "branches")
+
+    def __init__(self, kind: str, branches: tuple, line: int = 0) -> None:
+        self.kind, self.branches, self.line = kind, branches, line
+
+    def map_terms(self, f):
+        return Fork(self.kind, tuple(map_body(b, f) for b in self.branches), self.line)
+
+    def __str__(self) -> str:
+        sep = " |&| " if self.kind == "and" else " ||| "
+        return sep.join(body_str(b) for b in self.branches)
+
+
+def map_body(body: tuple, f: Callable[[Term], Term]) -> tuple:
+    return tuple(i.map_terms(f) for i in body)
+
+
+def body_str(body: tuple) -> str:
+    return "; ".join(str(i) for i in body)
+
+
+def body_variables(body: tuple, out: list | None = None) -> list:
+    out = [] if out is None else out
+    for instr in body:
+        if isinstance(instr, If):
+            for c, b in instr.branches:
+                variables(c, out)
+                body_variables(b, out)
+            if instr.else_body:
+                body_variables(instr.else_body, out)
+        elif isinstance(instr, (While, For)):
+            variables(instr.cond, out)
+            body_variables(instr.body, out)
+        elif isinstance(instr, Fork):
+            for b in instr.branches:
+                body_variables(b, out)
+        else:
+            for t in instr.terms():
+                variables(t, out)
+    return out
+
+
+# -- plans and rules -----------------------------------------------------------------------
+_plan_counter = [0]
+
+
+@dataclass(eq=False)
+class Plan:
+    """``@label trigger : context <- body.``"""
+
+    trigger: Trigger
+    context: Term | None = None
+    body: tuple = ()
+    label: Literal | None = None
+    source_file: str = ""
+    line: int = 0
+    atomic: bool = field(init=False, default=False)
+    all_unifs: bool = field(init=False, default=False)
+
+    def __post_init__(self) -> None:
+        self.refresh_label_flags()
+
+    def refresh_label_flags(self) -> None:
+        annots = self.label.annots if self.label is not None and self.label.annots else ()
+        names = {a.functor for a in annots if isinstance(a, Literal)}
+        self.atomic = "atomic" in names
+        self.all_unifs = "all_unifs" in names
+
+    def ensure_label(self) -> Literal:
+        """Jason gives an unlabelled plan a unique ``p__N`` label."""
+        if self.label is None or not self.label.functor:
+            _plan_counter[0] += 1
+            annots = self.label.annots if self.label is not None else None
+            self.label = Literal(f"p__{_plan_counter[0]}", (), annots)
+        return self.label
+
+    def renamed(self) -> "Plan":
+        """A copy with fresh variables (used when a plan is stored as a term)."""
+        mapping: dict = {}
+        p = Plan(self.trigger.rename(mapping),
+                 rename(self.context, mapping) if self.context is not None else None,
+                 map_body(self.body, lambda t: rename(t, mapping)), self.label,
+                 self.source_file, self.line)
+        return p
+
+    def resolved(self, b: Bindings) -> "Plan":
+        return Plan(self.trigger.resolve(b),
+                    resolve(self.context, b) if self.context is not None else None,
+                    map_body(self.body, lambda t: resolve(t, b)),
+                    resolve(self.label, b) if self.label is not None else None,
+                    self.source_file, self.line)
+
+    def __str__(self) -> str:
+        text = ""
+        if self.label is not None:
+            text += "@" + to_str(self.label) + " "
+        text += str(self.trigger)
+        if self.context is not None:
+            text += " : " + to_str(self.context)
+        if self.body:
+            text += " <- " + body_str(self.body)
+        return text
+
+
+@dataclass(eq=False)
+class Rule:
+    """``head :- body.`` (a non-ground initial belief ``b(X).`` becomes ``b(X) :- true``)."""
+
+    head: Literal
+    body: Term
+    source_file: str = ""
+    line: int = 0
+    nvars: int = 0
+
+    def __str__(self) -> str:
+        return f"{to_str(self.head)} :- {to_str(self.body)}"
+
+
+class PlanTerm:
+    """A plan, trigger, body or rule written as a term: ``{ +!g <- b }``, ``{ +b }``, ``{ a; b }``.
+
+    ``plan`` is set for plans and triggers (a trigger-only term is a plan without body);
+    ``body`` for a body term; ``rule`` for a rule term.
+    """
+
+    __slots__ = ("plan", "body", "rule")
+
+    def __init__(self, plan: Plan | None = None, body: tuple | None = None, rule: Rule | None = None) -> None:
+        self.plan, self.body, self.rule = plan, body, rule
+
+    def as_trigger(self) -> Trigger | None:
+        """The trigger this term stands for (``{+!g}`` or a one-formula body such as ``{+b}``)."""
+        if self.plan is not None:
+            return self.plan.trigger
+        if self.body is not None and len(self.body) == 1:
+            instr = self.body[0]
+            if isinstance(instr, TriggerInstr):
+                return instr.trigger
+            if isinstance(instr, AddBel):
+                return Trigger(ADD, BEL, instr.term)
+            if isinstance(instr, DelBel):
+                return Trigger(DEL, BEL, instr.term)
+        return None
+
+    def as_plan(self) -> Plan | None:
+        if self.plan is not None:
+            return self.plan
+        trig = self.as_trigger()
+        return Plan(trig) if trig is not None else None
+
+    def resolve(self, b: Bindings) -> "PlanTerm":
+        if self.plan is not None:
+            return PlanTerm(plan=self.plan.resolved(b))
+        if self.body is not None:
+            return PlanTerm(body=map_body(self.body, lambda t: resolve(t, b)))
+        r = self.rule
+        return PlanTerm(rule=Rule(resolve(r.head, b), resolve(r.body, b), r.source_file, r.line))
+
+    def rename(self, mapping: dict) -> "PlanTerm":
+        if self.plan is not None:
+            p = self.plan
+            return PlanTerm(plan=Plan(p.trigger.rename(mapping),
+                                      rename(p.context, mapping) if p.context is not None else None,
+                                      map_body(p.body, lambda t: rename(t, mapping)), p.label,
+                                      p.source_file, p.line))
+        if self.body is not None:
+            return PlanTerm(body=map_body(self.body, lambda t: rename(t, mapping)))
+        r = self.rule
+        return PlanTerm(rule=Rule(rename(r.head, mapping), rename(r.body, mapping), r.source_file, r.line))
+
+    def subterms(self) -> list:
+        out: list = []
+        if self.plan is not None:
+            out.append(self.plan.trigger.literal)
+            if self.plan.context is not None:
+                out.append(self.plan.context)
+            body = self.plan.body
+        elif self.body is not None:
+            body = self.body
+        else:
+            return [self.rule.head, self.rule.body]
+        return out + body_variables(body)
+
+    def unify_with(self, other: object, b: Bindings, trail: list) -> bool:
+        if not isinstance(other, PlanTerm):
+            return False
+        from agentspeak.unify import unify
+        if self.plan is not None and other.plan is not None:
+            return str(self.plan.resolved(b).body) == str(other.plan.resolved(b).body) and \
+                unify(self.plan.trigger.literal, other.plan.trigger.literal, b, trail)
+        return str(self.resolve(b)) == str(other.resolve(b))
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, PlanTerm) and str(self) == str(other)
+
+    def __hash__(self) -> int:
+        return hash(str(self))
+
+    def __str__(self) -> str:
+        if self.plan is not None:
+            return "{ " + str(self.plan) + " }"
+        if self.body is not None:
+            return "{ " + body_str(self.body) + " }"
+        return "{ " + str(self.rule) + " }"
+
+    __repr__ = __str__
+
+
+class TriggerInstr(Instr):
+    """A trigger written where a body formula is expected: only valid inside ``{ ... }`` terms."""
+
+    __slots__ = ("trigger",)
+
+    def __init__(self, trigger: Trigger, line: int = 0) -> None:
+        self.trigger, self.line = trigger, line
+
+    def map_terms(self, f):
+        return TriggerInstr(Trigger(self.trigger.op, self.trigger.kind, f(self.trigger.literal)), self.line)
+
+    def terms(self) -> list:
+        return [self.trigger.literal]
+
+    def __str__(self) -> str:
+        return str(self.trigger)
+
+
+@dataclass
+class Program:
+    """Everything one .asl file (and its includes) declares, in source order."""
+
+    beliefs: list = field(default_factory=list)       # ground literals
+    rules: list = field(default_factory=list)         # Rule
+    goals: list = field(default_factory=list)         # literals of initial goals
+    plans: list = field(default_factory=list)         # Plan
+    source_file: str = ""
+    warnings: list = field(default_factory=list)
+
+
+def is_var(t: Term) -> bool:
+    return type(t) is Var
+
+
+__all__ = [n for n in dir() if not n.startswith("_")]
+_ = Cons  # re-exported for convenience of the parser
+
+
+class PyCall(Instr):
+    """A Python step inserted by the runtime itself (e.g. answering an ask after a ``+?q`` plan)."""
+
+    __slots__ = ("fn",)
+
+    def __init__(self, fn, line: int = 0) -> None:
+        self.fn, self.line = fn, line
+
+    def map_terms(self, f):
+        return self
+
+    def __str__(self) -> str:
+        return f"<python {getattr(self.fn, '__name__', 'call')}>"

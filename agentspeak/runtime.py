@@ -1,0 +1,173 @@
+"""Run agents in one process: a scheduler that visits only agents with work, timers, idle detection.
+
+The scheduler never polls idle agents (a ready queue, filled when an agent gets a message, an
+event or a result), so a 100-agent ring costs what a 10-agent ring does. Results from other
+threads (robot actions, Zenoh messages, the diagnoser) wake the loop through a condition variable.
+"""
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections import deque
+from typing import Callable, Iterable
+
+from agentspeak.agent import Agent
+from agentspeak.arch import AgentArch
+from agentspeak.communication import Message
+from agentspeak.parser import parse_program
+from agentspeak.terms import Literal
+
+log = logging.getLogger("faultmas.agentspeak")
+
+CYCLES_PER_TURN = 64
+"""Reasoning cycles an agent runs before the next ready agent gets its turn (fairness)."""
+
+
+class LocalArch(AgentArch):
+    """Architecture of an agent run by ``LocalRuntime``: in-process mailbox, shared console."""
+
+    def __init__(self, runtime: "LocalRuntime", **kwargs) -> None:
+        super().__init__(**kwargs)
+        self.runtime = runtime
+
+    def send(self, agent: Agent, message: Message) -> None:
+        self.runtime.route(message)
+
+    def all_names(self, agent: Agent) -> list[str]:
+        return self.runtime.names()
+
+    def stop_mas(self, agent: Agent, delay: float = 0.0) -> None:
+        self.runtime.stop(delay)
+
+    def wake(self, agent: Agent) -> None:
+        self.runtime.wake(agent)
+
+    def print_line(self, agent: Agent, text: str) -> None:
+        self.runtime.print_line(agent.name, text)
+
+    def accepts_plans_from(self, agent: Agent, sender: str) -> bool:
+        return self.runtime.accepts_plans_from(sender)
+
+    def act(self, agent: Agent, action: Literal):
+        env = self.runtime.environment
+        return env(agent, action) if env is not None else None
+
+
+class LocalRuntime:
+    """All agents of a MAS in this process. Not thread-safe except ``wake``/``route``/``stop``."""
+
+    def __init__(self, printer: Callable[[str, str], None] | None = None,
+                 environment: Callable[[Agent, Literal], object] | None = None) -> None:
+        self.agents: dict[str, Agent] = {}
+        self.ready: deque[Agent] = deque()
+        self._ready_set: set[str] = set()
+        self._cond = threading.Condition()
+        self._stop_at: float | None = None
+        self.stopped = False
+        self.printer = printer
+        self.environment = environment
+        self.trusted_senders: set[str] | None = None
+        self.remote: Callable[[Message], bool] | None = None   # a transport for agents elsewhere
+        self.undeliverable = 0
+
+    # -- set-up
+    def add_agent(self, name: str, source: str | None = None, source_file: str = "<string>",
+                  extra_beliefs: Iterable[Literal] = (), extra_goals: Iterable[Literal] = (),
+                  arch: AgentArch | None = None, program=None) -> Agent:
+        if name in self.agents:
+            raise ValueError(f"an agent named {name!r} already exists")
+        if program is None:
+            program = parse_program(source or "", source_file)
+        agent = Agent(name, arch=arch or LocalArch(self), source_file=source_file)
+        for lit in extra_beliefs:
+            agent.add_initial_belief(lit)
+        agent.load(program)
+        for goal in extra_goals:
+            agent.add_initial_goal(goal)
+        self.agents[name] = agent
+        self.wake(agent)
+        return agent
+
+    def names(self) -> list[str]:
+        return list(self.agents)
+
+    def accepts_plans_from(self, sender: str) -> bool:
+        return self.trusted_senders is None or sender in self.trusted_senders or sender in self.agents
+
+    # -- cross-thread entry points
+    def wake(self, agent: Agent) -> None:
+        with self._cond:
+            if agent.name not in self._ready_set:
+                self._ready_set.add(agent.name)
+                self.ready.append(agent)
+            self._cond.notify()
+
+    def route(self, message: Message) -> None:
+        target = self.agents.get(message.receiver)
+        if target is not None:
+            target.deliver(message)
+            return
+        if self.remote is not None and self.remote(message):
+            return
+        self.undeliverable += 1
+        log.warning("message %s to unknown agent '%s' dropped", message.msg_id, message.receiver)
+
+    def stop(self, delay: float = 0.0) -> None:
+        with self._cond:
+            self._stop_at = time.monotonic() + delay
+            self._cond.notify()
+
+    def print_line(self, name: str, text: str) -> None:
+        if self.printer is not None:
+            self.printer(name, text)
+        else:
+            print(f"[{name}] {text}", flush=True)
+
+    # -- the loop
+    def idle(self) -> bool:
+        return not self.ready and all(a.is_idle() for a in self.agents.values())
+
+    def run(self, timeout: float | None = None, stop_when_idle: bool = True) -> str:
+        """Run until ``.stopMAS``, until idle (if asked) or until ``timeout`` seconds. Returns why."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        ready = self.ready
+        while True:
+            now = time.monotonic()
+            if self._stop_at is not None and now >= self._stop_at:
+                self.stopped = True
+                return "stopped"
+            if deadline is not None and now >= deadline:
+                return "timeout"
+            # timers that are due make their agents ready
+            for agent in self.agents.values():
+                if agent.timers and agent.timers[0][0] <= now and agent.name not in self._ready_set:
+                    self._ready_set.add(agent.name)
+                    ready.append(agent)
+            if ready:
+                with self._cond:
+                    agent = ready.popleft()
+                    self._ready_set.discard(agent.name)
+                for _ in range(CYCLES_PER_TURN):
+                    agent.cycle()
+                    if not agent.has_work() or self._stop_at is not None:
+                        break
+                if agent.has_work() or (agent.timers and agent.timers[0][0] <= time.monotonic()):
+                    self.wake(agent)
+                continue
+            if stop_when_idle and self.idle() and not self._external_pending():
+                return "idle"
+            # nothing ready: sleep until the next timer, a wake-up, or the deadline
+            waits = [a.timers[0][0] for a in self.agents.values() if a.timers]
+            if self._stop_at is not None:
+                waits.append(self._stop_at)
+            if deadline is not None:
+                waits.append(deadline)
+            wait = max(0.0, min(waits) - time.monotonic()) if waits else 0.5
+            with self._cond:
+                if not self.ready:
+                    self._cond.wait(min(wait, 0.5))
+
+    def _external_pending(self) -> bool:
+        hook = getattr(self, "external_pending", None)
+        return bool(hook()) if hook else False

@@ -1,0 +1,293 @@
+"""Solving logical formulas against an agent's belief base: contexts, test goals, rules.
+
+An explicit machine (a continuation list and a choice-point stack), not Python recursion, so rules
+recursing 100,000 levels deep or walking long lists never hit the recursion limit. Bindings live in
+the caller's dict; a trail undoes them on backtracking.
+
+``solve(kb, formula, b)`` is a generator: each ``next`` leaves one solution's bindings in ``b``.
+Stopping early keeps the bindings of the last solution (what a plan context or a test goal wants);
+running to exhaustion undoes everything.
+"""
+from __future__ import annotations
+
+import logging
+from typing import Callable, Iterator, Protocol
+
+from agentspeak.program import Rule
+from agentspeak.terms import (
+    NIL, And, Arith, ArithmeticError_, Cons, Literal, Not, Or, Rel, Term, Var, compare, deref,
+    is_list, list_items, make_list, rename, resolve, to_str,
+)
+from agentspeak.unify import undo, unify, unify_annots_all
+
+log = logging.getLogger("faultmas.agentspeak")
+
+
+class KnowledgeBase(Protocol):
+    """What the solver needs from an agent: facts, rules and internal actions usable in formulas."""
+
+    def candidates(self, lit: Literal, b: dict) -> list: ...
+    def rules_for(self, lit: Literal) -> list: ...
+    def call_internal(self, lit: Literal, b: dict, trail: list) -> Iterator[None]: ...
+
+
+class SolveError(Exception):
+    """A formula that cannot be evaluated (non-numeric arithmetic, unknown internal action...)."""
+
+    def __init__(self, error: str, message: str) -> None:
+        super().__init__(message)
+        self.error = error
+        self.message = message
+
+
+class _Cont:
+    """A linked list of goals still to prove."""
+
+    __slots__ = ("goal", "next")
+
+    def __init__(self, goal: Term, next_: "_Cont | None") -> None:
+        self.goal, self.next = goal, next_
+
+
+def solve(kb: KnowledgeBase, formula: Term, b: dict, trail: list | None = None) -> Iterator[None]:
+    if trail is None:
+        trail = []
+    base = len(trail)
+    # each choice point: (kind, data..., continuation, trail mark)
+    choices: list = []
+    cont: _Cont | None = _Cont(formula, None)
+    while True:
+        if cont is None:
+            yield None
+            # ask for the next solution: backtrack
+            ok = False
+        else:
+            goal = cont.goal
+            cont = cont.next
+            ok = True
+            tg = type(goal)
+            if tg is Var:
+                goal = deref(goal, b)
+                tg = type(goal)
+                if tg is Var:
+                    raise SolveError("wrong_arguments", f"unbound variable {goal.name} used as a formula")
+            if tg is And:
+                cont = _Cont(goal.left, _Cont(goal.right, cont))
+                continue
+            if tg is Literal:
+                functor = goal.functor
+                if not goal.args and not goal.neg:
+                    if functor == "true":
+                        continue
+                    if functor == "false":
+                        ok = False
+                if ok and "." in functor and not goal.neg:
+                    gen = kb.call_internal(goal, b, trail)
+                    choices.append((2, gen, cont, len(trail)))
+                    ok = False  # fall through to backtracking, which pulls the first solution
+                elif ok:
+                    facts = kb.candidates(goal, b)
+                    rules = kb.rules_for(goal)
+                    if not facts and not rules:
+                        ok = False
+                    else:
+                        choices.append((1, goal, facts, 0, rules, 0, cont, len(trail), None))
+                        ok = False
+            elif tg is Rel:
+                try:
+                    ok = _rel(kb, goal, b, trail)
+                except ArithmeticError_ as exc:
+                    raise SolveError("wrong_arguments", str(exc)) from None
+                if ok:
+                    continue
+            elif tg is Or:
+                choices.append((3, goal.right, cont, len(trail)))
+                cont = _Cont(goal.left, cont)
+                continue
+            elif tg is Not:
+                mark = len(trail)
+                inner = solve(kb, goal.arg, b, trail)
+                found = next(inner, False) is None
+                inner.close()
+                undo(b, trail, mark)  # negation as failure binds nothing
+                if found:
+                    ok = False
+                else:
+                    continue
+            elif tg is bool:
+                ok = goal
+                if ok:
+                    continue
+            elif tg is str or tg is int or tg is float or tg is Cons:
+                raise SolveError("wrong_arguments", f"'{to_str(goal)}' is not a formula")
+            else:
+                raise SolveError("wrong_arguments", f"'{to_str(goal)}' is not a formula")
+            if ok:
+                continue
+        # ---- backtrack: resume the most recent choice point
+        while True:
+            if not choices:
+                undo(b, trail, base)
+                return
+            cp = choices[-1]
+            kind = cp[0]
+            if kind == 1:
+                _, goal, facts, fi, rules, ri, ccont, mark, annot_gen = cp
+                undo(b, trail, mark)
+                if annot_gen is not None:
+                    # more ways to match annotations of the same belief
+                    try:
+                        next(annot_gen)
+                        cont = ccont
+                        break
+                    except StopIteration:
+                        choices[-1] = (1, goal, facts, fi, rules, ri, ccont, mark, None)
+                        continue
+                matched = False
+                while fi < len(facts):
+                    fact = facts[fi]
+                    fi += 1
+                    if goal.annots is not None and _annots_have_vars(goal):
+                        if not unify(goal.without_annots(), fact, b, trail):
+                            undo(b, trail, mark)
+                            continue
+                        gen = unify_annots_all(goal, fact, b, trail)
+                        try:
+                            next(gen)
+                        except StopIteration:
+                            undo(b, trail, mark)
+                            continue
+                        choices[-1] = (1, goal, facts, fi, rules, ri, ccont, mark, gen)
+                        matched = True
+                        break
+                    if unify(goal, fact, b, trail):
+                        choices[-1] = (1, goal, facts, fi, rules, ri, ccont, mark, None)
+                        matched = True
+                        break
+                    undo(b, trail, mark)
+                if matched:
+                    cont = ccont
+                    break
+                while ri < len(rules):
+                    rule = rules[ri]
+                    ri += 1
+                    mapping: dict = {}
+                    head = rename(rule.head, mapping)
+                    if unify(goal, head, b, trail):
+                        body = rename(rule.body, mapping)
+                        if fi >= len(facts) and ri >= len(rules):
+                            choices.pop()  # last alternative: no choice point left (keeps the stack flat)
+                        else:
+                            choices[-1] = (1, goal, facts, fi, rules, ri, ccont, mark, None)
+                        cont = _Cont(body, ccont)
+                        matched = True
+                        break
+                    undo(b, trail, mark)
+                if matched:
+                    break
+                choices.pop()
+                continue
+            if kind == 2:
+                _, gen, ccont, mark = cp
+                undo(b, trail, mark)
+                try:
+                    next(gen)
+                except StopIteration:
+                    choices.pop()
+                    continue
+                cont = ccont
+                break
+            # kind 3: the right branch of an Or
+            _, right, ccont, mark = cp
+            undo(b, trail, mark)
+            choices.pop()
+            cont = _Cont(right, ccont)
+            break
+
+
+def _annots_have_vars(goal: Literal) -> bool:
+    from agentspeak.terms import is_ground
+    return not all(is_ground(a) for a in goal.annots) or goal.annot_tail is not None
+
+
+def solve_first(kb: KnowledgeBase, formula: Term, b: dict) -> bool:
+    """Find one solution, keeping its bindings in ``b``."""
+    gen = solve(kb, formula, b)
+    for _ in gen:
+        return True
+    return False
+
+
+def _rel(kb: KnowledgeBase, rel: Rel, b: dict, trail: list) -> bool:
+    op = rel.op
+    left = resolve(rel.left, b)
+    right = resolve(rel.right, b)
+    if op == "=":
+        return unify(left, right, b, trail)
+    if op == "==":
+        return compare_equal(left, right)
+    if op == "\\==":
+        return not compare_equal(left, right)
+    if op == "=..":
+        return _univ(left, right, b, trail)
+    if type(left) is Arith or type(right) is Arith or type(left) is Var or type(right) is Var:
+        raise ArithmeticError_(f"cannot compare {to_str(left)} {op} {to_str(right)}: unbound variable")
+    c = compare(left, right)
+    if op == "<":
+        return c < 0
+    if op == "<=":
+        return c <= 0
+    if op == ">":
+        return c > 0
+    if op == ">=":
+        return c >= 0
+    raise ArithmeticError_(f"unknown relational operator {op}")
+
+
+def compare_equal(a: Term, c: Term) -> bool:
+    if type(a) in (int, float) and type(c) in (int, float):
+        return a == c
+    return a == c
+
+
+DEFAULT_NS = Literal("default")
+
+
+def _univ(left: Term, right: Term, b: dict, trail: list) -> bool:
+    """``p(1,2)[a] =.. [default, p, [1,2], [a]]`` (Jason 3; a 3-element list is accepted)."""
+    if isinstance(left, Literal):
+        annots = make_list(left.annots or ())
+        functor = Literal(("~" if left.neg else "") + left.functor) if True else None
+        lst = make_list([DEFAULT_NS, Literal(left.functor) if not left.neg else Literal("~" + left.functor),
+                         make_list(left.args), annots])
+        if is_list(right):
+            items = _items(right)
+            if items is not None and len(items) == 3:
+                lst = make_list([functor, make_list(left.args), annots])
+        return unify(lst, right, b, trail)
+    if type(left) is Var:
+        items = _items(right)
+        if items is None or len(items) not in (3, 4):
+            raise ArithmeticError_(f"=.. needs [Namespace, Functor, Args, Annots], got {to_str(right)}")
+        if len(items) == 4:
+            items = items[1:]
+        f, args, annots = items
+        if not isinstance(f, Literal):
+            raise ArithmeticError_(f"=..: functor must be an atom, got {to_str(f)}")
+        name, neg = f.functor, False
+        if name.startswith("~"):
+            name, neg = name[1:], True
+        lit = Literal(name, tuple(list_items(args)), tuple(list_items(annots)) or None, neg)
+        return unify(left, lit, b, trail)
+    return False
+
+
+def _items(t: Term) -> list | None:
+    try:
+        return list_items(t)
+    except TypeError:
+        return None
+
+
+__all__ = ["solve", "solve_first", "SolveError", "KnowledgeBase", "compare_equal"]
+_ = (Rule, NIL, Callable, log)

@@ -1,0 +1,212 @@
+"""Control of goals and intentions: fail, succeed_goal, fail_goal, drop_*, intend, desire, suspend, resume."""
+from __future__ import annotations
+
+from agentspeak.intentions import Intention
+from agentspeak.program import ACHIEVE, ADD, DEL, Trigger
+from agentspeak.stdlib.registry import IAError, Suspend, internal_action, wrong_arguments
+from agentspeak.terms import Literal, Var, resolve
+from agentspeak.unify import undo, unifies, unify
+
+
+@internal_action(".fail", args=(0, None))
+def fail(ctx, *annots):
+    """Fail the current plan; optional arguments are added to the failure event's annotations."""
+    error = "ia_failed"
+    message = ".fail"
+    for a in annots:
+        if isinstance(a, Literal) and a.functor == "error" and a.args:
+            error = getattr(a.args[0], "functor", str(a.args[0]))
+        if isinstance(a, Literal) and a.functor == "error_msg" and a.args:
+            message = str(a.args[0])
+    raise IAError(error, message)
+
+
+def _goal_ims(intention: Intention, goal: Literal):
+    """Indexes of intended means (top first) whose trigger is +!goal (goal unifies the trigger)."""
+    for i in range(len(intention.stack) - 1, -1, -1):
+        im = intention.stack[i]
+        t = im.plan.trigger
+        if t.op == ADD and t.kind == ACHIEVE and unifies(goal, resolve(t.literal, im.b), {}):
+            yield i
+
+
+def _matching(agent, goal: Literal):
+    for intention in agent.intentions():
+        idx = next(_goal_ims(intention, goal), None)
+        if idx is not None:
+            yield intention, idx
+
+
+@internal_action(".succeed_goal", args=1)
+def succeed_goal(ctx, goal):
+    """Finish goal ``goal`` as if its plan had succeeded (the caller goes on after its ``!goal``)."""
+    agent = ctx.agent
+    _drop_events(agent, goal)
+    for intention, idx in list(_matching(agent, goal)):
+        del intention.stack[idx + 1:]
+        im = intention.stack[idx]
+        im.frames[:] = [im.frames[0]]
+        im.frames[0].pc = len(im.frames[0].body)
+        if intention is not ctx.intention:
+            agent._requeue(intention)
+        agent.clr_int(intention)
+    if ctx.intention is not None and ctx.intention.dropped:
+        return Suspend(reason="finished")  # the calling intention itself was finished
+    return True
+
+
+@internal_action(".fail_goal", args=1)
+def fail_goal(ctx, goal):
+    """Abort goal ``goal`` as if its plan had failed (posts ``-!goal``, also for a bottom goal)."""
+    agent = ctx.agent
+    current = ctx.intention
+    affected_current = False
+    for intention, idx in list(_matching(agent, goal)):
+        del intention.stack[idx + 1:]
+        if intention is current:
+            affected_current = True
+            continue
+        agent._requeue(intention)
+        agent._fail(intention, "ia_failed", f".fail_goal({goal})")
+    if affected_current:
+        raise IAError("ia_failed", f".fail_goal({goal})")
+    return True
+
+
+@internal_action(".drop_intention", args=(0, 1))
+def drop_intention(ctx, goal=None):
+    """Drop the intention(s) pursuing ``goal`` (no failure event); without argument, the current one."""
+    agent = ctx.agent
+    if goal is None:
+        agent.drop_intention(ctx.intention)
+        return Suspend(reason="dropped")
+    current_dropped = False
+    for intention, _ in list(_matching(agent, goal)):
+        if intention is ctx.intention:
+            current_dropped = True
+        agent.drop_intention(intention)
+    return Suspend(reason="dropped") if current_dropped else True
+
+
+def _drop_events(agent, goal: Literal) -> None:
+    keep = []
+    for ev in agent.events:
+        t = ev.trigger
+        if t.op == ADD and t.kind == ACHIEVE and unifies(goal, t.literal, {}):
+            if ev.intention is not None:
+                agent.drop_intention(ev.intention)
+            continue
+        keep.append(ev)
+    agent.events.clear()
+    agent.events.extend(keep)
+
+
+def drop_desire(agent, goal: Literal, current=None) -> bool:
+    _drop_events(agent, goal)
+    dropped_current = False
+    for intention, _ in list(_matching(agent, goal)):
+        if intention is current:
+            dropped_current = True
+        agent.drop_intention(intention)
+    return dropped_current
+
+
+@internal_action(".drop_desire", args=1)
+def drop_desire_(ctx, goal):
+    """Remove goal ``goal`` from events and intentions."""
+    return Suspend(reason="dropped") if drop_desire(ctx.agent, goal, ctx.intention) else True
+
+
+@internal_action(".drop_all_desires", args=0)
+def drop_all_desires(ctx):
+    agent = ctx.agent
+    agent.events.clear()
+    for i in agent.intentions():
+        if i is not ctx.intention:
+            agent.drop_intention(i)
+    agent.drop_intention(ctx.intention)
+    return Suspend(reason="dropped")
+
+
+@internal_action(".drop_all_intentions", args=0)
+def drop_all_intentions(ctx):
+    return drop_all_desires(ctx)
+
+
+@internal_action(".drop_all_events", args=0)
+def drop_all_events(ctx):
+    ctx.agent.events.clear()
+
+
+@internal_action(".intend", args=(1, 2))
+def intend(ctx, goal, ident=None):
+    """Is ``goal`` currently intended? Backtracks over intentions."""
+    for intention in ctx.agent.intentions() + ([ctx.intention] if ctx.intention and ctx.intention.dropped is False and ctx.intention not in ctx.agent.intentions() else []):
+        for i in _goal_ims(intention, goal):
+            im = intention.stack[i]
+            mark = len(ctx.trail)
+            if ctx.unify(goal, resolve(im.plan.trigger.literal, im.b)) and (ident is None or ctx.unify(ident, intention.id)):
+                yield
+            undo(ctx.b, ctx.trail, mark)
+
+
+@internal_action(".desire", args=(1, 2))
+def desire(ctx, goal, ident=None):
+    """Is ``goal`` a desire (a pending goal event or an intention)?"""
+    for ev in list(ctx.agent.events):
+        t = ev.trigger
+        if t.op == ADD and t.kind == ACHIEVE:
+            mark = len(ctx.trail)
+            if ctx.unify(goal, t.literal):
+                yield
+            undo(ctx.b, ctx.trail, mark)
+    yield from intend(ctx, goal, ident)
+
+
+@internal_action(".suspend", args=(0, 1))
+def suspend(ctx, goal=None):
+    """Suspend the intention(s) pursuing ``goal`` until ``.resume(goal)`` (the current one without argument)."""
+    agent = ctx.agent
+    if goal is None:
+        return Suspend(reason="suspended")
+    current = False
+    for intention, _ in list(_matching(agent, goal)):
+        if intention is ctx.intention:
+            current = True
+            continue
+        try:
+            agent.running.remove(intention)
+        except ValueError:
+            pass
+        agent._suspend(intention, "suspended")
+        intention.waiting = Suspend(reason="suspended")
+    return Suspend(reason="suspended") if current else True
+
+
+@internal_action(".resume", args=1)
+def resume(ctx, goal):
+    """Resume intentions suspended by ``.suspend`` that pursue ``goal``."""
+    agent = ctx.agent
+    for intention, _ in list(_matching(agent, goal)):
+        if intention.suspended == "suspended":
+            susp = intention.waiting
+            finish = getattr(susp, "finish", None)
+            if finish is not None:
+                finish(True)
+            else:
+                intention.waiting = None
+                agent._requeue(intention)
+
+
+@internal_action(".suspended", args=2)
+def suspended(ctx, goal, reason):
+    for intention in ctx.agent.intentions():
+        if intention.suspended:
+            for i in _goal_ims(intention, goal):
+                mark = len(ctx.trail)
+                if ctx.unify(reason, Literal(intention.suspended)):
+                    yield
+                undo(ctx.b, ctx.trail, mark)
+
+
+_ = (DEL, Trigger, Var, unify, wrong_arguments)

@@ -1,0 +1,146 @@
+"""Messages: send, broadcast, my_name, all_names (KQML semantics in agentspeak.communication)."""
+from __future__ import annotations
+
+from concurrent.futures import Future
+
+from agentspeak.communication import Message, PERFORMATIVES
+from agentspeak.program import PlanTerm
+from agentspeak.stdlib.registry import IAError, Suspend, internal_action, wrong_arguments
+from agentspeak.terms import NIL, Literal, Var, list_items, make_list, to_str
+
+_ASK = ("askOne", "askAll", "askHow")
+
+
+def _names(receiver) -> list[str]:
+    try:
+        items = list_items(receiver)
+    except TypeError:
+        items = [receiver]
+    names = []
+    for r in items:
+        if isinstance(r, Literal) and not r.args:
+            names.append(r.functor)
+        elif isinstance(r, str):
+            names.append(r)
+        else:
+            raise wrong_arguments(f".send: '{to_str(r)}' is not an agent name")
+    return names
+
+
+@internal_action(".send", args=(3, 5))
+def send(ctx, receiver, performative, content, answer=None, timeout=None):
+    """``.send(R, Perf, C[, Ans[, TimeoutMs]])``. With Ans, an ask suspends this intention until
+    the answer (``false`` if unknown, ``timeout`` on timeout) - other intentions go on."""
+    agent = ctx.agent
+    if not isinstance(performative, Literal) or performative.args:
+        raise wrong_arguments(".send: the performative must be an atom")
+    perf = performative.functor
+    names = _names(receiver)
+    if isinstance(content, Var):
+        raise wrong_arguments(".send: the content is an unbound variable")
+    sender = agent.name
+    if answer is None or perf not in _ASK:
+        for name in names:
+            agent.arch.send(agent, Message(sender, name, perf, content))
+        return True
+    # a synchronous ask: wait for the replies
+    futures = []
+    for name in names:
+        msg = Message(sender, name, perf, content)
+        fut: Future = Future()
+        futures.append(fut)
+
+        def on_reply(reply: Message, fut=fut, name=name) -> None:
+            if not fut.done():
+                fut.set_result(reply)
+        agent.pending_asks[msg.msg_id] = on_reply
+        agent.arch.send(agent, msg)
+    waiting = _all_of(futures)
+
+    def on_result(c, replies) -> bool:
+        values = [_answer_value(perf, r, content) for r in replies]
+        return c.unify(answer, values[0] if len(values) == 1 and not isinstance(receiver, type(NIL)) and len(names) == 1 and not _is_list(receiver) else make_list(values))
+
+    def on_timeout(c) -> bool:
+        for fut in futures:
+            fut.cancel()
+        return c.unify(answer, Literal("timeout"))
+
+    seconds = None
+    if timeout is not None:
+        if not isinstance(timeout, (int, float)):
+            raise wrong_arguments(".send: the timeout is a number of milliseconds")
+        seconds = timeout / 1000.0
+    return Suspend(future=waiting, on_result=on_result, timeout=seconds,
+                   on_timeout=on_timeout if seconds is not None else None, reason="ask")
+
+
+def _is_list(t) -> bool:
+    try:
+        list_items(t)
+        return True
+    except TypeError:
+        return False
+
+
+def _all_of(futures: list[Future]) -> Future:
+    done: Future = Future()
+    remaining = [len(futures)]
+    results: list = [None] * len(futures)
+
+    def one(i: int, f: Future) -> None:
+        if f.cancelled():
+            return
+        results[i] = f.result()
+        remaining[0] -= 1
+        if remaining[0] == 0 and not done.done():
+            done.set_result(results)
+    for i, f in enumerate(futures):
+        f.add_done_callback(lambda f, i=i: one(i, f))
+    return done
+
+
+def _answer_value(perf: str, reply: Message, question):
+    """What the asker's answer variable gets: the content annotated with the replier as source."""
+    sender = Literal(reply.sender)
+    if reply.performative == "untell":
+        return Literal("false")
+    content = reply.content
+    if perf == "askHow":
+        return content
+    if perf == "askAll":
+        try:
+            return make_list([_with_source(c, sender) for c in list_items(content)])
+        except TypeError:
+            return content
+    return _with_source(content, sender)
+
+
+def _with_source(t, sender):
+    if isinstance(t, Literal):
+        return t.add_annot(Literal("source", (sender,)))
+    return t
+
+
+@internal_action(".broadcast", args=2)
+def broadcast(ctx, performative, content):
+    """Send to every other agent of the MAS."""
+    agent = ctx.agent
+    if not isinstance(performative, Literal):
+        raise wrong_arguments(".broadcast: the performative must be an atom")
+    for name in agent.arch.all_names(agent):
+        if name != agent.name:
+            agent.arch.send(agent, Message(agent.name, name, performative.functor, content))
+
+
+@internal_action(".my_name", args=1)
+def my_name(ctx, name):
+    return ctx.unify(name, Literal(ctx.agent.name))
+
+
+@internal_action(".all_names", args=1)
+def all_names(ctx, result):
+    return ctx.unify(result, make_list([Literal(n) for n in sorted(ctx.agent.arch.all_names(ctx.agent))]))
+
+
+_ = (IAError, PERFORMATIVES, PlanTerm)

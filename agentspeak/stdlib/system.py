@@ -1,0 +1,109 @@
+"""Time, randomness, waiting and the MAS: time, date, nano_time, random, wait, stopMAS, include."""
+from __future__ import annotations
+
+import datetime
+import random as _random
+import time
+
+from agentspeak.program import PlanTerm, Trigger
+from agentspeak.stdlib.registry import Suspend, internal_action, wrong_arguments
+from agentspeak.terms import Literal, Var, normalise_number, resolve
+
+
+@internal_action(".time", args=(3, 4))
+def time_(ctx, h, m, s, ms=None):
+    now = datetime.datetime.now()
+    ok = ctx.unify(h, now.hour) and ctx.unify(m, now.minute) and ctx.unify(s, now.second)
+    return ok and (ms is None or ctx.unify(ms, now.microsecond // 1000))
+
+
+@internal_action(".date", args=3)
+def date(ctx, y, m, d):
+    today = datetime.date.today()
+    return ctx.unify(y, today.year) and ctx.unify(m, today.month) and ctx.unify(d, today.day)
+
+
+@internal_action(".nano_time", args=1)
+def nano_time(ctx, t):
+    return ctx.unify(t, time.perf_counter_ns())
+
+
+def _rng(agent) -> _random.Random:
+    rng = getattr(agent, "_rng", None)
+    if rng is None:
+        rng = agent._rng = _random.Random()
+    return rng
+
+
+@internal_action(".random", args=(1, 2))
+def random(ctx, x, n=None):
+    """A random number in [0, 1); with a count N, backtracks over N values."""
+    rng = _rng(ctx.agent)
+    if n is None:
+        return ctx.unify(x, rng.random())
+    from agentspeak.unify import undo
+    for _ in range(int(n)):
+        mark = len(ctx.trail)
+        if ctx.unify(x, rng.random()):
+            yield
+        undo(ctx.b, ctx.trail, mark)
+
+
+@internal_action(".set_random_seed", args=1)
+def set_random_seed(ctx, seed):
+    _rng(ctx.agent).seed(seed)
+
+
+@internal_action(".wait", args=(1, 3))
+def wait(ctx, what, timeout=None, elapsed=None):
+    """``.wait(Ms)``, ``.wait({Event}[, Ms[, Elapsed]])`` or ``.wait(Condition[, Ms[, Elapsed]])``.
+    With two arguments a timeout fails the goal; with three it does not (Elapsed says how long)."""
+    started = time.monotonic()
+    if isinstance(what, (int, float)):
+        return Suspend(timeout=max(0.0, what / 1000.0), on_timeout=lambda c: True, reason="wait")
+    seconds = None
+    if timeout is not None:
+        if not isinstance(timeout, (int, float)):
+            raise wrong_arguments(".wait: the timeout is a number of milliseconds")
+        seconds = timeout / 1000.0
+
+    def done(c) -> bool:
+        return elapsed is None or c.unify(elapsed, normalise_number(round((time.monotonic() - started) * 1000)))
+
+    on_timeout = None
+    if seconds is not None:
+        on_timeout = (lambda c: done(c)) if elapsed is not None else None
+    trigger = what.as_trigger() if isinstance(what, PlanTerm) else None
+    if trigger is not None:
+        return Suspend(event=trigger, timeout=seconds, on_timeout=on_timeout, reason="wait_event")
+    # a logical condition, re-checked after every reasoning cycle
+    agent = ctx.agent
+    b = ctx.b
+    from agentspeak.solver import solve_first
+    if solve_first(agent, what, b):
+        return done(ctx)
+    return Suspend(until=lambda: solve_first(agent, what, b), timeout=seconds, on_timeout=on_timeout,
+                   reason="wait_condition")
+
+
+@internal_action(".stopMAS", args=(0, 2))
+def stop_mas(ctx, delay=0, code=0):
+    """Stop every agent of the MAS."""
+    ctx.agent.arch.stop_mas(ctx.agent, (delay or 0) / 1000.0)
+    return Suspend(reason="stopping")
+
+
+@internal_action(".include", args=(1, 2))
+def include(ctx, path, namespace=None):
+    """Load an .asl file now (beliefs, rules, plans, goals)."""
+    import os
+    from agentspeak.parser import parse_program
+    if not isinstance(path, str):
+        raise wrong_arguments(".include needs a file name")
+    base = os.path.dirname(ctx.agent.source_file) if ctx.agent.source_file else "."
+    full = path if os.path.isabs(path) else os.path.join(base, path)
+    with open(full) as f:
+        ctx.agent.load(parse_program(f.read(), full))
+
+
+_ = (Literal, Trigger, Var, resolve)

@@ -1,0 +1,194 @@
+"""Unification with Jason's annotation semantics.
+
+``unify(a, b, bindings, trail)`` binds variables in ``bindings`` (recording each bound variable
+in ``trail`` so the caller can undo) and returns True or False. On False the caller must undo the
+trail: the bindings may be half made. Annotations are directional: every annotation of the left
+term must unify with one of the right term's (``p[a] = p[a,b]`` succeeds, ``p[a,b] = p[a]`` fails),
+which is how Jason matches plan triggers (left) against events and queries (left) against beliefs.
+Lists are walked along their tails in a loop, so long lists cost no Python recursion.
+"""
+from __future__ import annotations
+
+from typing import Iterator
+
+from agentspeak.terms import (
+    NIL, And, Arith, Bindings, Cons, Literal, Not, Or, Rel, Term, Var, list_items, make_list,
+)
+
+
+def bind(v: Var, t: Term, b: Bindings, trail: list) -> None:
+    b[v] = t
+    trail.append(v)
+
+
+def undo(b: Bindings, trail: list, mark: int) -> None:
+    """Remove the bindings made since ``mark`` (a previous ``len(trail)``)."""
+    while len(trail) > mark:
+        b.pop(trail.pop(), None)
+
+
+def unify(a: Term, c: Term, b: Bindings, trail: list) -> bool:
+    stack = [(a, c)]
+    pop = stack.pop
+    push = stack.append
+    while stack:
+        x, y = pop()
+        # dereference both sides
+        while type(x) is Var:
+            v = b.get(x)
+            if v is None:
+                break
+            x = v
+        while type(y) is Var:
+            v = b.get(y)
+            if v is None:
+                break
+            y = v
+        if x is y:
+            continue
+        tx, ty = type(x), type(y)
+        if tx is Var:
+            b[x] = y
+            trail.append(x)
+            continue
+        if ty is Var:
+            b[y] = x
+            trail.append(y)
+            continue
+        if tx is Literal:
+            if ty is not Literal:
+                return False
+            if x.functor != y.functor or x.neg != y.neg or len(x.args) != len(y.args):
+                return False
+            if x.annots is not None or x.annot_tail is not None:
+                if not unify_annots(x, y, b, trail):
+                    return False
+            for pair in zip(x.args, y.args):
+                push(pair)
+            continue
+        if tx is Cons:
+            if ty is not Cons:
+                return False
+            push((x.tail, y.tail))
+            push((x.head, y.head))
+            continue
+        if (tx is int or tx is float) and (ty is int or ty is float):
+            if x != y:
+                return False
+            continue
+        if tx is str or ty is str:
+            if tx is not ty or x != y:
+                return False
+            continue
+        if tx is Arith or ty is Arith:
+            from agentspeak.terms import resolve  # arithmetic in a pattern: evaluate when ground
+            rx, ry = resolve(x, b), resolve(y, b)
+            if type(rx) is Arith or type(ry) is Arith:
+                if not (type(rx) is Arith and type(ry) is Arith and rx.op == ry.op):
+                    return False
+                push((rx.left, ry.left))
+                if rx.right is not None or ry.right is not None:
+                    push((rx.right, ry.right))
+                continue
+            push((rx, ry))
+            continue
+        if tx is not ty:
+            return False
+        if tx in (Rel, And, Or):
+            if tx is Rel and x.op != y.op:
+                return False
+            push((x.right, y.right))
+            push((x.left, y.left))
+            continue
+        if tx is Not:
+            push((x.arg, y.arg))
+            continue
+        unifier = getattr(x, "unify_with", None)
+        if unifier is not None:
+            if not unifier(y, b, trail):
+                return False
+            continue
+        if x != y:
+            return False
+    return True
+
+
+def unify_annots(x: Literal, y: Literal, b: Bindings, trail: list) -> bool:
+    """Every annotation of ``x`` must unify with some annotation of ``y`` (first match wins).
+
+    If ``x`` has an annotation tail ``|T``, T is bound to the list of ``y``'s annotations that
+    were not used.
+    """
+    yann = list(y.annots or ())
+    if y.annot_tail is not None:
+        tail_value = b.get(y.annot_tail)
+        if tail_value is not None:
+            yann.extend(_safe_items(tail_value, b))
+    used = [False] * len(yann)
+    for ax in x.annots or ():
+        for i, ay in enumerate(yann):
+            if used[i]:
+                continue
+            mark = len(trail)
+            if unify(ax, ay, b, trail):
+                used[i] = True
+                break
+            undo(b, trail, mark)
+        else:
+            return False
+    if x.annot_tail is not None:
+        rest = make_list([a for a, u in zip(yann, used) if not u])
+        return unify(x.annot_tail, rest, b, trail)
+    return True
+
+
+def _safe_items(t: Term, b: Bindings) -> list:
+    from agentspeak.terms import resolve
+    try:
+        return list_items(resolve(t, b))
+    except TypeError:
+        return []
+
+
+def unify_annots_all(x: Literal, y: Literal, b: Bindings, trail: list) -> Iterator[None]:
+    """Like the annotation part of ``unify`` but backtracking over every way to match.
+
+    Used when a query such as ``b[source(S)]`` must enumerate each source of one belief.
+    Each yield leaves the bindings of one solution in ``b``; the caller undoes.
+    """
+    xann = list(x.annots or ())
+    yann = list(y.annots or ())
+
+    def match(i: int, used: frozenset) -> Iterator[None]:
+        if i == len(xann):
+            if x.annot_tail is not None:
+                mark = len(trail)
+                rest = make_list([a for k, a in enumerate(yann) if k not in used])
+                if unify(x.annot_tail, rest, b, trail):
+                    yield
+                undo(b, trail, mark)
+            else:
+                yield
+            return
+        for k, ay in enumerate(yann):
+            if k in used:
+                continue
+            mark = len(trail)
+            if unify(xann[i], ay, b, trail):
+                yield from match(i + 1, used | {k})
+            undo(b, trail, mark)
+
+    return match(0, frozenset())
+
+
+def unifies(a: Term, c: Term, b: Bindings | None = None) -> bool:
+    """Convenience: do ``a`` and ``c`` unify (bindings kept in ``b`` if given)?"""
+    b = {} if b is None else b
+    trail: list = []
+    if unify(a, c, b, trail):
+        return True
+    undo(b, trail, 0)
+    return False
+
+
+__all__ = ["bind", "undo", "unify", "unify_annots", "unify_annots_all", "unifies", "NIL"]
