@@ -269,18 +269,38 @@ def _blobs(hsv: np.ndarray, depth: np.ndarray, cam: CameraModel, cfg: DetectorCo
     import cv2
 
     mask = colour_mask(hsv, rng, kernel)
-    n, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
     out = []
-    for i in range(1, n):
-        x, y, w, h, area = (int(s) for s in stats[i])
-        if area < cfg.min_area_px:
-            continue
-        sub = labels[y:y + h, x:x + w] == i
-        blob = _measure(sub, x, y, float(centroids[i][1]), depth, cam, cfg, name, area)
+    for x, y, sub, area, v_c in _components(mask, cfg.min_area_px):
+        blob = _measure(sub, x, y, v_c, depth, cam, cfg, name, area)
         if blob is not None:
             out.append(blob)
         else:
             out.extend(_split_by_depth(sub, x, y, depth, cam, cfg, name))
+    return out
+
+
+def _components(mask: np.ndarray, min_area: int) -> list[tuple[int, int, np.ndarray, int, float]]:
+    """Connected blobs of a 0/255 mask as (x, y, boolean bbox-sized mask, area, centroid row).
+
+    External contours and their bounding boxes cost far less than labelling the whole frame when, as
+    here, the mask is nearly empty.
+    """
+    import cv2
+
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    out = []
+    for c in contours:
+        x, y, w, h = cv2.boundingRect(c)
+        if w * h < min_area:
+            continue
+        own = np.zeros((h, w), np.uint8)
+        cv2.drawContours(own, [c], -1, 255, thickness=-1, offset=(-x, -y))
+        sub = (own > 0) & (mask[y:y + h, x:x + w] > 0)
+        area = int(np.count_nonzero(sub))
+        if area < min_area:
+            continue
+        v_c = y + float(np.nonzero(sub)[0].mean())
+        out.append((x, y, sub, area, v_c))
     return out
 
 
@@ -311,15 +331,10 @@ def _split_by_depth(sub: np.ndarray, x0: int, y0: int, depth: np.ndarray, cam: C
         return []
     out = []
     for a, b in runs:
-        part = np.zeros_like(sub)
+        part = np.zeros(sub.shape, np.uint8)
         part[:, a:b] = sub[:, a:b]
-        n, labels, stats, cents = cv2.connectedComponentsWithStats(part.view(np.uint8), connectivity=8)
-        for i in range(1, n):
-            x, y, ww, hh, area = (int(v) for v in stats[i])
-            if area < cfg.min_area_px:
-                continue
-            blob = _measure(labels[y:y + hh, x:x + ww] == i, x0 + x, y0 + y, y0 + float(cents[i][1]),
-                            depth, cam, cfg, name, area)
+        for x, y, piece, area, v_c in _components(part * 255, cfg.min_area_px):
+            blob = _measure(piece, x0 + x, y0 + y, y0 + v_c, depth, cam, cfg, name, area)
             if blob is not None:
                 out.append(blob)
     return out
