@@ -588,7 +588,7 @@ def _expected_text(expected) -> str:
 # -- single terms -----------------------------------------------------------------------------
 def parse_literal(text: str) -> Term:
     """Parse one term, e.g. message content ``price(10)[a]`` (raises ``AslSyntaxError``)."""
-    program = parse_program(f"__t__({text}).", "<term>") if text.strip() else None
+    program = parse_program(f"term__({text}).", "<term>") if text.strip() else None
     if program is None:
         raise AslSyntaxError("empty term", "<term>", 1, 1, text)
     if program.beliefs:
@@ -602,7 +602,7 @@ def parse_term(text: str) -> Term:
 
 def parse_body(text: str) -> tuple:
     """Parse a plan body (used by ``.add_plan`` of strings and by tests)."""
-    program = parse_program(f"+!__b__ <- {text}.", "<body>")
+    program = parse_program(f"+!body__ <- {text}.", "<body>")
     return program.plans[0].body
 
 

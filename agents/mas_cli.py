@@ -1,0 +1,94 @@
+"""``faultmas mas run PROJECT.mas2j``, ``faultmas agent run FILE.asl`` and ``faultmas router``.
+
+In one process (the default) all agents share a ``LocalRuntime`` with an in-process mailbox.
+"""
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+
+from agents.router import add_router_parser
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    mas = sub.add_parser("mas", help="run a multi-agent system from a Jason project file")
+    mas_sub = mas.add_subparsers(dest="mas_command", metavar="ACTION")
+    run = mas_sub.add_parser("run", help="run every agent of PROJECT.mas2j")
+    run.add_argument("project")
+    run.add_argument("--timeout", type=float, default=None, help="stop after S seconds (always wins)")
+    run.add_argument("--processes", action="store_true", help="one OS process per agent, over Zenoh")
+    run.set_defaults(func=cmd_mas_run)
+    mas.set_defaults(func=lambda args: (mas.print_help(), 2)[1])
+    add_router_parser(sub)
+
+
+def _setup_logging() -> None:
+    logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr)
+
+
+def build_local_mas(project, printer=None):
+    """A LocalRuntime holding every agent of ``project`` (parse errors raise AslSyntaxError)."""
+    from pathlib import Path
+
+    from agentspeak.parser import parse_program
+    from agentspeak.runtime import LocalRuntime
+
+    runtime = LocalRuntime(printer=printer)
+    runtime.trusted_senders = set(project.agent_names())
+    programs: dict[str, object] = {}
+    for decl in project.agents:
+        if decl.source not in programs:
+            try:
+                text = Path(decl.source).read_text()
+            except OSError as exc:
+                from agentspeak.errors import SourceError
+                raise SourceError(f"agent '{decl.name}': cannot read {decl.source}: {exc.strerror or exc}",
+                                  project.file) from None
+            programs[decl.source] = text
+        beliefs = _option_literals(decl.options.get("beliefs"), project.file)
+        goals = _option_literals(decl.options.get("goals"), project.file)
+        for name in decl.instance_names():
+            # each instance gets its own parse: plans hold per-agent labels and state
+            program = parse_program(programs[decl.source], decl.source)
+            runtime.add_agent(name, source_file=decl.source, program=program,
+                              extra_beliefs=beliefs, extra_goals=goals)
+    return runtime
+
+
+def _option_literals(text: str | None, file: str) -> list:
+    if not text:
+        return []
+    from agentspeak.parser import parse_term
+    from agentspeak.terms import list_items
+    return list_items(parse_term(f"[{text}]"))
+
+
+def cmd_mas_run(args) -> int:
+    from agentspeak.errors import AslSyntaxError, SourceError
+    from agentspeak.mas2j import load_mas2j
+    _setup_logging()
+    try:
+        project = load_mas2j(args.project)
+    except OSError as exc:
+        print(f"{args.project}: cannot read: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except AslSyntaxError as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    if args.processes:
+        try:
+            from agents.distributed import run_processes
+        except ModuleNotFoundError as exc:
+            if exc.name != "agents.distributed":
+                raise
+            print("--processes: the distributed runtime is not built yet (issue 3)", file=sys.stderr)
+            return 2
+        return run_processes(project, timeout=args.timeout)
+    try:
+        runtime = build_local_mas(project)
+    except (AslSyntaxError, SourceError) as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    runtime.run(timeout=args.timeout)
+    return 0
