@@ -71,6 +71,7 @@ class Registry:
     """Internal actions by AgentSpeak name (with the leading dot)."""
 
     actions: dict[str, InternalActionSpec] = field(default_factory=dict)
+    _extensions_loaded: bool = False
 
     def register(self, name: str, function: Callable, min_args: int = 0, max_args: int | None = None) -> None:
         if not name.startswith(".") and "." not in name:
@@ -79,7 +80,27 @@ class Registry:
         self.actions[name] = InternalActionSpec(name, function, min_args, max_args, doc)
 
     def get(self, name: str) -> InternalActionSpec | None:
-        return self.actions.get(name)
+        spec = self.actions.get(name)
+        if spec is None and not self._extensions_loaded:
+            self.load_extensions()
+            spec = self.actions.get(name)
+        return spec
+
+    def load_extensions(self) -> None:
+        """Import the modules named in the ``faultmas.internal_actions`` entry-point group once.
+
+        Each such module registers its actions on ``STDLIB`` with the decorator when imported; this
+        keeps the interpreter free of imports of higher layers (the diagnoser, robot bridges).
+        """
+        self._extensions_loaded = True
+        from importlib.metadata import entry_points
+        for ep in entry_points(group="faultmas.internal_actions"):
+            try:
+                ep.load()
+            except Exception as exc:  # a broken plug-in must not take the interpreter down
+                import logging
+                logging.getLogger("faultmas.agentspeak").warning(
+                    "internal-action plug-in %s (%s) failed to load: %s", ep.name, ep.value, exc)
 
     def internal_action(self, name: str, args: int | tuple[int, int | None] = (0, None)):
         """Decorator: ``@internal_action(".length", args=2)`` or ``args=(1, 3)``."""
