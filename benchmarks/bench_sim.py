@@ -54,7 +54,7 @@ def run(quick: bool) -> str:
         verdict = "-" if target is None else ("yes" if seen >= target else "NO")
         goal = f">= {target:g}x" if target else "-"
         lines.append(f"{n:>6} | {bare:>13.1f}x | {seen:>13.2f}x | {goal:>7} | {verdict}")
-    lines.append("(simulated seconds per wall second; dt = 0.01 s; 640x480 RGB-D per camera frame)")
+    lines.append("(simulated seconds per wall second; dt = 0.02 s; 640x480 RGB-D per camera frame)")
     return "\n".join(lines)
 
 

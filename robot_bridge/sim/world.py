@@ -24,7 +24,8 @@ from robot_bridge.protocol import Completion, Percept
 from robot_bridge.sim import faults, kobuki, motion, odometry
 from robot_bridge.sim.faults import NO_FAULT, Fault
 
-DEFAULT_DT = 0.01
+DEFAULT_DT = 0.02
+"""Simulated seconds per step: the Kobuki reports its sensors at 50 Hz."""
 
 
 @dataclass(frozen=True)
