@@ -7,6 +7,7 @@ own process groups, so a Ctrl-C reaches the supervisor only and the shutdown ord
 """
 from __future__ import annotations
 
+import math
 import os
 import signal
 import subprocess
@@ -18,7 +19,8 @@ from typing import Sequence
 from robot_bridge.ros2.runtime import loopback_env
 
 SPACING_M = 1.5
-"""Robots start on a line along +x, facing +x: the last one sees all the others with its camera."""
+"""Robots start on a line along +x. The last one faces +x and sees the others with its camera; they
+stand side-on to it (facing +y), since a robot seen from behind hides one marker behind the other."""
 
 
 @dataclass(frozen=True)
@@ -50,7 +52,9 @@ def plan(robots: Sequence[str], fault: str = "none", camera: bool = True, seed: 
     specs = []
     for i, robot in enumerate(robots):
         x = SPACING_M * (len(robots) - 1 - i)
-        specs.append(NodeSpec(robot, "kobuki_sim", (("x", repr(float(x))), ("seed", str(seed + i)))))
+        yaw = 0.0 if i == len(robots) - 1 else math.pi / 2
+        specs.append(NodeSpec(robot, "kobuki_sim", (("x", repr(float(x))), ("yaw", repr(yaw)),
+                                                    ("seed", str(seed + i)))))
         specs.append(NodeSpec(robot, "fault_injector", (("fault", fault if i == 0 else "none"),)))
         specs.append(NodeSpec(robot, "motion_decomposer"))
         if camera:

@@ -147,6 +147,9 @@ def run_node(node_factory: Callable[..., object], description: str, argv: Sequen
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except Exception:
+        if rclpy.ok():
+            raise                 # a real error, not a message taken while SIGINT shut us down
     finally:
         if node is not None:
             stop = getattr(node, "stop", None)
