@@ -71,6 +71,7 @@ class Blob:
     clipped: bool                       # touches the top or bottom image border
     sides: tuple[float, float]          # depth beside the left and right edges (-1 border, NaN none)
     placed: bool = False                # range from the partner cylinder (no depth of its own)
+    mixed: bool = False                 # depth readings from more than one surface (merged blobs)
 
 
 @dataclass(frozen=True)
@@ -201,8 +202,11 @@ def _place_on_circle(known: Blob, other: Blob, cam: CameraModel, cfg: DetectorCo
     for side, meas, pred, z_side in (("left", other.phi_left, phi - half, other.sides[0]),
                                      ("right", other.phi_right, phi + half, other.sides[1])):
         res = (meas - pred) * cam.fx / 0.6                     # pixels / sigma
-        hidden = (z_side == -1.0) | ((z_side == z_side) & (z_side < limit))
         outward = res * (-1.0 if side == "left" else 1.0)      # measured edge beyond the prediction
+        if z_side != z_side:                                   # no reading beside it: maybe hidden
+            cost += np.maximum(outward, 0.0) ** 2 + (np.minimum(outward, 0.0) / 3.0) ** 2
+            continue
+        hidden = (z_side == -1.0) | (z_side < limit)
         cost += np.where(hidden, np.maximum(outward, 0.0) ** 2, res * res)
     v_top = cam.cy + cam.fy * known.top_y_m / np.maximum((rho - r) * np.cos(phi), 0.05)
     cost += ((other.bbox[1] - 0.5 - v_top) / 0.8) ** 2
@@ -272,10 +276,12 @@ def _blobs(hsv: np.ndarray, depth: np.ndarray, cam: CameraModel, cfg: DetectorCo
     out = []
     for x, y, sub, area, v_c in _components(mask, cfg.min_area_px):
         blob = _measure(sub, x, y, v_c, depth, cam, cfg, name, area)
-        if blob is not None:
-            out.append(blob)
-        else:
-            out.extend(_split_by_depth(sub, x, y, depth, cam, cfg, name))
+        if blob is None or blob.mixed:
+            parts = _split_by_depth(sub, x, y, depth, cam, cfg, name)
+            if parts or blob is None:
+                out.extend(parts)
+                continue
+        out.append(blob)
     return out
 
 
@@ -306,46 +312,33 @@ def _components(mask: np.ndarray, min_area: int) -> list[tuple[int, int, np.ndar
 
 def _split_by_depth(sub: np.ndarray, x0: int, y0: int, depth: np.ndarray, cam: CameraModel,
                     cfg: DetectorConfig, name: str) -> list[Blob]:
-    """A marker touching a same-coloured object (a blue pole, a blue box) in the image: cut the merged
-    blob into runs of columns at one depth and measure each run's components on their own."""
+    """A marker touching a same-coloured object in the image (a blue box behind it, a blue pole
+    beside it): cut the merged blob into depth layers and measure each layer's components alone."""
     import cv2
 
     h, w = sub.shape
-    if w < 4:
+    d = depth[y0:y0 + h, x0:x0 + w]
+    vals = np.sort(d[sub & (d > 0)])
+    if vals.size < 2 * cfg.min_depth_px:
         return []
-    dsub = np.where(sub & (depth[y0:y0 + h, x0:x0 + w] > 0), depth[y0:y0 + h, x0:x0 + w], np.nan)
-    counts = np.count_nonzero(~np.isnan(dsub), axis=0)
-    with np.errstate(all="ignore"):
-        import warnings
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            col_z = np.nanmedian(dsub, axis=0)
-    col_z[counts < 3] = np.nan
-    runs: list[tuple[int, int]] = []
-    start = 0
-    for c in range(1, w + 1):
-        if c == w or not _same_layer(col_z[c - 1], col_z[c]):
-            runs.append((start, c))
-            start = c
-    if len(runs) < 2:
+    tol = np.maximum(0.06, 0.008 * vals[1:] ** 2)
+    cuts = np.nonzero(np.diff(vals) > tol)[0]
+    if cuts.size == 0:
         return []
+    bounds = np.split(vals, cuts + 1)
     out = []
-    for a, b in runs:
-        part = np.zeros(sub.shape, np.uint8)
-        part[:, a:b] = sub[:, a:b]
-        for x, y, piece, area, v_c in _components(part * 255, cfg.min_area_px):
+    for layer in bounds:
+        if layer.size < cfg.min_depth_px:
+            continue
+        pad = max(0.03, 0.004 * float(layer[-1]) ** 2)
+        lm = (sub & (d >= layer[0] - pad) & (d <= layer[-1] + pad)).view(np.uint8) * 255
+        lm = cv2.morphologyEx(lm, cv2.MORPH_CLOSE, _kernel(3))      # refill dropouts
+        lm &= sub.view(np.uint8) * 255
+        for x, y, piece, area, v_c in _components(lm, cfg.min_area_px):
             blob = _measure(piece, x0 + x, y0 + y, y0 + v_c, depth, cam, cfg, name, area)
-            if blob is not None:
+            if blob is not None and not blob.mixed:
                 out.append(blob)
     return out
-
-
-def _same_layer(za: float, zb: float) -> bool:
-    if math.isnan(za) and math.isnan(zb):
-        return True
-    if math.isnan(za) or math.isnan(zb):
-        return False
-    return abs(za - zb) < max(0.08, 0.03 * max(za, zb))
 
 
 def _measure(sub: np.ndarray, x0: int, y0: int, v_c: float, depth: np.ndarray, cam: CameraModel,
@@ -381,7 +374,7 @@ def _measure(sub: np.ndarray, x0: int, y0: int, v_c: float, depth: np.ndarray, c
 
     base = dict(colour=name, area_px=area, bbox=(x0, y0, w, h), v=v_c, phi_left=phi_l, phi_right=phi_r,
                 height_px=bottom - top + 1, clipped=clipped, sides=sides)
-    rng_m, sig, used = _range_from_depth(rho, ang, phi, r)
+    rng_m, sig, used, frac = _range_from_depth(rho, ang, phi, r)
     from_size = False
     if rng_m is None:                           # no depth (closer than the sensor's minimum, shadow)
         rng_m = _range_from_size(half, bottom - top + 1, clipped, cam, cfg)
@@ -397,14 +390,14 @@ def _measure(sub: np.ndarray, x0: int, y0: int, v_c: float, depth: np.ndarray, c
         phi = phi_r - expected_half if occluded == "left" else phi_l + expected_half
         again = _range_from_depth(rho, ang, phi, r)
         if again[0] is not None:
-            rng_m, sig, used = again
+            rng_m, sig, used, frac = again
     if not _size_plausible(w, h, area, rng_m, cam, cfg):
         return None                              # far bigger than a marker at this range: not one
     top_y = None if top <= 0 else (top - 0.5 - cam.cy) * (rng_m - r) * math.cos(phi) / cam.fy
     cross = rng_m * cfg.pixel_sigma_px / cam.fx * (2.0 if occluded else 1.0)
     return Blob(u=cam.cx + cam.fx * math.tan(phi), x_m=rng_m * math.sin(phi), z_m=rng_m * math.cos(phi),
                 range_m=rng_m, range_sigma_m=sig, cross_sigma_m=cross, top_y_m=top_y, depth_px=used,
-                from_size=from_size, occluded=occluded, ranged=True, **base)
+                from_size=from_size, occluded=occluded, ranged=True, mixed=frac < 0.7, **base)
 
 
 def _size_plausible(w: int, h: int, area: int, rng_m: float, cam: CameraModel, cfg: DetectorConfig) -> bool:
@@ -448,31 +441,32 @@ def _range_from_size(half: float, height_px: int, clipped: bool, cam: CameraMode
     if half <= 0 or clipped:
         return None
     rng_w = cfg.radius_m / math.sin(min(half, 1.0))
-    rng_h = cam.fy * cfg.height_m / height_px + cfg.radius_m
-    return rng_w if abs(rng_h - rng_w) <= 0.12 * rng_w else None
+    expected_px = cam.fy * cfg.height_m / (rng_w - cfg.radius_m)
+    # the robot's top plate may hide the foot (shorter), but a narrowed silhouette looks too tall
+    return rng_w if 0.6 * expected_px - 2 <= height_px <= 1.12 * expected_px + 3 else None
 
 
 def _range_from_depth(rho: np.ndarray, ang: np.ndarray, phi: float, r: float
-                      ) -> tuple[float | None, float, int]:
+                      ) -> tuple[float | None, float, int, float]:
     """Axis range from surface ranges: R = rho cos(a) + sqrt(r^2 - rho^2 sin^2(a)), robust mean."""
     if rho.size == 0:
-        return None, 0.0, 0
+        return None, 0.0, 0, 1.0
     a = ang - phi
     s = rho * np.sin(a)
     keep = np.abs(s) < 0.8 * r                  # the rims are steep: misregistration and mixed pixels
     if np.count_nonzero(keep) < 6:
-        return None, 0.0, 0
+        return None, 0.0, 0, 1.0
     est = rho[keep] * np.cos(a[keep]) + np.sqrt(r * r - s[keep] ** 2)
     med = float(np.median(est))
     mad = float(np.median(np.abs(est - med))) * 1.4826
     tol = max(3.0 * mad, 0.01 + 0.004 * med * med)
     inl = est[np.abs(est - med) <= tol]
     if inl.size < 6:
-        return None, 0.0, 0
+        return None, 0.0, 0, 1.0
     mean = float(inl.mean())
     # neighbouring depth pixels share noise (block matching): count about one independent sample per 4
     sig = float(inl.std()) / math.sqrt(max(1.0, inl.size / 4.0)) + 0.0005 * mean
-    return mean, sig, int(inl.size)
+    return mean, sig, int(inl.size), inl.size / est.size
 
 
 def _pose(f: Blob, r: Blob, spacing: float, cam: CameraModel, cfg: DetectorConfig) -> Detection:
