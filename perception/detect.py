@@ -72,6 +72,7 @@ class Blob:
     sides: tuple[float, float]          # depth beside the left and right edges (-1 border, NaN none)
     placed: bool = False                # range from the partner cylinder (no depth of its own)
     mixed: bool = False                 # depth readings from more than one surface (merged blobs)
+    mask: np.ndarray | None = field(default=None, repr=False, compare=False)    # bbox-sized pixels
 
 
 @dataclass(frozen=True)
@@ -142,6 +143,11 @@ def _run(rgb: np.ndarray, depth: np.ndarray, camera: CameraModel, cfg: DetectorC
     if not rears:
         return DetectionResult(None, f"no_{cfg.rear_name}_blob", blobs=blobs)
     pairs = _pairs(fronts, rears, cam, cfg)
+    if not pairs:                   # merged look-alikes can hide a pair: retry with depth layers
+        fronts2 = _resplit(fronts, depth, cam, cfg)
+        rears2 = _resplit(rears, depth, cam, cfg)
+        if fronts2 is not fronts or rears2 is not rears:
+            pairs = _pairs(fronts2, rears2, cam, cfg)
     if not pairs:
         return DetectionResult(None, "no_pair_within_spacing", blobs=blobs)
     pairs.sort(key=lambda p: p[0])
@@ -157,6 +163,20 @@ def _run(rgb: np.ndarray, depth: np.ndarray, camera: CameraModel, cfg: DetectorC
     return DetectionResult(found[0], "", tuple(found), blobs)
 
 
+def _resplit(blobs: list[Blob], depth: np.ndarray, cam: CameraModel, cfg: DetectorConfig) -> list[Blob]:
+    """The blobs with every multi-layer one replaced by its depth layers (same list if none split)."""
+    out, changed = [], False
+    for b in blobs:
+        x, y, w, h = b.bbox
+        parts = _split_by_depth(b.mask, x, y, depth, cam, cfg, b.colour) if b.mask is not None else []
+        if parts:
+            out.extend(parts)
+            changed = True
+        else:
+            out.append(b)
+    return out if changed else blobs
+
+
 def _pairs(fronts: list[Blob], rears: list[Blob], cam: CameraModel, cfg: DetectorConfig) -> list[tuple]:
     """Candidate (score, front id, rear id, front, rear, spacing) pairs, best (lowest score) first."""
     out = []
@@ -164,12 +184,20 @@ def _pairs(fronts: list[Blob], rears: list[Blob], cam: CameraModel, cfg: Detecto
         for r in rears:
             if f.ranged and r.ranged:
                 d = math.hypot(f.x_m - r.x_m, f.z_m - r.z_m)
-                if not cfg.spacing_range_m[0] <= d <= cfg.spacing_range_m[1]:
+                if cfg.spacing_range_m[0] <= d <= cfg.spacing_range_m[1] and (
+                        f.top_y_m is None or r.top_y_m is None
+                        or abs(f.top_y_m - r.top_y_m) <= cfg.max_top_step_m):
+                    out.append((abs(d - cfg.spacing_m), id(f), id(r), f, r, d))
                     continue
-                if (f.top_y_m is not None and r.top_y_m is not None
-                        and abs(f.top_y_m - r.top_y_m) > cfg.max_top_step_m):
+                # a sliver (hidden on both sides) or a blob with few readings: let its partner place it
+                weak = [b for b in (f, r) if b.occluded == "both" or b.depth_px < 15 or b.from_size]
+                if len(weak) != 1:
                     continue
-                out.append((abs(d - cfg.spacing_m), id(f), id(r), f, r, d))
+                known, other = (r, f) if weak[0] is f else (f, r)
+                placed = _place_on_circle(known, other, cam, cfg)
+                if placed is not None:
+                    pf, pr = (known, placed) if known is f else (placed, known)
+                    out.append((0.04, id(f), id(r), pf, pr, cfg.spacing_m))
             elif f.ranged or r.ranged:
                 known, other = (f, r) if f.ranged else (r, f)
                 placed = _place_on_circle(known, other, cam, cfg)
@@ -204,7 +232,7 @@ def _place_on_circle(known: Blob, other: Blob, cam: CameraModel, cfg: DetectorCo
         res = (meas - pred) * cam.fx / 0.6                     # pixels / sigma
         outward = res * (-1.0 if side == "left" else 1.0)      # measured edge beyond the prediction
         if z_side != z_side:                                   # no reading beside it: maybe hidden
-            cost += np.maximum(outward, 0.0) ** 2 + (np.minimum(outward, 0.0) / 3.0) ** 2
+            cost += np.maximum(outward, 0.0) ** 2 + (np.minimum(outward, 0.0) / 20.0) ** 2
             continue
         hidden = (z_side == -1.0) | (z_side < limit)
         cost += np.where(hidden, np.maximum(outward, 0.0) ** 2, res * res)
@@ -372,7 +400,7 @@ def _measure(sub: np.ndarray, x0: int, y0: int, v_c: float, depth: np.ndarray, c
     rho = z * np.sqrt(1.0 + tau * tau)                  # range in the horizontal plane
     ang = np.arctan(tau)
 
-    base = dict(colour=name, area_px=area, bbox=(x0, y0, w, h), v=v_c, phi_left=phi_l, phi_right=phi_r,
+    base = dict(colour=name, area_px=area, bbox=(x0, y0, w, h), v=v_c, mask=sub, phi_left=phi_l, phi_right=phi_r,
                 height_px=bottom - top + 1, clipped=clipped, sides=sides)
     rng_m, sig, used, frac = _range_from_depth(rho, ang, phi, r)
     from_size = False
