@@ -2,5 +2,6 @@
 
 Layers, each usable alone: ``kobuki`` (pure physics), ``faults`` (pure injector), ``odometry`` (the
 robot's dead reckoning), ``motion`` (move/turn/rotate/stop to wheel commands), ``world`` (several robots,
-one simulated clock), ``runner`` (paces a world against wall time), ``bridge`` (``SimBridge``).
+one simulated clock), ``runner`` (paces a world against wall time), ``bridge`` (``SimBridge``),
+``camera`` (the Kinect-like RGB-D renderer). See ``robot_bridge/README.md``.
 """
