@@ -530,12 +530,11 @@ def eval_arith(op: str, left: Term, right: Term) -> float | int:
             raise ArithmeticError_("division by zero in 'div'")
         q = abs(ia) // abs(ic)
         r = q if (ia >= 0) == (ic >= 0) else -q
-    elif op == "mod":
-        ia, ic = _java_int(a), _java_int(c)
-        if ic == 0:
+    elif op == "mod":  # Java's % on doubles: the sign of the dividend, fractions kept
+        if c == 0:
             raise ArithmeticError_("division by zero in 'mod'")
-        r = abs(ia) % abs(ic)
-        r = r if ia >= 0 else -r
+        r = math.fmod(a, c)
+        r = int(r) if isinstance(a, int) and isinstance(c, int) else r
     elif op == "**":
         r = float(a) ** c if isinstance(a, float) or isinstance(c, float) or c < 0 else a ** c
     else:
