@@ -82,7 +82,7 @@ def run(quick: bool = False) -> str:
         f"{'metric':<44}{'value':>14}  {'target':>10}  status",
         f"{'detection rate, both cylinders visible':<44}{rate:>13.1f}%  {'>= 98%':>10}  {ok(rate >= 98.0)}",
         f"{'detections > 2 deg or > 0.1 m off':<44}{len(far_off):>14d}  {'0':>10}  {ok(not far_off)}",
-        f"{'detections where no robot is visible':<44}{len(extra):>14d}  {'(info)':>10}",
+        f"{'detections of robots below that bar':<44}{len(extra):>14d}  {'(info)':>10}",
         f"{'angle error p50 / p95 / max (deg)':<44}{p(ang, 50):>5.3f}/{p(ang, 95):.3f}/{ang.max():.2f}"
         f"  {'p95 < 0.5':>10}  {ok(p(ang, 95) < 0.5)}",
         f"{'depth error p50 / p95 / max (cm)':<44}{100 * p(dep, 50):>5.2f}/{100 * p(dep, 95):.2f}/{100 * dep.max():.1f}"

@@ -44,6 +44,7 @@ class DetectorConfig:
     max_top_step_m: float = 0.08        # the two cylinder tops are level on one robot
     occlusion_step_m: float = 0.06      # a neighbour this much nearer hides a blob's edge
     pixel_sigma_px: float = 0.35        # edge localisation noise, for the heading fit
+    max_size_range_m: float = 1.3       # range from silhouette width only this close (no depth readings)
 
 
 @dataclass(frozen=True)
@@ -469,6 +470,8 @@ def _range_from_size(half: float, height_px: int, clipped: bool, cam: CameraMode
     if half <= 0 or clipped:
         return None
     rng_w = cfg.radius_m / math.sin(min(half, 1.0))
+    if rng_w > cfg.max_size_range_m:
+        return None                 # a pixel of width is more than ~4 % of range beyond this
     expected_px = cam.fy * cfg.height_m / (rng_w - cfg.radius_m)
     # the robot's top plate may hide the foot (shorter), but a narrowed silhouette looks too tall
     return rng_w if 0.6 * expected_px - 2 <= height_px <= 1.12 * expected_px + 3 else None

@@ -169,15 +169,18 @@ class MarkerPixels:
     """Pixel counts of one robot's markers: as rendered (``*_visible``) and if nothing hid them (``*_full``)."""
 
     front_visible: int
-    front_full: int
+    front_full: int             # counted inside the image only
     rear_visible: int
     rear_full: int
+    front_in_frame: bool = True     # the cylinder's axis projects inside the image
+    rear_in_frame: bool = True
 
     def both_visible(self, min_fraction: float = 0.4, min_px: int = 30) -> bool:
-        """Both cylinders show at least ``min_fraction`` of their silhouette and ``min_px`` pixels."""
-        return all(vis >= min_px and vis >= min_fraction * full
-                   for vis, full in ((self.front_visible, self.front_full),
-                                     (self.rear_visible, self.rear_full)))
+        """Both axes in the image, and both cylinders show at least ``min_fraction`` of their
+        silhouette and ``min_px`` pixels."""
+        return self.front_in_frame and self.rear_in_frame and all(
+            vis >= min_px and vis >= min_fraction * full
+            for vis, full in ((self.front_visible, self.front_full), (self.rear_visible, self.rear_full)))
 
 
 @dataclass
@@ -299,8 +302,13 @@ def render_with_pixels(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose]
     visible = np.zeros(n_labels + 1, np.int64)
     for label, (v0, v1, u0, u1) in bands.items():
         visible[label] = int(np.count_nonzero(labels[v0:v1, u0:u1] == label))
-    pixels = [MarkerPixels(int(visible[1 + 2 * i]), int(full[1 + 2 * i]), int(visible[2 + 2 * i]),
-                           int(full[2 + 2 * i])) for i in range(len(robots))]
+    pixels = []
+    for i, robot in enumerate(robots):
+        view = true_view(rig, camera_pose, robot)
+        inside = [z > 0 and -0.5 <= u <= w - 0.5 for u, z in ((view.front_u, view.front_xz[1]),
+                                                               (view.rear_u, view.rear_xz[1]))]
+        pixels.append(MarkerPixels(int(visible[1 + 2 * i]), int(full[1 + 2 * i]), int(visible[2 + 2 * i]),
+                                   int(full[2 + 2 * i]), inside[0], inside[1]))
     return image, noisy, pixels
 
 
