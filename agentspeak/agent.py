@@ -390,7 +390,7 @@ class Agent:
         try:
             handler(self, intention, im, frame, instr)
         except IAError as exc:
-            self._fail(intention, exc.error, exc.message, instr)
+            self._fail(intention, exc.error, exc.message, instr, extra=exc.annots)
             return
         except SolveError as exc:
             self._fail(intention, exc.error, exc.message, instr)

@@ -13,12 +13,15 @@ def fail(ctx, *annots):
     """Fail the current plan; optional arguments are added to the failure event's annotations."""
     error = "ia_failed"
     message = ".fail"
+    extra = []
     for a in annots:
         if isinstance(a, Literal) and a.functor == "error" and a.args:
             error = getattr(a.args[0], "functor", str(a.args[0]))
-        if isinstance(a, Literal) and a.functor == "error_msg" and a.args:
+        elif isinstance(a, Literal) and a.functor == "error_msg" and a.args:
             message = str(a.args[0])
-    raise IAError(error, message)
+        else:
+            extra.append(a)
+    raise IAError(error, message, tuple(extra))
 
 
 def _goal_ims(intention: Intention, goal: Literal):

@@ -27,10 +27,11 @@ from agentspeak.errors import FaultmasError
 class IAError(FaultmasError):
     """An internal action failed on purpose: ``error`` becomes the ``error(...)`` annotation."""
 
-    def __init__(self, error: str, message: str) -> None:
+    def __init__(self, error: str, message: str, annots: tuple = ()) -> None:
         super().__init__(message)
         self.error = error
         self.message = message
+        self.annots = annots  # further annotations for the failure event (``.fail(why(x))``)
 
 
 def wrong_arguments(message: str) -> IAError:
