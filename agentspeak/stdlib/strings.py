@@ -52,8 +52,12 @@ def substring(ctx, sub, text, pos=None):
     """Is ``sub`` in ``text``? With a third argument, backtracks over the positions."""
     s = sub if isinstance(sub, str) else to_str(sub)
     t = text if isinstance(text, str) else to_str(text)
-    if pos is None:
+    if pos is None:  # not a generator here: a function with ``yield`` would always fail
         return s in t
+    return _positions(ctx, s, t, pos)
+
+
+def _positions(ctx, s: str, t: str, pos):
     start = t.find(s)
     while start >= 0:
         mark = len(ctx.trail)

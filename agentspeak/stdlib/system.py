@@ -39,8 +39,12 @@ def _rng(agent) -> _random.Random:
 def random(ctx, x, n=None):
     """A random number in [0, 1); with a count N, backtracks over N values."""
     rng = _rng(ctx.agent)
-    if n is None:
+    if n is None:  # not a generator here: a function with ``yield`` would never bind X
         return ctx.unify(x, rng.random())
+    return _random_values(ctx, rng, x, n)
+
+
+def _random_values(ctx, rng, x, n):
     from agentspeak.unify import undo
     for _ in range(int(n)):
         mark = len(ctx.trail)
