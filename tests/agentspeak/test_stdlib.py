@@ -1,0 +1,82 @@
+"""Standard internal actions: lists, strings, queries, system, .wait forms."""
+from __future__ import annotations
+
+import pytest
+
+from tests.agentspeak.harness import run_asl
+
+
+def body(text: str, extra: str = "") -> list[str]:
+    return run_asl(f"{extra}!t.\n+!t <- {text}.\n-!t[error(E)] <- .print(failed, E).\n")
+
+
+@pytest.mark.parametrize("call, printed", [
+    ('.concat([a],[b,c],R); .print(R)', "[a,b,c]"),
+    ('.concat("ab", "cd", 1, R); .print(R)', "abcd1"),
+    ('.length([1,2,3], N); .length("hello", M); .print(N, M)', "35"),
+    ('.nth(1, [a,b,c], X); .print(X)', "b"),
+    ('.member(b, [a,b]); .print(yes)', "yes"),
+    ('.reverse([1,2,3], R); .print(R)', "[3,2,1]"),
+    ('.delete(a, [a,b,a], R); .print(R)', "[b]"),
+    ('.delete(0, [a,b], R); .print(R)', "[b]"),
+    ('.sort([c, 1, b(1), a, 0.5], S); .print(S)', "[0.5,1,a,c,b(1)]"),
+    ('.max([3,1,4], X); .min([3,1,4], Y); .print(X, Y)', "41"),
+    ('.sum([1,2,3.5], S); .print(S)', "6.5"),
+    ('.empty([]); .print(empty)', "empty"),
+    ('.findall(X, .member(X,[c,a]), L); .print(L)', "[c,a]"),
+    ('.setof(X, .member(X,[c,a,b,a]), L); .print(L)', "[a,b,c]"),
+    ('.count(.member(_,[a,b,c]), N); .print(N)', "3"),
+    ('.term2string(f(x,"a"), S); .print(S); .term2string(T, "g(1,b)"); .print(T)', 'f(x,"a")'),
+    ('.string("x"); .substring("bc", "abcd", P); .print(P)', "1"),
+    ('.substring("bc", "abcd"); .print(in); .substring("x", "abc")', "in"),
+    ('.findall(P, .substring("a", "banana", P), L); .print(L)', "[1,3,5]"),
+    ('.findall(R, .random(R, 3), L); .length(L, N); .print(N)', "3"),
+    ('.lower_case("AbC", L); .upper_case("AbC", U); .print(L, U)', "abcABC"),
+    ('.replace("aXbX", "X", "y", R); .print(R)', "ayby"),
+    ('.my_name(N); .print(N)', "ag"),
+    ('.random(R); if (R >= 0 & R < 1) { .print(in_range) }', "in_range"),
+    ('.time(H,M,S); .date(Y,Mo,D); if (H < 24 & Mo <= 12 & Y > 2000) { .print(ok) }', "ok"),
+    ('.nth(5, [a], X)', "failedia_failed"),
+    ('.length(1, 2, 3)', "failedwrong_arguments"),
+])
+def test_internal_action(call, printed):
+    assert body(call)[0] == printed
+
+
+def test_term2string_both_directions():
+    assert body('.term2string(f(x,"a"), S); .print(S); .term2string(T, "g(1,b)"); .print(T)') == [
+        'f(x,"a")', "g(1,b)"]
+
+
+def test_println_is_print():
+    assert body('.println("a", 1, b)') == ["a1b"]
+
+
+def test_abolish_removes_all_matching():
+    assert body(".abolish(b(_)); .count(b(_), N); .print(N)", "b(1). b(2). c.\n") == ["0"]
+
+
+def test_wait_forms():
+    src = """!main.
++!main <- !!w; .wait({+go}); .print(gone); .wait(flag); .print(flagged);
+   .wait({+never}, 30, E); .print(three_arg_continues);
+   .wait({+never}, 30).
++!w <- .print(w1); +go; .print(w2); +flag.
+-!main[error(E)] <- .print(two_arg_fails).
+"""
+    assert run_asl(src) == ["w1", "gone", "w2", "flagged", "three_arg_continues", "two_arg_fails"]
+
+
+def test_wait_milliseconds():
+    assert body(".wait(20); .print(after)") == ["after"]
+
+
+def test_stop_mas_stops_other_intentions():
+    src = "!a. !b.\n+!a <- .print(a); .stopMAS.\n+!b <- .wait(3000); .print(never).\n"
+    assert run_asl(src, timeout=10) == ["a"]
+
+
+def test_include_at_run_time(tmp_path):
+    lib = tmp_path / "lib.asl"
+    lib.write_text("+!hi <- .print(hi_from_lib).\n")
+    assert body(f'.include("{lib}"); !hi') == ["hi_from_lib"]
