@@ -542,7 +542,7 @@ class Agent:
         intention.waiting = susp
         done = [False]
 
-        def finish(ok: bool, error: str = "ia_failed", message: str = "") -> None:
+        def finish(ok: bool, error: str = "ia_failed", message: str = "", extra: tuple = ()) -> None:
             if done[0] or intention.dropped:
                 return
             done[0] = True
@@ -553,7 +553,7 @@ class Agent:
                 self.clr_int(intention)
             else:
                 self._requeue(intention)
-                self._fail(intention, error, message or f"{instr} failed", instr)
+                self._fail(intention, error, message or f"{instr} failed", instr, extra=extra)
 
         susp.finish = finish  # type: ignore[attr-defined]
         ctx = IAContext(self, intention, im, im.b, [])
@@ -573,7 +573,7 @@ class Agent:
                     try:
                         ok = susp.on_result(ctx, value) if susp.on_result else True
                     except IAError as exc:
-                        finish(False, exc.error, exc.message)
+                        finish(False, exc.error, exc.message, exc.annots)
                         return
                     finish(bool(ok) or ok is None)
                 self.feedback.append(apply)
@@ -812,7 +812,9 @@ def _exec_action(ag: Agent, intention, im, frame, instr) -> None:
         def on_result(ctx, value) -> bool:
             ok, reason = _action_outcome(value)
             if not ok:
-                raise IAError("action_failed", f"action {to_str(action)} failed" + (f": {reason}" if reason else ""))
+                # the bridge's reason (no_progress, timeout, ...) reaches -!g as reason(R)
+                raise IAError("action_failed", f"action {to_str(action)} failed" + (f": {reason}" if reason else ""),
+                              (Literal("reason", (Literal(reason),)),) if reason else ())
             return True
         ag.suspend_on(intention, im, Suspend(future=result, on_result=on_result, reason="action"), instr)
         return
