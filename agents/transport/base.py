@@ -84,6 +84,9 @@ class Presence:
         for agent in now:
             _call_safely(callback, agent, True)
 
+    def is_alive(self, agent: str) -> bool:
+        return agent in self._alive  # one set lookup: atomic under the GIL, no lock on the send path
+
     def alive(self) -> frozenset[str]:
         with self._changed:
             return frozenset(self._alive)

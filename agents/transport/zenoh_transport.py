@@ -85,7 +85,9 @@ class ZenohTransport(Transport):
         publisher = self._publishers.get(receiver)
         if publisher is None:
             publisher = self._publisher(receiver)
-        if not publisher.matching_status.matching:
+        # A client learns of remote subscribers lazily (through its router's interest replies), so a
+        # receiver whose liveliness token is seen counts as reachable even before matching says so.
+        if not (publisher.matching_status.matching or self._presence.is_alive(receiver)):
             return False
         publisher.put(encoded())
         return True

@@ -65,10 +65,13 @@ class Child:
     def pid(self) -> int:
         return self.process.pid
 
-    def stop(self, timeout: float = 10.0) -> int:
-        """Close standard input (the polite stop), then kill if it lingers; the exit code."""
+    def stop(self, timeout: float = 10.0, signum: int | None = None) -> int:
+        """Close standard input (the polite stop) or send ``signum``, then kill if it lingers;
+        the exit code."""
         try:
             self.process.stdin.close()
+            if signum is not None and self.process.poll() is None:
+                self.process.send_signal(signum)
         except OSError:
             pass
         try:
