@@ -4,7 +4,8 @@
 
 Runs in its own process so every workload starts from a clean heap and its peak RSS is its own.
 Parse + load (``build_local_mas``) and the run (``LocalRuntime.run``) are timed separately in CPU
-time (after building the grammar once, reported apart); the agents' console lines are collected (not printed) so printing does not cost run time.
+time, after the grammar is built once (reported apart: it is not the file's cost). The agents'
+console lines are collected, not printed, so printing costs no run time.
 The one JSON object on stdout is read by ``benchmarks.bench_asl``.
 """
 from __future__ import annotations

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import json
 import os
-import re
 import statistics
 import subprocess
 import sys
@@ -167,7 +166,11 @@ def run_faultmas(workload: Workload, quick: bool, repeats: int = 1) -> Result:
         if child.returncode != 0:
             result.error = f"exit {child.returncode}: {_tail(child.stderr)}"
             return result
-        data = json.loads(child.stdout)
+        try:
+            data = json.loads(child.stdout)
+        except json.JSONDecodeError:
+            result.error = f"no JSON report on stdout: {_tail(child.stdout)!r}"
+            return result
         result.detail = data
         if data["last_line"] != expected:
             result.error = f"last line {data['last_line']!r}, expected {expected!r}"
