@@ -59,7 +59,7 @@ class Workload:
     phase: str = "run"                        # "load" (parse + load) for parse2000
 
     def sets(self, quick: bool) -> dict[str, int]:
-        return {**self.fixed, **(self.quick if quick else {})}
+        return {**(self.quick if quick else {}), **self.fixed}      # fixed wins: the fill run keeps queries=0
 
     def sizes(self, quick: bool) -> dict[str, int]:
         return {**self.defaults, **self.sets(quick)}

@@ -58,3 +58,10 @@ def test_table_says_baseline_unavailable_and_lists_failures():
     assert "FAILED fib (rules), faultmas: last line None" in table
     count_row = next(line for line in table.splitlines() if line.startswith("count"))
     assert "200,000 (0.500 s)" in count_row and "yes" in count_row
+
+
+def test_quick_scaling_keeps_the_fill_run_query_free():
+    fill, join = WORKLOADS["beliefs-fill"], WORKLOADS["beliefs"]
+    assert fill.sets(quick=True)["queries"] == 0 and fill.sets(quick=False) == {"queries": 0}
+    assert join.sets(quick=True)["queries"] > 0 and join.sets(quick=False) == {}
+    assert fill.sizes(quick=True)["size"] == join.sizes(quick=True)["size"]
