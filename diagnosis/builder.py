@@ -1,0 +1,60 @@
+"""Incremental construction of a ``SystemModel``: variable numbering and clause collection."""
+from __future__ import annotations
+
+from pysat.formula import IDPool
+
+from diagnosis.formula import Ab, Atom, Formula, Literal, to_cnf
+from diagnosis.model import SystemModel
+
+
+class ModelBuilder:
+    """Numbers health variables, propositions and auxiliaries, and collects clauses."""
+
+    def __init__(self, name: str, source: str, kind: str) -> None:
+        self.name = name
+        self.source = source
+        self.kind = kind
+        self.pool = IDPool()
+        self.components: list[str] = []
+        self.observables: dict[str, int] = {}
+        self.observable_kinds: dict[str, str] = {}
+        self.clauses: list[tuple[int, ...]] = []
+        self.held: list[int] = []
+
+    def ab(self, component: str) -> int:
+        return self.pool.id(("AB", component))
+
+    def atom(self, name: str) -> int:
+        return self.pool.id(("atom", name))
+
+    def aux(self) -> int:
+        return self.pool.id(("aux", self.pool.top + 1))
+
+    def var_of(self, literal: Literal) -> int:
+        return self.ab(literal.component) if isinstance(literal, Ab) else self.atom(literal.name)
+
+    def add_component(self, name: str) -> None:
+        self.components.append(name)
+        self.ab(name)
+
+    def add_observable(self, name: str, kind: str = "observation") -> int:
+        var = self.atom(name)
+        self.observables[name] = var
+        self.observable_kinds[name] = kind
+        return var
+
+    def add_formula(self, formula: Formula) -> None:
+        self.clauses.extend(tuple(c) for c in to_cnf(formula, self.var_of, self.aux))
+
+    def add_clause(self, clause: list[int] | tuple[int, ...]) -> None:
+        self.clauses.append(tuple(clause))
+
+    def build(self) -> SystemModel:
+        return SystemModel(
+            name=self.name, source=self.source, components=tuple(self.components),
+            ab_var={c: self.ab(c) for c in self.components}, observables=dict(self.observables),
+            clauses=tuple(self.clauses), num_vars=self.pool.top, held=tuple(self.held), kind=self.kind,
+            observable_kinds=dict(self.observable_kinds))
+
+
+__all__ = ["ModelBuilder", "Ab", "Atom"]

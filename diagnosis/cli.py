@@ -1,0 +1,77 @@
+"""``faultmas diagnose MODEL --obs OBS.json [--max-card K] [--min-card-only] [--timeout S] [--json]``.
+
+MODEL is a ``.yaml`` system description (or architecture model) or a ``.bench`` netlist. OBS.json maps
+observation names to 0/1 (or false/true); for a netlist, signal names (primary inputs and outputs, or any
+other signal that was probed). Exit status: 0 answered, 2 bad model or observations.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser("diagnose", help="all minimal diagnoses of a model given observations",
+                              description=__doc__.splitlines()[0])
+    p.add_argument("model", help="a .yaml system description or a .bench netlist")
+    p.add_argument("--obs", required=True, metavar="OBS.json", help="JSON object: observation name -> 0/1")
+    p.add_argument("--max-card", type=int, default=None, metavar="K",
+                   help="largest diagnosis size to enumerate (default: no bound)")
+    p.add_argument("--min-card-only", action="store_true", help="only the minimum-cardinality diagnoses")
+    p.add_argument("--max-count", type=int, default=None, metavar="N", help="stop after N diagnoses")
+    p.add_argument("--timeout", type=float, default=None, metavar="S", help="wall-clock limit in seconds")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+def read_observations(path: str) -> dict[str, bool]:
+    """OBS.json as name -> bool; a bad file raises SourceError naming it."""
+    from agentspeak.errors import SourceError
+
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise SourceError(f"cannot read observations: {exc.strerror}", file=path) from None
+    except json.JSONDecodeError as exc:
+        raise SourceError(f"not JSON: {exc.msg}", file=path, line=exc.lineno, column=exc.colno) from None
+    if not isinstance(data, dict):
+        raise SourceError("observations must be a JSON object mapping names to 0/1", file=path)
+    out = {}
+    for name, value in data.items():
+        if value in (0, 1) and not isinstance(value, float) or isinstance(value, bool):
+            out[name] = bool(value)
+        else:
+            raise SourceError(f"observation {name!r} must be 0, 1, true or false, not {value!r}", file=path)
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    from agentspeak.errors import SourceError
+    from diagnosis.engine import Diagnoser
+    from diagnosis.loader import load_model
+
+    try:
+        model = load_model(args.model)
+        observations = read_observations(args.obs)
+        diagnoser = Diagnoser(model)
+        result = diagnoser.diagnose(observations, max_card=args.max_card, max_count=args.max_count,
+                                    timeout=args.timeout, min_card_only=args.min_card_only)
+    except SourceError as exc:
+        print(f"faultmas diagnose: {exc}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps(result.to_json()))
+        return 0
+    if not result.consistent_with_model:
+        print("no diagnosis: the observations contradict the model whatever is faulty")
+    elif result.diagnoses == [[]]:
+        print("no fault: the observations are consistent with every component healthy")
+    else:
+        for d in result.diagnoses:
+            print("{" + ", ".join(d) + "}")
+    state = "complete" if result.complete else "INCOMPLETE (limit reached)"
+    print(f"{len(result.diagnoses)} minimal diagnoses, min cardinality {result.min_cardinality}, "
+          f"{state}, {result.seconds:.3f} s", file=sys.stderr)
+    return 0

@@ -1,0 +1,321 @@
+"""Consistency-based diagnosis (Reiter) on one persistent incremental SAT solver per model.
+
+The model's clauses are loaded once. A query passes the observations, the held assumptions and a
+cardinality bound as *assumptions*, so a new observation set rebuilds nothing. The bound comes from an
+incremental totalizer over the health variables (``pysat.card.ITotalizer``): assuming ``-rhs[k]``
+means "at most k components abnormal". Minimal diagnoses are enumerated level by level: at level k
+every model found is a diagnosis of size exactly k that contains no smaller one (those are blocked),
+hence subset-minimal; it is reported and its supersets blocked. Blocking clauses carry a per-query
+activation literal, retired when the query ends, so they never leak into the next query.
+
+The default solver is Glucose 4: it releases the GIL while solving (other threads of the agent keep
+running) and honours ``interrupt()``, which the time limits rely on; CaDiCaL in python-sat does neither.
+"""
+from __future__ import annotations
+
+import threading
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import Iterator, Mapping, Sequence
+
+from pysat.card import ITotalizer
+from pysat.solvers import Solver
+
+from diagnosis.model import SystemModel
+
+DEFAULT_SOLVER = "glucose4"
+
+
+@dataclass
+class DiagnosisResult:
+    """Minimal diagnoses (each a list of component names in model order), smallest first.
+
+    ``min_cardinality`` is the size of the smallest diagnosis (None when there is none, or it was not
+    reached in time); ``complete`` is True when every minimal diagnosis within the bound is listed.
+    """
+    diagnoses: list[list[str]]
+    min_cardinality: int | None
+    complete: bool
+    seconds: float
+    max_card: int | None = None
+    consistent_with_model: bool = True  # False: no set of faults explains the observations
+    notes: list[str] = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        return {"diagnoses": self.diagnoses, "min_cardinality": self.min_cardinality,
+                "complete": self.complete, "seconds": round(self.seconds, 6)}
+
+
+class Deadline:
+    """A wall-clock limit shared by the SAT calls of one query (None = no limit).
+
+    ``watch(solver)`` starts one timer for the whole query that interrupts the solver when time is up
+    (a timer per SAT call would cost more than the call itself on small circuits).
+    """
+
+    def __init__(self, seconds: float | None) -> None:
+        self.end = None if seconds is None else time.monotonic() + seconds
+        self._timer: threading.Timer | None = None
+
+    def left(self) -> float | None:
+        return None if self.end is None else self.end - time.monotonic()
+
+    def expired(self) -> bool:
+        return self.end is not None and time.monotonic() >= self.end
+
+    def watch(self, solver: Solver) -> "Deadline":
+        if self.end is not None and self._timer is None:
+            self._timer = threading.Timer(max(self.end - time.monotonic(), 0.0), solver.interrupt)
+            self._timer.daemon = True
+            self._timer.start()
+        return self
+
+    def release(self, solver: Solver) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+            solver.clear_interrupt()
+
+
+class TimedOut(Exception):
+    """A SAT call hit the query's deadline."""
+
+
+class Diagnoser:
+    """All queries for one model. Thread-safe: queries on one Diagnoser run one at a time."""
+
+    def __init__(self, model: SystemModel, solver: str = DEFAULT_SOLVER) -> None:
+        self.model = model
+        self._lock = threading.Lock()
+        self._solver = Solver(name=solver, bootstrap_with=[list(c) for c in model.clauses])
+        self._ab = [model.ab_var[c] for c in model.components]
+        self._component_of = {v: c for c, v in model.ab_var.items()}
+        self._index = {c: i for i, c in enumerate(model.components)}
+        self._top = model.num_vars
+        self._totalizer: ITotalizer | None = None
+        try:  # prefer "healthy" so the solver's first guesses are small fault sets
+            self._solver.set_phases([-v for v in self._ab])
+        except NotImplementedError:
+            pass
+
+    def close(self) -> None:
+        self._solver.delete()
+        if self._totalizer is not None:
+            self._totalizer.delete()
+
+    # -- SAT plumbing -------------------------------------------------------------------------------
+
+    def _fresh(self) -> int:
+        self._top += 1
+        return self._top
+
+    def _at_most(self, k: int) -> list[int]:
+        """Assumptions bounding the number of abnormal candidates to k (empty when k >= all)."""
+        n = len(self._ab)
+        if k >= n:
+            return []
+        if self._totalizer is None:
+            self._totalizer = ITotalizer(lits=self._ab, ubound=max(k, 1), top_id=self._top)
+            self._solver.append_formula(self._totalizer.cnf.clauses)
+            self._top = self._totalizer.top_id
+        elif k > self._totalizer.ubound:
+            self._totalizer.increase(ubound=k, top_id=self._top)
+            if self._totalizer.nof_new:
+                self._solver.append_formula(self._totalizer.cnf.clauses[-self._totalizer.nof_new:])
+            self._top = self._totalizer.top_id
+        return [-self._totalizer.rhs[k]]
+
+    def _solve(self, assumptions: list[int], deadline: Deadline) -> bool:
+        if deadline.end is None:
+            return bool(self._solver.solve(assumptions=assumptions))
+        if deadline.expired():
+            raise TimedOut
+        deadline.watch(self._solver)
+        result = self._solver.solve_limited(assumptions=assumptions, expect_interrupt=True)
+        if result is None:
+            raise TimedOut
+        return result
+
+    @contextmanager
+    def _query(self, deadline: Deadline) -> Iterator[None]:
+        """One query at a time on this solver; its deadline's timer ends with it."""
+        with self._lock:
+            try:
+                yield
+            finally:
+                deadline.release(self._solver)
+
+    def _abnormal(self) -> list[str]:
+        model = self._solver.get_model()
+        return [self._component_of[v] for v in self._ab if model[v - 1] > 0]
+
+    def _base(self, observations: Mapping[str, bool]) -> list[int]:
+        return [*self.model.held, *self.model.observation_literals(observations)]
+
+    # -- queries ------------------------------------------------------------------------------------
+
+    def is_consistent(self, observations: Mapping[str, bool], abnormal: Sequence[str] = ()) -> bool:
+        """Is "exactly the components in ``abnormal`` are faulty" consistent with the observations?"""
+        bad = {self.model.ab_var[c] for c in abnormal}
+        with self._lock:
+            return self._solve(self._base(observations) + [v if v in bad else -v for v in self._ab], Deadline(None))
+
+    def minimal_diagnoses(self, observations: Mapping[str, bool], max_card: int | None = None,
+                          deadline: Deadline | None = None) -> Iterator[list[str]]:
+        """Stream the subset-minimal diagnoses of size <= max_card, smallest first, each level sorted.
+
+        Raises TimedOut (after yielding what was found) when the deadline passes. Holds the model's
+        lock while the generator is alive: exhaust or close it.
+        """
+        deadline = deadline or Deadline(None)
+        limit = len(self._ab) if max_card is None else min(max_card, len(self._ab))
+        with self._query(deadline):
+            base = self._base(observations)
+            if not self._solve(base, deadline):
+                return  # nothing explains the observations, not even "everything is faulty"
+            act = self._fresh()
+            try:
+                for k in range(limit + 1):
+                    level, timed_out = self._level(base + [act] + self._at_most(k), act, deadline)
+                    yield from level
+                    if timed_out:
+                        raise TimedOut
+            finally:
+                self._solver.add_clause([-act])  # retire this query's blocking clauses
+
+    def _level(self, assumptions: list[int], act: int, deadline: Deadline) -> tuple[list[list[str]], bool]:
+        """The diagnoses of one level, sorted, and whether the deadline cut the level short."""
+        found: list[list[str]] = []
+        timed_out = False
+        try:
+            while self._solve(assumptions, deadline):
+                diagnosis = self._abnormal()
+                found.append(diagnosis)
+                self._solver.add_clause([-act, *(-self.model.ab_var[c] for c in diagnosis)])
+        except TimedOut:
+            timed_out = True
+        return sorted(found, key=self._order), timed_out
+
+    def _order(self, diagnosis: list[str]) -> list[int]:
+        return [self._index[c] for c in diagnosis]
+
+    def minimum_cardinality(self, observations: Mapping[str, bool], deadline: Deadline | None = None,
+                            ) -> tuple[int | None, list[str] | None]:
+        """Smallest number of faults that explains the observations, with one such diagnosis.
+
+        Lower bound from disjoint conflicts (cores of "all healthy"), then the bound is raised from
+        there until satisfiable; each SAT answer also tightens from above.
+        """
+        deadline = deadline or Deadline(None)
+        with self._query(deadline):
+            base = self._base(observations)
+            if not self._solve(base, deadline):
+                return None, None
+            lower = self._disjoint_conflicts(base, deadline)
+            k = lower
+            while True:
+                if self._solve(base + self._at_most(k), deadline):
+                    best = self._abnormal()
+                    # the model may be smaller than k only if k > lower bound of an earlier level: fine
+                    return len(best), sorted(best, key=self._index.__getitem__)
+                k += 1
+
+    def _disjoint_conflicts(self, base: list[int], deadline: Deadline) -> int:
+        """Number of pairwise disjoint conflicts found greedily: a lower bound on the min cardinality."""
+        healthy = {-v for v in self._ab}
+        count = 0
+        while True:
+            if self._solve(base + sorted(healthy, key=abs), deadline):
+                return count
+            core = set(self._solver.get_core() or ()) & healthy
+            if not core:
+                return count
+            count += 1
+            healthy -= core
+
+    def diagnose(self, observations: Mapping[str, bool], max_card: int | None = None,
+                 max_count: int | None = None, timeout: float | None = None,
+                 min_card_only: bool = False) -> DiagnosisResult:
+        """All minimal diagnoses up to ``max_card`` (or only minimum-cardinality ones), with limits."""
+        started = time.perf_counter()
+        deadline = Deadline(timeout)
+        if min_card_only:
+            return self._diagnose_min_card(observations, max_count, deadline, started)
+        diagnoses: list[list[str]] = []
+        complete = True
+        stream = self.minimal_diagnoses(observations, max_card, deadline)
+        try:
+            for d in stream:
+                if max_count is not None and len(diagnoses) >= max_count:
+                    complete = False
+                    break
+                diagnoses.append(d)
+        except TimedOut:
+            complete = False
+        finally:
+            stream.close()
+        # levels run in order and each is exhausted before the next: the first answer has minimum size
+        min_card = len(diagnoses[0]) if diagnoses else None
+        consistent = bool(diagnoses) or not complete or self._explainable(observations)
+        return DiagnosisResult(diagnoses, min_card, complete, time.perf_counter() - started, max_card, consistent)
+
+    def _diagnose_min_card(self, observations: Mapping[str, bool], max_count: int | None,
+                           deadline: Deadline, started: float) -> DiagnosisResult:
+        try:
+            k, _one = self.minimum_cardinality(observations, deadline)
+        except TimedOut:
+            return DiagnosisResult([], None, False, time.perf_counter() - started)
+        if k is None:
+            return DiagnosisResult([], None, True, time.perf_counter() - started, consistent_with_model=False)
+        # every diagnosis of minimum size is subset-minimal: enumerate just that level
+        diagnoses: list[list[str]] = []
+        complete = True
+        with self._query(deadline):
+            base = self._base(observations)
+            act = self._fresh()
+            assumptions = base + [act] + self._at_most(k)
+            try:
+                while self._solve(assumptions, deadline):
+                    d = self._abnormal()
+                    if max_count is not None and len(diagnoses) >= max_count:
+                        complete = False
+                        break
+                    diagnoses.append(d)
+                    self._solver.add_clause([-act, *(-self.model.ab_var[c] for c in d)])
+            except TimedOut:
+                complete = False
+            finally:
+                self._solver.add_clause([-act])
+        diagnoses.sort(key=self._order)
+        return DiagnosisResult(diagnoses, k, complete, time.perf_counter() - started, k)
+
+    def _explainable(self, observations: Mapping[str, bool]) -> bool:
+        with self._lock:
+            return self._solve(self._base(observations), Deadline(None))
+
+    def possibly_faulty(self, observations: Mapping[str, bool], components: Sequence[str] | None = None,
+                        timeout: float | None = None) -> list[str]:
+        """PosAb: the components that are faulty in some minimum-cardinality diagnosis.
+
+        One SAT call per component ("AB(c) and at most k faults", k the minimum cardinality), no
+        enumeration. With k minimal every such diagnosis is subset-minimal, so the answer is exact.
+        Empty when the observations need no fault or nothing explains them.
+        """
+        deadline = Deadline(timeout)
+        k, first = self.minimum_cardinality(observations, deadline)
+        if not k:
+            return []
+        asked = list(self.model.components if components is None else components)
+        for c in asked:
+            if c not in self.model.ab_var:
+                raise KeyError(f"unknown component {c!r} in model {self.model.name!r}")
+        known = set(first or ())
+        with self._query(deadline):
+            base = self._base(observations) + self._at_most(k)
+            for c in asked:
+                if c in known:
+                    continue
+                if self._solve(base + [self.model.ab_var[c]], deadline):
+                    known.update(self._abnormal())
+        return [c for c in asked if c in known]
