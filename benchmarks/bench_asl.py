@@ -135,6 +135,10 @@ def run_child(cmd: list[str], env: dict[str, str] | None = None, timeout: float 
         timer.start()
         try:
             _, status, usage = os.wait4(proc.pid, 0)
+        except BaseException:             # e.g. Ctrl-C: do not leave the child running
+            proc.kill()
+            proc.wait()
+            raise
         finally:
             timer.cancel()
         proc.returncode = os.waitstatus_to_exitcode(status)
