@@ -8,6 +8,11 @@ every model found is a diagnosis of size exactly k that contains no smaller one 
 hence subset-minimal; it is reported and its supersets blocked. Blocking clauses carry a per-query
 activation literal, retired when the query ends, so they never leak into the next query.
 
+Monotone models (no negative health literal in any clause: weak fault models such as netlists and
+architecture models) take the faster route of ``hitting_sets``: the model's solver only checks fixed
+candidates and the bound lives in a small per-query hitting-set solver. Models with fault modes use the
+bound on the model's solver directly. The minimum cardinality comes from RC2 (core-guided MaxSAT).
+
 The default solver is Glucose 4: it releases the GIL while solving (other threads of the agent keep
 running) and honours ``interrupt()``, which the time limits rely on; CaDiCaL in python-sat does neither.
 """
@@ -17,14 +22,18 @@ import threading
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Iterator, Mapping, Sequence
+from typing import Callable, Iterator, Mapping, Sequence
 
 from pysat.card import ITotalizer
+from pysat.examples.rc2 import RC2
+from pysat.formula import WCNF
 from pysat.solvers import Solver
 
+from diagnosis.hitting_sets import HittingSetSolver, next_diagnosis
 from diagnosis.model import SystemModel
 
 DEFAULT_SOLVER = "glucose4"
+_RC2_SOLVER = {"glucose4": "g4", "glucose3": "g3", "minisat22": "m22", "cadical195": "cd19"}
 
 
 @dataclass
@@ -94,6 +103,9 @@ class Diagnoser:
         self._index = {c: i for i, c in enumerate(model.components)}
         self._top = model.num_vars
         self._totalizer: ITotalizer | None = None
+        self._solver_name = solver
+        negative_ab = {-v for v in self._ab}
+        self.monotone = not any(lit in negative_ab for clause in model.clauses for lit in clause)
         try:  # prefer "healthy" so the solver's first guesses are small fault sets
             self._solver.set_phases([-v for v in self._ab])
         except NotImplementedError:
@@ -174,6 +186,9 @@ class Diagnoser:
             base = self._base(observations)
             if not self._solve(base, deadline):
                 return  # nothing explains the observations, not even "everything is faulty"
+            if self.monotone:
+                yield from self._conflict_levels(base, limit, deadline)
+                return
             act = self._fresh()
             try:
                 for k in range(limit + 1):
@@ -183,6 +198,43 @@ class Diagnoser:
                         raise TimedOut
             finally:
                 self._solver.add_clause([-act])  # retire this query's blocking clauses
+
+    def _check(self, base: list[int], deadline: Deadline) -> "Callable[[list[int]], list[int] | None]":
+        """check(H): None if exactly H faulty is consistent, else a conflict from the solver's core."""
+        def check(candidate: list[int]) -> list[int] | None:
+            bad = set(candidate)
+            if self._solve(base + [v if v in bad else -v for v in self._ab], deadline):
+                return None
+            core = set(self._solver.get_core() or ())
+            conflict = [v for v in self._ab if -v in core]
+            if not conflict:  # cannot happen once base alone is known consistent
+                raise RuntimeError("inconsistent observations reached the conflict search")
+            return conflict
+        return check
+
+    def _hitting_sets(self, ubound: int) -> HittingSetSolver:
+        return HittingSetSolver(self.model.num_vars + 1, ubound, self._solver_name)
+
+    def _conflict_levels(self, base: list[int], limit: int, deadline: Deadline) -> Iterator[list[str]]:
+        hs = self._hitting_sets(limit)
+        check = self._check(base, deadline)
+        try:
+            for k in range(limit + 1):
+                found: list[list[str]] = []
+                try:
+                    while (candidate := next_diagnosis(hs, k, check)) is not None:
+                        hs.block(candidate)
+                        found.append([self._component_of[v] for v in candidate])
+                        if deadline.expired():
+                            raise TimedOut
+                except TimedOut:
+                    yield from sorted(found, key=self._order)
+                    raise
+                yield from sorted(found, key=self._order)
+                if found and not found[0]:
+                    return  # the empty diagnosis: nothing else is minimal
+        finally:
+            hs.close()
 
     def _level(self, assumptions: list[int], act: int, deadline: Deadline) -> tuple[list[list[str]], bool]:
         """The diagnoses of one level, sorted, and whether the deadline cut the level short."""
@@ -204,35 +256,26 @@ class Diagnoser:
                             ) -> tuple[int | None, list[str] | None]:
         """Smallest number of faults that explains the observations, with one such diagnosis.
 
-        Lower bound from disjoint conflicts (cores of "all healthy"), then the bound is raised from
-        there until satisfiable; each SAT answer also tightens from above.
+        RC2 (core-guided MaxSAT: hard = model and observations, soft = each component healthy) on a
+        solver of its own for this query; RC2 cannot be interrupted, so the deadline is checked only
+        before it starts. None, None when nothing explains the observations.
         """
         deadline = deadline or Deadline(None)
-        with self._query(deadline):
-            base = self._base(observations)
-            if not self._solve(base, deadline):
+        if deadline.expired():
+            raise TimedOut
+        base = self._base(observations)
+        wcnf = WCNF()
+        wcnf.extend([list(c) for c in self.model.clauses])
+        wcnf.extend([[lit] for lit in base])
+        for v in self._ab:
+            wcnf.append([-v], weight=1)
+        with RC2(wcnf, solver=_RC2_SOLVER.get(self._solver_name, "g4")) as rc2:
+            model = rc2.compute()
+            if model is None:
                 return None, None
-            lower = self._disjoint_conflicts(base, deadline)
-            k = lower
-            while True:
-                if self._solve(base + self._at_most(k), deadline):
-                    best = self._abnormal()
-                    # the model may be smaller than k only if k > lower bound of an earlier level: fine
-                    return len(best), sorted(best, key=self._index.__getitem__)
-                k += 1
-
-    def _disjoint_conflicts(self, base: list[int], deadline: Deadline) -> int:
-        """Number of pairwise disjoint conflicts found greedily: a lower bound on the min cardinality."""
-        healthy = {-v for v in self._ab}
-        count = 0
-        while True:
-            if self._solve(base + sorted(healthy, key=abs), deadline):
-                return count
-            core = set(self._solver.get_core() or ()) & healthy
-            if not core:
-                return count
-            count += 1
-            healthy -= core
+            true = set(lit for lit in model if lit > 0)
+        best = [self._component_of[v] for v in self._ab if v in true]
+        return len(best), best
 
     def diagnose(self, observations: Mapping[str, bool], max_card: int | None = None,
                  max_count: int | None = None, timeout: float | None = None,
@@ -273,22 +316,41 @@ class Diagnoser:
         complete = True
         with self._query(deadline):
             base = self._base(observations)
-            act = self._fresh()
-            assumptions = base + [act] + self._at_most(k)
+            stream = self._one_level(base, k, deadline)
             try:
-                while self._solve(assumptions, deadline):
-                    d = self._abnormal()
+                for d in stream:
                     if max_count is not None and len(diagnoses) >= max_count:
                         complete = False
                         break
                     diagnoses.append(d)
-                    self._solver.add_clause([-act, *(-self.model.ab_var[c] for c in d)])
             except TimedOut:
                 complete = False
             finally:
-                self._solver.add_clause([-act])
+                stream.close()
         diagnoses.sort(key=self._order)
         return DiagnosisResult(diagnoses, k, complete, time.perf_counter() - started, k)
+
+    def _one_level(self, base: list[int], k: int, deadline: Deadline) -> Iterator[list[str]]:
+        """Every diagnosis of size <= k, when k is the minimum cardinality (so all are minimal)."""
+        if self.monotone:
+            hs = self._hitting_sets(k)
+            check = self._check(base, deadline)
+            try:
+                while (candidate := next_diagnosis(hs, k, check)) is not None:
+                    hs.block(candidate)
+                    yield [self._component_of[v] for v in candidate]
+            finally:
+                hs.close()
+            return
+        act = self._fresh()
+        assumptions = base + [act] + self._at_most(k)
+        try:
+            while self._solve(assumptions, deadline):
+                d = self._abnormal()
+                self._solver.add_clause([-act, *(-self.model.ab_var[c] for c in d)])
+                yield d
+        finally:
+            self._solver.add_clause([-act])
 
     def _explainable(self, observations: Mapping[str, bool]) -> bool:
         with self._lock:
@@ -312,10 +374,20 @@ class Diagnoser:
                 raise KeyError(f"unknown component {c!r} in model {self.model.name!r}")
         known = set(first or ())
         with self._query(deadline):
-            base = self._base(observations) + self._at_most(k)
-            for c in asked:
-                if c in known:
-                    continue
-                if self._solve(base + [self.model.ab_var[c]], deadline):
-                    known.update(self._abnormal())
+            base = self._base(observations)
+            if self.monotone:
+                hs = self._hitting_sets(k)
+                check = self._check(base, deadline)
+                try:
+                    for c in asked:
+                        if c not in known:
+                            found = next_diagnosis(hs, k, check, extra=[self.model.ab_var[c]])
+                            known.update(self._component_of[v] for v in found or ())
+                finally:
+                    hs.close()
+            else:
+                bounded = base + self._at_most(k)
+                for c in asked:
+                    if c not in known and self._solve(bounded + [self.model.ab_var[c]], deadline):
+                        known.update(self._abnormal())
         return [c for c in asked if c in known]

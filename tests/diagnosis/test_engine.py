@@ -119,3 +119,30 @@ def test_contradictory_observations_have_no_diagnosis(write):
     result = Diagnoser(model).diagnose({"a": False})
     assert result.diagnoses == [] and result.complete and not result.consistent_with_model
     assert result.min_cardinality is None
+
+
+plain_atom = st.sampled_from(OBSERVATIONS + VARIABLES)
+plain_formula = st.recursive(plain_atom, lambda sub: st.one_of(
+    st.builds(lambda a: f"!({a})", sub),
+    st.builds(lambda a, b, op: f"({a}) {op} ({b})", sub, sub, st.sampled_from(["&", "|", "->", "<->"]))),
+    max_leaves=5)
+weak_models = st.lists(st.builds(lambda c, body: f"!AB({c}) -> ({body})", st.sampled_from(COMPONENTS),
+                                 plain_formula), min_size=1, max_size=6)
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(weak_models, st.lists(observation_sets, min_size=1, max_size=3), st.integers(0, 4))
+def test_weak_fault_models_take_the_conflict_route_and_agree_with_brute_force(rules, queries, max_card):
+    model = build(rules)
+    formulas = [parse_formula(r) for r in rules]
+    diagnoser = Diagnoser(model)
+    assert diagnoser.monotone
+    for observations in queries:
+        expected = brute_minimal_diagnoses(formulas, observations, max_card)
+        assert diagnoser.diagnose(observations, max_card=max_card).diagnoses == expected, (rules, observations)
+        full = brute_minimal_diagnoses(formulas, observations, len(COMPONENTS))
+        k = len(full[0]) if full else None
+        assert diagnoser.minimum_cardinality(observations)[0] == k
+        minimum = [d for d in full if len(d) == k] if full and k else []
+        assert diagnoser.diagnose(observations, min_card_only=True).diagnoses == (minimum if k else full[:1])
+        assert diagnoser.possibly_faulty(observations) == [c for c in COMPONENTS if any(c in d for d in minimum)]

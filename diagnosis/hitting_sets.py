@@ -1,0 +1,90 @@
+"""Level-wise minimal diagnoses for monotone models, by conflicts and hitting sets.
+
+A model is *monotone* when no clause contains a negative health literal (weak fault models: ISCAS
+netlists, the paper's architecture models): declaring one more component faulty never makes a
+consistent set inconsistent. Then Reiter's duality holds with cheap pieces:
+
+* the model's persistent solver only ever answers "is exactly H faulty consistent?" (all health
+  literals fixed by assumptions: pure propagation, no search) and, when not, its core is a conflict;
+* a small per-query *hitting-set solver* holds the conflicts, the blocking clauses of diagnoses found
+  and a totalizer over only the components that occur in conflicts; assuming "at most k" bounds it.
+
+At level k a consistent candidate is a minimal diagnosis of size k, for the reason given in
+``engine``'s module doc. Keeping the totalizer out of the model's solver is what makes this fast: the
+checks on a 3,500-gate circuit cost a third of a millisecond instead of two.
+"""
+from __future__ import annotations
+
+from typing import Callable, Sequence
+
+from pysat.card import ITotalizer
+from pysat.solvers import Solver
+
+SolveFn = Callable[[list[int]], bool]
+
+
+class HittingSetSolver:
+    """Candidates that hit every conflict seen so far and contain no blocked set."""
+
+    def __init__(self, first_free_var: int, ubound: int, solver: str) -> None:
+        self.solver = Solver(name=solver)
+        self.top = first_free_var - 1
+        self.ubound = max(ubound, 1)
+        self.members: list[int] = []       # health variables that occur in some conflict
+        self._member_set: set[int] = set()
+        self.totalizer: ITotalizer | None = None
+
+    def close(self) -> None:
+        self.solver.delete()
+        if self.totalizer is not None:
+            self.totalizer.delete()
+
+    def add_conflict(self, ab_vars: Sequence[int]) -> None:
+        self.solver.add_clause(list(ab_vars))
+        new = [v for v in ab_vars if v not in self._member_set]
+        if not new:
+            return
+        self.members.extend(new)
+        self._member_set.update(new)
+        self.solver.set_phases([-v for v in new])
+        if self.totalizer is None:
+            self.totalizer = ITotalizer(lits=list(new), ubound=self.ubound, top_id=self.top)
+            self.solver.append_formula(self.totalizer.cnf.clauses)
+        else:
+            self.totalizer.extend(lits=list(new), ubound=self.ubound, top_id=self.top)
+            if self.totalizer.nof_new:
+                self.solver.append_formula(self.totalizer.cnf.clauses[-self.totalizer.nof_new:])
+        self.top = self.totalizer.top_id
+
+    def block(self, ab_vars: Sequence[int]) -> None:
+        """No candidate may contain all of these (a diagnosis found: its supersets are not minimal)."""
+        self.solver.add_clause([-v for v in ab_vars])
+
+    def candidate(self, k: int, extra: Sequence[int] = ()) -> list[int] | None:
+        """A hitting set of at most k members (plus ``extra`` assumptions), or None when there is none."""
+        assumptions = list(extra)
+        if self.totalizer is not None and k < len(self.members):
+            if k > self.ubound:
+                raise ValueError(f"bound {k} above the solver's {self.ubound}")
+            assumptions.append(-self.totalizer.rhs[k])
+        if not self.solver.solve(assumptions=assumptions):
+            return None
+        model = self.solver.get_model() or []
+        return [v for v in self.members if model[v - 1] > 0] if self.members else []
+
+
+def next_diagnosis(hs: HittingSetSolver, k: int, check: Callable[[list[int]], list[int] | None],
+                   extra: Sequence[int] = ()) -> list[int] | None:
+    """The next consistent hitting set of size <= k, learning conflicts on the way; None if none is left.
+
+    ``check(H)`` returns None when "exactly H faulty" is consistent, else a conflict (health
+    variables of components that cannot all be healthy), never empty.
+    """
+    while True:
+        candidate = hs.candidate(k, extra)
+        if candidate is None:
+            return None
+        conflict = check(candidate)
+        if conflict is None:
+            return candidate
+        hs.add_conflict(conflict)
