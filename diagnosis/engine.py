@@ -224,7 +224,7 @@ class Diagnoser:
                 try:
                     while (candidate := next_diagnosis(hs, k, check)) is not None:
                         hs.block(candidate)
-                        found.append([self._component_of[v] for v in candidate])
+                        found.append(self._names(candidate))
                         if deadline.expired():
                             raise TimedOut
                 except TimedOut:
@@ -248,6 +248,10 @@ class Diagnoser:
         except TimedOut:
             timed_out = True
         return sorted(found, key=self._order), timed_out
+
+    def _names(self, ab_vars: list[int]) -> list[str]:
+        """Component names of health variables, in model order."""
+        return sorted((self._component_of[v] for v in ab_vars), key=self._index.__getitem__)
 
     def _order(self, diagnosis: list[str]) -> list[int]:
         return [self._index[c] for c in diagnosis]
@@ -338,7 +342,7 @@ class Diagnoser:
             try:
                 while (candidate := next_diagnosis(hs, k, check)) is not None:
                     hs.block(candidate)
-                    yield [self._component_of[v] for v in candidate]
+                    yield self._names(candidate)
             finally:
                 hs.close()
             return
@@ -382,7 +386,7 @@ class Diagnoser:
                     for c in asked:
                         if c not in known:
                             found = next_diagnosis(hs, k, check, extra=[self.model.ab_var[c]])
-                            known.update(self._component_of[v] for v in found or ())
+                            known.update(self._names(found or []))
                 finally:
                     hs.close()
             else:
