@@ -41,6 +41,10 @@ class HittingSetSolver:
 
     def add_conflict(self, ab_vars: Sequence[int]) -> None:
         self.solver.add_clause(list(ab_vars))
+        self._add_members(ab_vars)
+
+    def _add_members(self, ab_vars: Sequence[int]) -> None:
+        """Count these components in the bound and report them in candidates from now on."""
         new = [v for v in ab_vars if v not in self._member_set]
         if not new:
             return
@@ -62,6 +66,7 @@ class HittingSetSolver:
 
     def candidate(self, k: int, extra: Sequence[int] = ()) -> list[int] | None:
         """A hitting set of at most k members (plus ``extra`` assumptions), or None when there is none."""
+        self._add_members([lit for lit in extra if lit > 0])  # a component assumed faulty counts too
         assumptions = list(extra)
         if self.totalizer is not None and k < len(self.members):
             if k > self.ubound:
