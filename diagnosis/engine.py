@@ -21,7 +21,7 @@ from __future__ import annotations
 import threading
 import time
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable, Iterator, Mapping, Sequence
 
 from pysat.card import ITotalizer
@@ -49,7 +49,6 @@ class DiagnosisResult:
     seconds: float
     max_card: int | None = None
     consistent_with_model: bool = True  # False: no set of faults explains the observations
-    notes: list[str] = field(default_factory=list)
 
     def to_json(self) -> dict:
         return {"diagnoses": self.diagnoses, "min_cardinality": self.min_cardinality,
@@ -261,23 +260,37 @@ class Diagnoser:
         """Smallest number of faults that explains the observations, with one such diagnosis.
 
         RC2 (core-guided MaxSAT: hard = model and observations, soft = each component healthy) on a
-        solver of its own for this query; RC2 cannot be interrupted, so the deadline is checked only
-        before it starts. None, None when nothing explains the observations.
+        solver of its own for this query; its oracle calls are interrupted when the deadline passes
+        (RC2's own ``interrupt`` lets it go on processing cores for seconds on c6288).
+        None, None when nothing explains the observations.
         """
         deadline = deadline or Deadline(None)
         if deadline.expired():
             raise TimedOut
-        base = self._base(observations)
         wcnf = WCNF()
         wcnf.extend([list(c) for c in self.model.clauses])
-        wcnf.extend([[lit] for lit in base])
+        wcnf.extend([[lit] for lit in self._base(observations)])
         for v in self._ab:
             wcnf.append([-v], weight=1)
         with RC2(wcnf, solver=_RC2_SOLVER.get(self._solver_name, "g4")) as rc2:
-            model = rc2.compute()
-            if model is None:
-                return None, None
-            true = set(lit for lit in model if lit > 0)
+            oracle = rc2.oracle
+            if deadline.end is not None:  # every oracle call of RC2 stops at the deadline
+                call = oracle.solve_limited
+
+                def limited(assumptions: Sequence[int] = (), expect_interrupt: bool = False) -> bool:
+                    result = None if deadline.expired() else call(assumptions=assumptions, expect_interrupt=True)
+                    if result is None:
+                        raise TimedOut
+                    return result
+                oracle.solve_limited = limited
+                deadline.watch(oracle)
+            try:
+                model = rc2.compute()
+            finally:
+                deadline.release(oracle)
+        if model is None:
+            return None, None
+        true = {lit for lit in model if lit > 0}
         best = [self._component_of[v] for v in self._ab if v in true]
         return len(best), best
 
@@ -364,9 +377,11 @@ class Diagnoser:
                         timeout: float | None = None) -> list[str]:
         """PosAb: the components that are faulty in some minimum-cardinality diagnosis.
 
-        One SAT call per component ("AB(c) and at most k faults", k the minimum cardinality), no
-        enumeration. With k minimal every such diagnosis is subset-minimal, so the answer is exact.
-        Empty when the observations need no fault or nothing explains them.
+        No enumeration: for each component c not yet seen in a diagnosis, one search for "AB(c) and
+        at most k faults" (k the minimum cardinality): a SAT call on the model's solver, or on the
+        conflict route a hitting-set search whose conflicts carry over from one component to the next.
+        Every diagnosis found on the way marks all its members. With k minimal every such diagnosis is
+        subset-minimal, so the answer is exact. Empty when no fault is needed or nothing explains them.
         """
         deadline = Deadline(timeout)
         k, first = self.minimum_cardinality(observations, deadline)
