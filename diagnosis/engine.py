@@ -18,6 +18,7 @@ running) and honours ``interrupt()``, which the time limits rely on; CaDiCaL in 
 """
 from __future__ import annotations
 
+import itertools
 import threading
 import time
 from contextlib import contextmanager
@@ -84,6 +85,15 @@ class Deadline:
             self._timer.cancel()
             self._timer = None
             solver.clear_interrupt()
+
+
+_SWAP_LIMIT = 4  # levels up to which equivalent candidates are tried directly (subset test is 2^k)
+
+
+def _contains_known(candidate: list[int], known: set[frozenset[int]]) -> bool:
+    """Does the candidate contain (or equal) a diagnosis found before? Then it is not a new minimal one."""
+    return any(frozenset(sub) in known for r in range(len(candidate) + 1)
+               for sub in itertools.combinations(candidate, r))
 
 
 class TimedOut(Exception):
@@ -218,14 +228,32 @@ class Diagnoser:
         hs = self._hitting_sets(limit)
         check = self._check(base, deadline)
         try:
+            known: set[frozenset[int]] = set()
             for k in range(limit + 1):
                 found: list[list[str]] = []
+
+                def record(diagnosis: list[int]) -> None:
+                    hs.block(diagnosis)
+                    known.add(frozenset(diagnosis))
+                    found.append(self._names(diagnosis))
+
                 try:
                     while (candidate := next_diagnosis(hs, k, check)) is not None:
-                        hs.block(candidate)
-                        found.append(self._names(candidate))
-                        if deadline.expired():
-                            raise TimedOut
+                        record(candidate)
+                        if k > _SWAP_LIMIT:
+                            continue
+                        learned: list[set[int]] = []  # conflicts found while trying the variants
+                        for variant in hs.equivalents(candidate):  # no hitting-set search for these
+                            if deadline.expired():
+                                raise TimedOut
+                            if _contains_known(variant, known) or any(c.isdisjoint(variant) for c in learned):
+                                continue
+                            conflict = check(variant)
+                            if conflict is None:
+                                record(variant)
+                            else:
+                                hs.add_conflict(conflict)
+                                learned.append(set(conflict))
                 except TimedOut:
                     yield from sorted(found, key=self._order)
                     raise

@@ -15,7 +15,8 @@ checks on a 3,500-gate circuit cost a third of a millisecond instead of two.
 """
 from __future__ import annotations
 
-from typing import Callable, Sequence
+import itertools
+from typing import Callable, Iterator, Sequence
 
 from pysat.card import ITotalizer
 from pysat.solvers import Solver
@@ -33,6 +34,9 @@ class HittingSetSolver:
         self.members: list[int] = []       # health variables that occur in some conflict
         self._member_set: set[int] = set()
         self.totalizer: ITotalizer | None = None
+        self._signature: dict[int, int] = {}            # member -> bit set of the conflicts it is in
+        self._classes: dict[int, list[int]] = {}        # bit set -> members with exactly that set
+        self._conflicts = 0
 
     def close(self) -> None:
         self.solver.delete()
@@ -42,6 +46,25 @@ class HittingSetSolver:
     def add_conflict(self, ab_vars: Sequence[int]) -> None:
         self.solver.add_clause(list(ab_vars))
         self._add_members(ab_vars)
+        bit = 1 << self._conflicts
+        self._conflicts += 1
+        for v in ab_vars:
+            old = self._signature[v]
+            self._classes[old].remove(v)
+            self._signature[v] = old | bit
+            self._classes.setdefault(old | bit, []).append(v)
+
+    def equivalents(self, candidate: Sequence[int]) -> Iterator[list[int]]:
+        """Sets that hit the same conflicts as ``candidate``: each member swapped for one that is in
+        exactly the same conflicts (gates along one path often are). The candidate itself is skipped."""
+        pools = [list(self._classes[self._signature[v]]) for v in candidate]
+        own = frozenset(candidate)
+        seen = {own}
+        for combo in itertools.product(*pools):
+            variant = frozenset(combo)
+            if len(variant) == len(combo) and variant not in seen:
+                seen.add(variant)
+                yield sorted(variant)
 
     def _add_members(self, ab_vars: Sequence[int]) -> None:
         """Count these components in the bound and report them in candidates from now on."""
@@ -50,6 +73,9 @@ class HittingSetSolver:
             return
         self.members.extend(new)
         self._member_set.update(new)
+        for v in new:
+            self._signature[v] = 0
+            self._classes.setdefault(0, []).append(v)
         self.solver.set_phases([-v for v in new])
         if self.totalizer is None:
             self.totalizer = ITotalizer(lits=list(new), ubound=self.ubound, top_id=self.top)
