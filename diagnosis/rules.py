@@ -8,7 +8,7 @@ contradict anything. Rules are evaluated only when Obs or PosAb change, and each
 once per change.
 
 ```yaml
-rules:                                  # next to the model, e.g. navigation.rules.yaml
+rules:                                  # next to the model: nav.yaml -> nav.rules.yaml
   - name: restart_laser
     posObs: [~hz(scan)]
     posPosAb: [laser_driver]
@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
+import yaml
 from yaml.nodes import Node
 
 from diagnosis.actions import (Action, ActionEnvironment, ActionError, CallAction, CommandAction, LogAction,
@@ -92,6 +93,12 @@ class RuleEngine:
         return fired
 
 
+def rules_path_for(model_path: str | Path) -> Path:
+    """Where a model's rules live: next to it, ``nav.yaml`` -> ``nav.rules.yaml``."""
+    model_path = Path(model_path)
+    return model_path.with_name(f"{model_path.stem}.rules.yaml")
+
+
 def load_rules(path: str | Path, model: SystemModel | None = None, text: str | None = None) -> list[Rule]:
     """Rules from YAML; with a model, every observation and component they name must exist in it."""
     source = YamlSource(path, text)
@@ -128,8 +135,7 @@ def _rule(source: YamlSource, node: Node, index: int, model: SystemModel | None)
     kinds = [k for k in ACTION_KEYS if k in entries]
     if len(kinds) != 1:
         source.error(node, f"rule {name}: give exactly one action among {', '.join(ACTION_KEYS)}")
-    key_node, value = entries[kinds[0]]
-    action = _action(source, kinds[0], value, entries, name)
+    action = _action(source, kinds[0], entries[kinds[0]][1], entries, name)
     return Rule(name, sets["posObs"], sets["negObs"], sets["posPosAb"], sets["negPosAb"], action,
                 node.start_mark.line + 1)
 
@@ -163,7 +169,6 @@ def _action(source: YamlSource, kind: str, value: Node, entries: dict, rule: str
         for k in ("node", "name", "value"):
             if k not in fields:
                 source.error(value, f"rule {rule}: set_parameter needs node, name and value")
-        import yaml
         return SetParameterAction(source.scalar(fields["node"][1], "node"), source.scalar(fields["name"][1], "name"),
                                   yaml.safe_load(yaml.serialize(fields["value"][1])))
     source.check_keys(fields, ("agent", "literal"), "post")

@@ -127,3 +127,12 @@ def test_bad_rules_name_file_line_and_reason(write, text, line, fragment):
         load_rules(path, model)
     assert (info.value.file, info.value.line) == (str(path), line)
     assert fragment in str(info.value)
+
+
+def test_rules_live_next_to_their_model(write):
+    model_path = write("nav.yaml", MODEL)
+    from diagnosis.rules import rules_path_for
+    assert rules_path_for(model_path) == model_path.with_name("nav.rules.yaml")
+    write("nav.rules.yaml", RULES)
+    assert [r.name for r in load_rules(rules_path_for(model_path), load_model(model_path))] == \
+        ["restart_laser", "tell_the_team", "note"]
