@@ -50,18 +50,19 @@ def load_architecture(source: YamlSource) -> SystemModel:
 
     producers: dict[str, list[str]] = {}
     inputs: dict[str, list[str]] = {}
+    subscriptions = []  # (node, topic, yaml node), checked once every publisher is known
     for node_name, (key, value) in source.mapping(top["nodes"][1], "nodes").items():
         entries = source.mapping(value, f"node {node_name!r}") if value.tag != "tag:yaml.org,2002:null" else {}
         source.check_keys(entries, NODE_KEYS, f"node {node_name!r}")
         builder.add_component(node_name)
-        inputs[node_name] = [t for t, _ in source.names(entries["sub"][1], "sub")] if "sub" in entries else []
+        subs = source.names(entries["sub"][1], "sub") if "sub" in entries else []
+        inputs[node_name] = [t for t, _ in subs]
+        subscriptions.extend((node_name, t, item) for t, item in subs)
         for topic, _ in (source.names(entries["pub"][1], "pub") if "pub" in entries else []):
             producers.setdefault(topic, []).append(node_name)
-    for node_name, (key, value) in source.mapping(top["nodes"][1], "nodes").items():
-        entries = source.mapping(value, "node") if value.tag != "tag:yaml.org,2002:null" else {}
-        for topic, item in (source.names(entries["sub"][1], "sub") if "sub" in entries else []):
-            if topic not in producers:
-                source.error(item, f"node {node_name!r} subscribes to topic {topic!r} but no node publishes it")
+    for node_name, topic, item in subscriptions:
+        if topic not in producers:
+            source.error(item, f"node {node_name!r} subscribes to topic {topic!r} but no node publishes it")
 
     def topic_ab(topic: str) -> int:
         return builder.pool.id(("ABtopic", topic))
