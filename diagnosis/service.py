@@ -49,23 +49,26 @@ class DiagnosisService:
         self._solver = solver
         self._lock = threading.Lock()
         self._cache: dict[str, tuple[tuple[int, int], Diagnoser]] = {}
+        self._loading: dict[str, threading.Lock] = {}
 
     def diagnoser(self, model_path: str | os.PathLike) -> Diagnoser:
-        """The cached Diagnoser of a model file, rebuilt when the file's mtime or size changed."""
+        """The cached Diagnoser of a model file, rebuilt when the file's mtime or size changed.
+
+        A replaced Diagnoser is not closed: a query on another thread may still be using it; its
+        solver is freed when the last reference goes.
+        """
         path = str(Path(model_path).resolve())
         st = os.stat(path)
         stamp = (st.st_mtime_ns, st.st_size)
         with self._lock:
+            loading = self._loading.setdefault(path, threading.Lock())
+        with loading:  # one load per model at a time; other models load in parallel
             cached = self._cache.get(path)
             if cached and cached[0] == stamp:
                 return cached[1]
-        diagnoser = Diagnoser(load_model(path), self._solver)  # outside the lock: loading can take a while
-        with self._lock:
-            old = self._cache.get(path)
+            diagnoser = Diagnoser(load_model(path), self._solver)
             self._cache[path] = (stamp, diagnoser)
-        if old and old[1] is not diagnoser:
-            old[1].close()
-        return diagnoser
+            return diagnoser
 
     def submit(self, model_path: str | os.PathLike, observations: Mapping[str, bool], *,
                max_card: int | None = None, timeout: float | None = None, max_count: int | None = None,
@@ -83,11 +86,10 @@ class DiagnosisService:
         return self._pool.submit(lambda: self.diagnoser(model_path).possibly_faulty(obs, components, timeout))
 
     def close(self) -> None:
-        self._pool.shutdown(wait=True)
-        with self._lock:
-            for _, diagnoser in self._cache.values():
-                diagnoser.close()
-            self._cache.clear()
+        self._pool.shutdown(wait=True)  # no query runs after this: the solvers can go
+        for _, diagnoser in self._cache.values():
+            diagnoser.close()
+        self._cache.clear()
 
     def __enter__(self) -> "DiagnosisService":
         return self

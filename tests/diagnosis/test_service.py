@@ -58,3 +58,13 @@ def test_models_are_cached_and_reloaded_when_the_file_changes(write):
         os.utime(path, ns=(st.st_atime_ns, st.st_mtime_ns + 1_000_000))
         second = service.diagnoser(path)
         assert second is not first and second.model.components == ("bulb", "switch", "plug")
+
+
+def test_concurrent_queries_on_one_and_on_several_models(write):
+    lamp = write("lamp.yaml", LAMP)
+    other = write("other.yaml", LAMP.replace("system: lamp", "system: other"))
+    with DiagnosisService(workers=4) as service:
+        futures = [service.submit(path, {"on": True, "lit": bool(i % 2)})
+                   for i in range(20) for path in (lamp, other)]
+        answers = [f.result(timeout=60).diagnoses for f in futures]
+    assert answers == [[["bulb"], ["switch"]] if i % 2 == 0 else [[]] for i in range(20) for _ in range(2)]
