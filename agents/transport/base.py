@@ -6,9 +6,10 @@ layer goes through ``on_envelope`` callbacks that must not block (``Inbox`` is t
 """
 from __future__ import annotations
 
+import collections
 import logging
-import queue
 import threading
+import time
 from abc import ABC, abstractmethod
 from collections import Counter
 from typing import Any, Callable, Iterable
@@ -26,36 +27,52 @@ OnStatus = Callable[[AgentStatus], None]
 
 
 class Inbox:
-    """A thread-safe mailbox: the network thread puts, the agent's thread takes; ``wake`` is called
-    after each put (e.g. to set the event the agent's reasoning loop sleeps on)."""
+    """A thread-safe mailbox: the network thread appends, the agent's thread takes; ``wake`` is called
+    after each append (e.g. to set the event the agent's reasoning loop sleeps on).
+
+    Appending never blocks and costs no lock while the reader is busy (a deque, and an event set
+    only when the reader may be asleep), so a burst of messages does not bounce the GIL per message.
+    """
 
     def __init__(self, wake: Callable[[], None] | None = None) -> None:
-        self._queue: queue.SimpleQueue[Envelope] = queue.SimpleQueue()
+        self._items: collections.deque[Envelope] = collections.deque()
+        self._ready = threading.Event()
         self._wake = wake
 
     def __call__(self, envelope: Envelope) -> None:
-        self._queue.put(envelope)
+        self._items.append(envelope)
+        if not self._ready.is_set():
+            self._ready.set()
         if self._wake is not None:
             self._wake()
 
     def get(self, timeout: float | None = None) -> Envelope | None:
         """The next envelope, waiting up to ``timeout`` seconds (``None`` when none came)."""
-        try:
-            return self._queue.get(timeout=timeout)
-        except queue.Empty:
-            return None
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            try:
+                return self._items.popleft()
+            except IndexError:
+                pass
+            self._ready.clear()
+            if self._items:  # appended between popleft and clear: its set() may have been skipped
+                continue
+            remaining = None if deadline is None else deadline - time.monotonic()
+            if remaining is not None and remaining <= 0:
+                return None
+            self._ready.wait(remaining)
 
     def drain(self) -> list[Envelope]:
         """Every envelope waiting now, oldest first, without blocking."""
         items = []
-        while True:
-            try:
-                items.append(self._queue.get_nowait())
-            except queue.Empty:
-                return items
+        try:
+            while True:
+                items.append(self._items.popleft())
+        except IndexError:
+            return items
 
     def __len__(self) -> int:
-        return self._queue.qsize()
+        return len(self._items)
 
 
 class Presence:
@@ -223,7 +240,10 @@ class Transport(ABC):
             return False
         with self._counters:
             self.received[agent] += 1
-        _call_safely(callback, envelope)
+        try:
+            callback(envelope)
+        except Exception:  # the agent's problem; the network thread carries on
+            log.exception("delivery to agent %s failed", agent)
         return True
 
     def _drop(self, reason: str, where: str, sender: str | None, detail: str = "") -> None:

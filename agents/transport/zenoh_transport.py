@@ -87,7 +87,7 @@ class ZenohTransport(Transport):
             publisher = self._publisher(receiver)
         # A client learns of remote subscribers lazily (through its router's interest replies), so a
         # receiver whose liveliness token is seen counts as reachable even before matching says so.
-        if not (publisher.matching_status.matching or self._presence.is_alive(receiver)):
+        if not (self._presence.is_alive(receiver) or publisher.matching_status.matching):
             return False
         publisher.put(encoded())
         return True
