@@ -3,7 +3,9 @@ a router process links clients; an access-control rule keyed on a user name deni
 from __future__ import annotations
 
 import argparse
+import shutil
 import signal
+import subprocess
 
 import pytest
 
@@ -128,3 +130,40 @@ def test_access_control_denies_a_user_the_stop_command(tmp_path):
         for child in (joiner, operator, intruder):
             child.stop()
         hub.close()
+
+
+def make_certificates(directory) -> dict[str, str]:
+    """A throw-away CA and a server certificate for 'localhost' (with the openssl command)."""
+    run = lambda *args: subprocess.run(["openssl", *args], cwd=directory, check=True,  # noqa: E731
+                                       capture_output=True)
+    run("req", "-x509", "-newkey", "rsa:2048", "-nodes", "-keyout", "ca.key", "-out", "ca.pem", "-days", "2",
+        "-subj", "/CN=faultmas-test-ca")
+    run("req", "-newkey", "rsa:2048", "-nodes", "-keyout", "hub.key", "-out", "hub.csr", "-subj", "/CN=hub")
+    (directory / "san.ext").write_text("subjectAltName=DNS:localhost,IP:127.0.0.1\n")
+    run("x509", "-req", "-in", "hub.csr", "-CA", "ca.pem", "-CAkey", "ca.key", "-CAcreateserial",
+        "-out", "hub.pem", "-days", "2", "-extfile", "san.ext")
+    return {name: str(directory / name) for name in ("ca.pem", "hub.pem", "hub.key")}
+
+
+@pytest.mark.skipif(shutil.which("openssl") is None, reason="needs the openssl command to make certificates")
+def test_tls_link_carries_messages_and_refuses_a_peer_without_the_ca(tmp_path):
+    """The TLS set-up of docs/deployment.md: the hub listens on tls/ with its certificate, agents
+    connect with the CA; a peer that does not trust the CA gets no link."""
+    files = make_certificates(tmp_path)
+    hub_file, agent_file = tmp_path / "hub.json5", tmp_path / "agent.json5"
+    hub_file.write_text(f'{{ transport: {{ link: {{ tls: {{ listen_certificate: "{files["hub.pem"]}", '
+                        f'listen_private_key: "{files["hub.key"]}" }} }} }} }}')
+    agent_file.write_text(f'{{ transport: {{ link: {{ tls: {{ root_ca_certificate: "{files["ca.pem"]}" }} }} }} }}')
+    endpoint, mas = f"tls/localhost:{free_port()}", unique_mas()
+    with ZenohTransport(mas, ZenohOptions(listen=(endpoint,), config_file=hub_file)) as hub, \
+            ZenohTransport(mas, ZenohOptions(connect=(endpoint,), config_file=agent_file)) as agent, \
+            ZenohTransport(mas, ZenohOptions(connect=(endpoint,))) as stranger:
+        inbox = Inbox()
+        hub.register("bob", inbox)
+        agent.register("alice", Inbox())
+        assert agent.wait_for_agents(["bob"], timeout=10)
+        assert agent.send(Envelope(mas, "alice", ("bob",), "tell", "over_tls")) == ()
+        assert inbox.get(timeout=10).content == "over_tls"
+        assert [link.dst.startswith("tls/") for link in agent.session.info.links()] == [True]
+        assert not stranger.wait_for_agents(["bob"], timeout=1.0)
+        assert stranger.send(Envelope(mas, "alice", ("bob",), "tell", "x")) == ("bob",)
