@@ -246,6 +246,11 @@ class Transport(ABC):
             log.exception("delivery to agent %s failed", agent)
         return True
 
+    def report_drop(self, envelope: Envelope, receiver: str, reason: str, detail: str = "") -> None:
+        """For the agent layer: refuse a delivered envelope (e.g. ``unparsable_content``,
+        ``untrusted_code``) with the same single log line and the same ``dropped`` counter."""
+        self._drop(reason, f"agent {receiver}", envelope.sender, detail)
+
     def _drop(self, reason: str, where: str, sender: str | None, detail: str = "") -> None:
         with self._counters:
             self.dropped[reason] += 1

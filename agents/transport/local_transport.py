@@ -65,10 +65,6 @@ class LocalTransport(Transport):
         for peer in self.bus.peers(self.mas):
             peer._presence.update(agent, False)
 
-    def send(self, envelope: Envelope) -> tuple[str, ...]:
-        envelope.validate()
-        return super().send(envelope)
-
     def _put(self, receiver: str, envelope: Envelope, encoded: Callable[[], bytes]) -> bool:
         owner = self.bus.owner(self.mas, receiver)
         if owner is None:

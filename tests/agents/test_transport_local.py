@@ -143,3 +143,13 @@ def test_trust_accepts_code_only_from_declared_or_allowed_senders():
     assert policy.refusal(plan("joiner")) is None
     strict = TrustPolicy("m", extra_check=lambda envelope: envelope.performative != "signal")
     assert strict.refusal(Envelope("m", "a", ("b",), "signal", "x")) == "refused_by_policy"
+
+
+def test_the_agent_layer_reports_its_own_refusals_the_same_way(two_processes, caplog):
+    one, _ = two_processes
+    envelope = Envelope("m", "joiner", ("bob",), "tellHow", "+!g <- .print(hi).")
+    with caplog.at_level(logging.WARNING, logger="faultmas.transport"):
+        one.report_drop(envelope, "bob", "untrusted_code", "joiner is not declared in the project")
+    assert one.dropped["untrusted_code"] == 1
+    assert caplog.messages == ["dropped message on agent bob from joiner: untrusted_code "
+                               "(joiner is not declared in the project)"]
