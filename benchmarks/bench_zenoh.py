@@ -49,10 +49,17 @@ def run(quick: bool = False) -> str:
             raw_rtt = raw.round_trips(200, trips)
             env_rtt = _transport_round_trips(transport, inbox, Envelope, 200, trips)
             raw.close()
+            gone = threading.Event()
+            transport.on_presence(lambda agent, alive: gone.set() if (agent, alive) == ("sink", False) else None)
+            started = time.perf_counter()
+            child.kill()  # SIGKILL: how soon do the others know?
+            loss = time.perf_counter() - started if gone.wait(30) else float("nan")
         finally:
             child.stdin.close()
+            if child.poll() is None:
+                child.kill()
             child.wait(30)
-    return _table(rows, raw_rtt, env_rtt, count, trips)
+    return _table(rows, raw_rtt, env_rtt, count, trips) + f"\nagent process SIGKILLed -> presence loss seen after {loss * 1e3:.1f} ms"
 
 
 def _table(rows: list[tuple[str, float, float]], raw_rtt: list[float], env_rtt: list[float],
