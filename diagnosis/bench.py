@@ -144,6 +144,14 @@ def netlist_model(netlist: Netlist) -> SystemModel:
         b.add_component(gate.name)
     for gate in netlist.gates:
         b.add_observable(gate.name, "output" if gate.name in outputs else "internal")
+    readers: dict[str, list[str]] = {}
+    for gate in netlist.gates:
+        for a in set(gate.inputs):
+            readers.setdefault(a, []).append(gate.name)
+    for gate in netlist.gates:
+        b.output_of[gate.name] = gate.name
+        if len(readers.get(gate.name, ())) == 1 and gate.name not in outputs:
+            b.successor[gate.name] = readers[gate.name][0]
     for gate in netlist.gates:
         ab = b.ab(gate.name)
         y = b.atom(gate.name)

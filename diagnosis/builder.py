@@ -20,6 +20,8 @@ class ModelBuilder:
         self.observable_kinds: dict[str, str] = {}
         self.clauses: list[tuple[int, ...]] = []
         self.held: list[int] = []
+        self.successor: dict[str, str] = {}
+        self.output_of: dict[str, str] = {}
 
     def ab(self, component: str) -> int:
         return self.pool.id(("AB", component))
@@ -54,7 +56,8 @@ class ModelBuilder:
             name=self.name, source=self.source, components=tuple(self.components),
             ab_var={c: self.ab(c) for c in self.components}, observables=dict(self.observables),
             clauses=tuple(self.clauses), num_vars=self.pool.top, held=tuple(self.held), kind=self.kind,
-            observable_kinds=dict(self.observable_kinds))
+            observable_kinds=dict(self.observable_kinds), successor=dict(self.successor),
+            output_of=dict(self.output_of))
 
 
 __all__ = ["ModelBuilder", "Ab", "Atom"]

@@ -196,7 +196,7 @@ class Diagnoser:
             if not self._solve(base, deadline):
                 return  # nothing explains the observations, not even "everything is faulty"
             if self.monotone:
-                yield from self._conflict_levels(base, limit, deadline)
+                yield from self._conflict_levels(base, limit, deadline, self._dominators(observations))
                 return
             act = self._fresh()
             try:
@@ -224,7 +224,22 @@ class Diagnoser:
     def _hitting_sets(self, ubound: int) -> HittingSetSolver:
         return HittingSetSolver(self.model.num_vars + 1, ubound, self._solver_name)
 
-    def _conflict_levels(self, base: list[int], limit: int, deadline: Deadline) -> Iterator[list[str]]:
+    def _dominators(self, observations: Mapping[str, bool]) -> dict[int, set[int]]:
+        """For each component c, the components along its fanout-free chain whose fault explains
+        whatever c's fault does: the chain goes on while the signal between them is not observed."""
+        out: dict[int, set[int]] = {}
+        succ, output_of = self.model.successor, self.model.output_of
+        for c in succ:
+            chain, cur = set(), c
+            while cur in succ and output_of.get(cur) not in observations:
+                cur = succ[cur]
+                chain.add(self.model.ab_var[cur])
+            if chain:
+                out[self.model.ab_var[c]] = chain
+        return out
+
+    def _conflict_levels(self, base: list[int], limit: int, deadline: Deadline,
+                         dominators: Mapping[int, set[int]]) -> Iterator[list[str]]:
         hs = self._hitting_sets(limit)
         check = self._check(base, deadline)
         try:
@@ -233,9 +248,23 @@ class Diagnoser:
                 found: list[list[str]] = []
 
                 def record(diagnosis: list[int]) -> None:
-                    hs.block(diagnosis)
-                    known.add(frozenset(diagnosis))
-                    found.append(self._names(diagnosis))
+                    """Keep a minimal diagnosis, and every set its members' dominators make of it:
+                    those are consistent without a SAT call, and minimal unless they contain one
+                    found before (all smaller diagnoses are known once the lower levels are done)."""
+                    todo = [diagnosis]
+                    while todo:
+                        d = todo.pop()
+                        hs.block(d)
+                        known.add(frozenset(d))
+                        found.append(self._names(d))
+                        for i, c in enumerate(d):
+                            for dom in dominators.get(c, ()):
+                                swapped = sorted({*d[:i], dom, *d[i + 1:]})
+                                if len(swapped) == len(d) and not _contains_known(swapped, known):
+                                    known.add(frozenset(swapped))
+                                    todo.append(swapped)
+                            if deadline.expired():
+                                raise TimedOut
 
                 try:
                     while (candidate := next_diagnosis(hs, k, check)) is not None:
@@ -243,9 +272,10 @@ class Diagnoser:
                         if k > _SWAP_LIMIT:
                             continue
                         learned: list[set[int]] = []  # conflicts found while trying the variants
-                        for variant in hs.equivalents(candidate):  # no hitting-set search for these
+                        for combo in hs.equivalents(candidate):  # no hitting-set search for these
                             if deadline.expired():
                                 raise TimedOut
+                            variant = sorted(combo)
                             if _contains_known(variant, known) or any(c.isdisjoint(variant) for c in learned):
                                 continue
                             conflict = check(variant)

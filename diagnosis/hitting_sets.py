@@ -54,17 +54,17 @@ class HittingSetSolver:
             self._signature[v] = old | bit
             self._classes.setdefault(old | bit, []).append(v)
 
-    def equivalents(self, candidate: Sequence[int]) -> Iterator[list[int]]:
+    def equivalents(self, candidate: Sequence[int]) -> Iterator[tuple[int, ...]]:
         """Sets that hit the same conflicts as ``candidate``: each member swapped for one that is in
-        exactly the same conflicts (gates along one path often are). The candidate itself is skipped."""
+        exactly the same conflicts (gates along one path often are). Yielded aligned with the
+        candidate (position i replaces candidate[i]); the candidate itself is skipped."""
         pools = [list(self._classes[self._signature[v]]) for v in candidate]
-        own = frozenset(candidate)
-        seen = {own}
+        seen = {frozenset(candidate)}
         for combo in itertools.product(*pools):
             variant = frozenset(combo)
             if len(variant) == len(combo) and variant not in seen:
                 seen.add(variant)
-                yield sorted(variant)
+                yield combo
 
     def _add_members(self, ab_vars: Sequence[int]) -> None:
         """Count these components in the bound and report them in candidates from now on."""

@@ -29,6 +29,10 @@ class SystemModel:
     held: tuple[int, ...] = ()
     kind: str = "system"
     observable_kinds: Mapping[str, str] = field(default_factory=dict)
+    # weak-fault structure (netlists): the one component reading c's output, and c's output signal.
+    # When c's output is not observed, "successor faulty" explains whatever "c faulty" does.
+    successor: Mapping[str, str] = field(default_factory=dict)
+    output_of: Mapping[str, str] = field(default_factory=dict)
 
     def observation_literals(self, observations: Mapping[str, bool]) -> list[int]:
         """Assumption literals for an observation set; unknown names raise ``UnknownObservation``."""
