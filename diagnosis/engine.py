@@ -10,8 +10,13 @@ activation literal, retired when the query ends, so they never leak into the nex
 
 Monotone models (no negative health literal in any clause: weak fault models such as netlists and
 architecture models) take the faster route of ``hitting_sets``: the model's solver only checks fixed
-candidates and the bound lives in a small per-query hitting-set solver. Models with fault modes use the
-bound on the model's solver directly. The minimum cardinality comes from RC2 (core-guided MaxSAT).
+candidates and the bound lives in a small per-query hitting-set solver. Two shortcuts there: members
+that lie in exactly the same conflicts are swapped into each diagnosis found and checked without a
+hitting-set search; and in netlists a gate may be swapped for the gate its output alone feeds
+(fanout-free chain, signal not observed) with no check at all, since that gate's fault explains
+whatever the first one's does. Every set so obtained is minimal when it contains no diagnosis found
+before, by the level argument above. Models with fault modes use the bound on the model's solver
+directly. The minimum cardinality comes from RC2 (core-guided MaxSAT).
 
 The default solver is Glucose 4: it releases the GIL while solving (other threads of the agent keep
 running) and honours ``interrupt()``, which the time limits rely on; CaDiCaL in python-sat does neither.
