@@ -202,3 +202,24 @@ def test_stop_control_reaches_every_process_of_the_mas_only():
         assert child.process.wait(timeout=10) == 0
         assert poll(lambda: seen, timeout=5)
         assert seen == [{"command": "stop", "by": "alice"}] and unrelated == []
+
+
+def test_peers_connected_to_one_hub_find_each_other_and_outlive_it():
+    """How `mas run --processes` wires children: each connects to the launcher's endpoint only;
+    gossip gives them direct links, so they keep talking when the launcher's session is gone."""
+    mas = unique_mas()
+    hub = ZenohTransport(mas).open()
+    one = ZenohTransport(mas, ZenohOptions(connect=tuple(hub.endpoints))).open()
+    two = ZenohTransport(mas, ZenohOptions(connect=tuple(hub.endpoints))).open()
+    try:
+        bob = Inbox()
+        one.register("bob", bob)
+        two.register("carol", Inbox())
+        assert two.wait_for_agents(["bob"], timeout=10) and one.wait_for_agents(["carol"], timeout=10)
+        assert poll(lambda: one.session.info.zid() in two.session.info.peers_zid(), timeout=10)
+        hub.close()
+        assert two.send(Envelope(mas, "carol", ("bob",), "tell", "direct")) == ()
+        assert bob.get(timeout=10).content == "direct"
+    finally:
+        for transport in (one, two, hub):
+            transport.close()
