@@ -211,11 +211,8 @@ def _annots_have_vars(goal: Literal) -> bool:
 
 
 def solve_first(kb: KnowledgeBase, formula: Term, b: dict) -> bool:
-    """Find one solution, keeping its bindings in ``b``."""
-    gen = solve(kb, formula, b)
-    for _ in gen:
-        return True
-    return False
+    """Find one solution, keeping its bindings in ``b`` (compiled closures; see below)."""
+    return compiled(formula)(kb, b, [], _true_k)
 
 
 def _rel(kb: KnowledgeBase, rel: Rel, b: dict, trail: list) -> bool:
@@ -291,3 +288,106 @@ def _items(t: Term) -> list | None:
 
 __all__ = ["solve", "solve_first", "SolveError", "KnowledgeBase", "compare_equal"]
 _ = (Rule, NIL, Callable, log)
+
+
+# ---------------------------------------------------------------------- compiled formulas
+# Plan contexts and if/while/for conditions are small formulas evaluated millions of times. They
+# are compiled once into closures in continuation-passing style: ``fn(kb, b, trail, k)`` calls
+# ``k()`` for each solution (bindings in ``b``) and returns True as soon as ``k()`` does; it undoes
+# its own bindings when it fails. Literals that have rules fall back to the explicit machine above,
+# so deep rule recursion still costs no Python stack.
+
+_COMPILED: dict[int, tuple] = {}
+
+
+def _true_k() -> bool:
+    return True
+
+
+def compiled(formula: Term):
+    entry = _COMPILED.get(id(formula))
+    if entry is not None and entry[0] is formula:
+        return entry[1]
+    fn = _compile(formula)
+    _COMPILED[id(formula)] = (formula, fn)
+    return fn
+
+
+def _compile(f: Term):
+    tf = type(f)
+    if tf is And:
+        left, right = _compile(f.left), _compile(f.right)
+
+        def conj(kb, b, trail, k):
+            return left(kb, b, trail, lambda: right(kb, b, trail, k))
+        return conj
+    if tf is Or:
+        left, right = _compile(f.left), _compile(f.right)
+
+        def disj(kb, b, trail, k):
+            return left(kb, b, trail, k) or right(kb, b, trail, k)
+        return disj
+    if tf is Not:
+        inner = _compile(f.arg)
+
+        def negation(kb, b, trail, k):
+            mark = len(trail)
+            found = inner(kb, b, trail, _true_k)
+            undo(b, trail, mark)
+            return (not found) and k()
+        return negation
+    if tf is Rel:
+        def relation(kb, b, trail, k):
+            mark = len(trail)
+            try:
+                ok = _rel(kb, f, b, trail)
+            except ArithmeticError_ as exc:
+                raise SolveError("wrong_arguments", str(exc)) from None
+            if ok and k():
+                return True
+            undo(b, trail, mark)
+            return False
+        return relation
+    if tf is Literal:
+        if not f.args and not f.neg and f.annots is None:
+            if f.functor == "true":
+                return lambda kb, b, trail, k: k()
+            if f.functor == "false":
+                return lambda kb, b, trail, k: False
+        if "." in f.functor and not f.neg:
+            def internal(kb, b, trail, k):
+                mark = len(trail)
+                for _ in kb.call_internal(f, b, trail):
+                    if k():
+                        return True
+                    undo(b, trail, mark)  # the action's next solution starts from the same bindings
+                undo(b, trail, mark)
+                return False
+            return internal
+        annot_vars = f.annots is not None and _annots_have_vars(f)
+
+        def literal(kb, b, trail, k):
+            if kb.rules_for(f) or annot_vars:
+                for _ in solve(kb, f, b, trail):
+                    if k():
+                        return True
+                return False
+            for fact in kb.candidates(f, b):
+                mark = len(trail)
+                if unify(f, fact, b, trail) and k():
+                    return True
+                undo(b, trail, mark)
+            return False
+        return literal
+    # variables and anything unusual: the general machine
+    def general(kb, b, trail, k):
+        for _ in solve(kb, f, b, trail):
+            if k():
+                return True
+        return False
+    return general
+
+
+def solve_first_compiled(kb: KnowledgeBase, formula: Term, b: dict) -> bool:
+    """One solution of ``formula`` (bindings kept in ``b``), through the compiled closure."""
+    return compiled(formula)(kb, b, [], _true_k)
