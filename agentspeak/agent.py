@@ -645,7 +645,7 @@ class Agent:
         and add ``source(self)``: the literal of a goal event (Jason's prepareBodyForEvent)."""
         value = resolve(lit, b)
         if type(value) is Literal:
-            if value.args or value.annots or value.annot_tail is not None:
+            if value.annots or value.annot_tail is not None or not _simple_args(value.args):
                 vs = variables(value)
                 if vs:
                     mapping: dict = {}
@@ -669,6 +669,18 @@ class Agent:
         if self.atomic_intention is not None and not self.atomic_intention.dropped:
             seen[self.atomic_intention.id] = self.atomic_intention
         return sorted(seen.values(), key=lambda i: i.id)
+
+
+def _simple_args(args: tuple) -> bool:
+    """True when every argument is a number, a string or an atom (so the literal is ground)."""
+    for a in args:
+        ta = type(a)
+        if ta is int or ta is float or ta is str:
+            continue
+        if ta is Literal and not a.args and a.annots is None:
+            continue
+        return False
+    return True
 
 
 class _PendingGoal:

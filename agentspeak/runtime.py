@@ -118,6 +118,12 @@ class LocalRuntime:
             self._stop_at = time.monotonic() + delay
             self._cond.notify()
 
+    def wait_for_work(self, timeout: float | None) -> bool:
+        """Block until an agent is ready or a stop is requested (True), or ``timeout`` passes (False).
+        For loops that do something while the MAS is idle (e.g. publish status for a launcher)."""
+        with self._cond:
+            return self._cond.wait_for(lambda: bool(self.ready) or self._stop_at is not None, timeout)
+
     def print_line(self, name: str, text: str) -> None:
         if self.printer is not None:
             self.printer(name, text)

@@ -217,8 +217,24 @@ def solve_first(kb: KnowledgeBase, formula: Term, b: dict) -> bool:
 
 def _rel(kb: KnowledgeBase, rel: Rel, b: dict, trail: list) -> bool:
     op = rel.op
-    left = resolve(rel.left, b)
-    right = resolve(rel.right, b)
+    left = rel.left
+    if type(left) is Var:
+        left = deref(left, b)
+    if type(left) is not int and type(left) is not float:
+        left = resolve(left, b)
+    right = rel.right
+    if type(right) is Var:
+        right = deref(right, b)
+    if type(right) is not int and type(right) is not float:
+        right = resolve(right, b)
+    if (op == "<" or op == ">" or op == "<=" or op == ">=") and type(left) in _NUMS and type(right) in _NUMS:
+        if op == "<":
+            return left < right
+        if op == ">":
+            return left > right
+        if op == "<=":
+            return left <= right
+        return left >= right
     if op == "=":
         return unify(left, right, b, trail)
     if op == "==":
@@ -248,6 +264,7 @@ def compare_equal(a: Term, c: Term) -> bool:
 
 
 DEFAULT_NS = Literal("default")
+_NUMS = (int, float)
 
 
 def _univ(left: Term, right: Term, b: dict, trail: list) -> bool:

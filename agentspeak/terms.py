@@ -329,7 +329,27 @@ def resolve(t: Term, b: Bindings) -> Term:
     if tt is Literal:
         if not t.args and t.annots is None and t.annot_tail is None:
             return t
-        args = tuple([resolve(a, b) for a in t.args]) if t.args else ()
+        if t.args:
+            out = []
+            for a in t.args:  # the common argument shapes without a call
+                ta = type(a)
+                if ta is int or ta is float or ta is str:
+                    out.append(a)
+                    continue
+                if ta is Var:
+                    v = b.get(a)
+                    if v is None:
+                        out.append(a)
+                        continue
+                    tv = type(v)
+                    if tv is int or tv is float or tv is str:
+                        out.append(v)
+                        continue
+                    a = v
+                out.append(resolve(a, b))
+            args = tuple(out)
+        else:
+            args = ()
         annots = t.annots
         tail = t.annot_tail
         if annots is not None or tail is not None:

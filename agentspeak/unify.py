@@ -28,6 +28,40 @@ def undo(b: Bindings, trail: list, mark: int) -> None:
 
 
 def unify(a: Term, c: Term, b: Bindings, trail: list) -> bool:
+    if type(a) is Literal and type(c) is Literal and a.annots is None and a.annot_tail is None:
+        # fast path for the most common case: a plan trigger or a query against a belief
+        if a.functor != c.functor or a.neg != c.neg or len(a.args) != len(c.args):
+            return False
+        for x, y in zip(a.args, c.args):
+            tx = type(x)
+            if tx is Var:
+                v = b.get(x)
+                if v is None:
+                    if type(y) is Var:
+                        if not _unify_general(x, y, b, trail):
+                            return False
+                        continue
+                    b[x] = y
+                    trail.append(x)
+                    continue
+                x = v
+                tx = type(x)
+            ty = type(y)
+            if (tx is int or tx is float) and (ty is int or ty is float):
+                if x != y:
+                    return False
+                continue
+            if tx is str and ty is str:
+                if x != y:
+                    return False
+                continue
+            if not _unify_general(x, y, b, trail):
+                return False
+        return True
+    return _unify_general(a, c, b, trail)
+
+
+def _unify_general(a: Term, c: Term, b: Bindings, trail: list) -> bool:
     stack = [(a, c)]
     pop = stack.pop
     push = stack.append
