@@ -384,8 +384,25 @@ def resolve(t: Term, b: Bindings) -> Term:
             tail_value = Cons(h, tail_value)
         return tail_value
     if tt is Arith:
-        left = resolve(t.left, b)
-        right = resolve(t.right, b) if t.right is not None else None
+        left = t.left
+        if type(left) is Var:
+            left = b.get(left, left)
+        if type(left) is not int and type(left) is not float:
+            left = resolve(left, b)
+        right = t.right
+        if right is not None:
+            if type(right) is Var:
+                right = b.get(right, right)
+            if type(right) is not int and type(right) is not float:
+                right = resolve(right, b)
+            if type(left) is int and type(right) is int:  # the common case, without a call
+                op = t.op
+                if op == "+":
+                    return normalise_number(left + right)
+                if op == "-":
+                    return normalise_number(left - right)
+                if op == "*":
+                    return normalise_number(left * right)
         value = try_eval_arith(t.op, left, right)
         return value if value is not None else Arith(t.op, left, right)
     if tt is Rel:
