@@ -1,6 +1,8 @@
 """``faultmas mas run PROJECT.mas2j``, ``faultmas agent run FILE.asl`` and ``faultmas router``.
 
-In one process (the default) all agents share a ``LocalRuntime`` with an in-process mailbox.
+In one process (the default) all agents share a ``LocalRuntime`` with an in-process mailbox (no
+network: the ring benchmark stays fast). ``--processes`` runs one OS process per agent over Zenoh
+(``agents.distributed``); ``faultmas agent run`` (``agents.agent_cli``) joins one agent to a MAS.
 """
 from __future__ import annotations
 
@@ -8,6 +10,7 @@ import argparse
 import logging
 import sys
 
+from agents.agent_cli import add_agent_parser
 from agents.router import add_router_parser
 
 
@@ -20,10 +23,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--processes", action="store_true", help="one OS process per agent, over Zenoh")
     run.set_defaults(func=cmd_mas_run)
     mas.set_defaults(func=lambda args: (mas.print_help(), 2)[1])
+    add_agent_parser(sub)
     add_router_parser(sub)
 
 
-def _setup_logging() -> None:
+def setup_logging() -> None:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr)
 
 
@@ -46,8 +50,8 @@ def build_local_mas(project, printer=None):
                 raise SourceError(f"agent '{decl.name}': cannot read {decl.source}: {exc.strerror or exc}",
                                   project.file) from None
             programs[decl.source] = text
-        beliefs = _option_literals(decl.options.get("beliefs"), project.file)
-        goals = _option_literals(decl.options.get("goals"), project.file)
+        beliefs = option_literals(decl.options.get("beliefs"), project.file)
+        goals = option_literals(decl.options.get("goals"), project.file)
         for name in decl.instance_names():
             # each instance gets its own parse: plans hold per-agent labels and state
             program = parse_program(programs[decl.source], decl.source)
@@ -56,7 +60,8 @@ def build_local_mas(project, printer=None):
     return runtime
 
 
-def _option_literals(text: str | None, file: str) -> list:
+def option_literals(text: str | None, file: str) -> list:
+    """The literals of a ``beliefs=``/``goals=`` option of a project file."""
     if not text:
         return []
     from agentspeak.parser import parse_term
@@ -67,7 +72,7 @@ def _option_literals(text: str | None, file: str) -> list:
 def cmd_mas_run(args) -> int:
     from agentspeak.errors import AslSyntaxError, SourceError
     from agentspeak.mas2j import load_mas2j
-    _setup_logging()
+    setup_logging()
     try:
         project = load_mas2j(args.project)
     except OSError as exc:

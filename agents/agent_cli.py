@@ -1,0 +1,115 @@
+"""``faultmas agent run FILE.asl --name N --mas M``: one agent that joins a MAS over Zenoh.
+
+The agent runs until ``.stopMAS`` (from any process of the MAS), SIGINT/SIGTERM or ``--timeout``; it
+never stops just because it is idle (others may still talk to it). ``faultmas mas run --processes``
+starts one of these per agent, with ``--project`` (trust, initial beliefs/goals) and
+``--wait-for-peers`` (start reasoning only once every agent of the project is reachable).
+Exit code: 0 after a stop, 124 after ``--timeout``, 2 for bad input, 1 if the network cannot be joined.
+"""
+from __future__ import annotations
+
+import argparse
+import logging
+import signal
+import sys
+
+log = logging.getLogger("faultmas.agents")
+
+EXIT_TIMEOUT = 124
+
+
+def add_agent_parser(sub: argparse._SubParsersAction) -> None:
+    """Register ``faultmas agent run`` on the CLI dispatcher's sub-parsers."""
+    agent = sub.add_parser("agent", help="run one agent that joins a MAS over Zenoh")
+    agent_sub = agent.add_subparsers(dest="agent_command", metavar="ACTION")
+    run = agent_sub.add_parser("run", help="run FILE.asl as agent NAME of MAS M")
+    run.add_argument("file", metavar="FILE.asl")
+    run.add_argument("--name", required=True, help="the agent's name")
+    run.add_argument("--mas", required=True, help="the MAS to join (its namespace on the network)")
+    run.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
+                     help="a peer or router to connect to, e.g. tcp/127.0.0.1:7447 (repeatable)")
+    run.add_argument("--listen", action="append", default=None, metavar="ENDPOINT",
+                     help="endpoint to listen on (repeatable; default: a free loopback port)")
+    run.add_argument("--mode", choices=("peer", "client"), default="peer", help="Zenoh mode (default peer)")
+    run.add_argument("--config", default=None, metavar="FILE", help="Zenoh JSON5 file (TLS, access control)")
+    run.add_argument("--project", default=None, metavar="PROJECT.mas2j",
+                     help="the project file: its agents may send plans; initial beliefs/goals of NAME")
+    run.add_argument("--allow-code-from", action="append", default=[], metavar="AGENT",
+                     help="also accept tellHow (plans) from AGENT (repeatable)")
+    run.add_argument("--max-message-size", type=int, default=None, metavar="BYTES",
+                     help="drop received messages larger than this (default 256 KiB)")
+    run.add_argument("--wait-for-peers", type=float, default=0.0, metavar="S",
+                     help="with --project: wait up to S seconds until every project agent is reachable")
+    run.add_argument("--timeout", type=float, default=None, metavar="S", help="stop after S seconds")
+    run.set_defaults(func=cmd_agent_run)
+    agent.set_defaults(func=lambda args: (agent.print_help(), 2)[1])
+
+
+def cmd_agent_run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from agents.mas_cli import option_literals, setup_logging
+    from agents.transport import ZenohOptions, ZenohTransport
+    from agents.transport.envelope import DEFAULT_MAX_SIZE
+    from agents.transport.keys import check_name
+    from agents.zenoh_arch import TransportBridge
+    from agentspeak.errors import AslSyntaxError, SourceError
+    from agentspeak.mas2j import load_mas2j
+    from agentspeak.parser import parse_program
+    from agentspeak.runtime import LocalRuntime
+
+    setup_logging()
+    try:
+        check_name(args.name)
+        check_name(args.mas, "MAS name")
+        source = Path(args.file).read_text()
+        program = parse_program(source, args.file)
+        declared: list[str] = [args.name]
+        beliefs: list = []
+        goals: list = []
+        if args.project:
+            project = load_mas2j(args.project)
+            declared = project.agent_names()
+            for decl in project.agents:
+                if args.name in decl.instance_names():
+                    beliefs = option_literals(decl.options.get("beliefs"), project.file)
+                    goals = option_literals(decl.options.get("goals"), project.file)
+        options = ZenohOptions(mode=args.mode, listen=tuple(args.listen) if args.listen else None,
+                               connect=tuple(args.connect), config_file=args.config)
+    except OSError as exc:
+        print(f"{exc.filename}: cannot read: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except (AslSyntaxError, SourceError, ValueError) as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    runtime = LocalRuntime()
+    runtime.add_agent(args.name, source_file=args.file, program=program, extra_beliefs=beliefs,
+                      extra_goals=goals)
+    transport = ZenohTransport(args.mas, options, max_message_size=args.max_message_size or DEFAULT_MAX_SIZE)
+    try:
+        transport.open()
+    except Exception as exc:  # zenoh.ZError: bad endpoint, port taken
+        print(f"faultmas agent run: cannot join the network: {exc}", file=sys.stderr)
+        return 1
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: runtime.stop())
+    try:
+        bridge = TransportBridge(runtime, transport, declared=declared,
+                                 allowed_code_senders=args.allow_code_from).attach()
+        if args.wait_for_peers > 0 and not transport.wait_for_agents(declared, args.wait_for_peers):
+            missing = sorted(set(declared) - transport.alive_agents())
+            log.warning("agent %s: still missing after %.0f s: %s; starting anyway", args.name,
+                        args.wait_for_peers, ", ".join(missing))
+        why = bridge.run(timeout=args.timeout)
+        bridge.detach()
+    finally:
+        transport.close()
+        _report_drops(args.name, transport.dropped)
+    return EXIT_TIMEOUT if why == "timeout" else 0
+
+
+def _report_drops(name: str, dropped: dict) -> None:
+    """One summary line of refused messages by reason (each one was also logged when it came)."""
+    if dropped:
+        reasons = ", ".join(f"{reason}={count}" for reason, count in sorted(dropped.items()))
+        log.warning("agent %s: dropped %d messages (%s)", name, sum(dropped.values()), reasons)

@@ -1,0 +1,165 @@
+"""``faultmas mas run PROJECT.mas2j --processes``: one OS process per agent, talking over Zenoh.
+
+The launcher opens a Zenoh peer on a free loopback port (the hub: multicast off, explicit
+``tcp/127.0.0.1`` endpoints) and starts each agent as ``python -m agents agent run FILE --name N
+--mas M --connect <hub> --project PROJECT``; gossip over those links lets the children reach each
+other directly. Each child's stdout lines (``[agent] text``) are relayed in the order they are read,
+stderr likewise. The MAS ends on ``.stopMAS`` (a control message seen by every process), when every
+agent has reported idle with as many messages received as sent in two consecutive checks, or at
+``--timeout`` (which always wins). Children are then asked to stop (control message), then sent
+SIGINT, SIGTERM and SIGKILL, each after a grace period.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import IO
+
+log = logging.getLogger("faultmas.agents")
+
+#: Exit codes of ``faultmas mas run --processes``.
+EXIT_CODES = {"stopped": 0, "idle": 0, "failed": 1, "timeout": 124, "interrupted": 130}
+CHECK_INTERVAL = 0.05    # seconds between quiescence checks
+START_TIMEOUT = 60.0     # seconds the children get to become reachable
+GRACE = 2.0              # seconds between the stop steps (control, SIGINT, SIGTERM, SIGKILL)
+REPO = Path(__file__).resolve().parents[1]
+
+
+def run_processes(project, timeout: float | None = None, *, out: IO[str] | None = None,
+                  err: IO[str] | None = None) -> int:
+    """Run every agent of ``project`` (a ``MasProject``) in its own process; return the exit code
+    (0: ``.stopMAS`` or all idle, 124: ``--timeout``, 1: an agent process failed, 130: interrupted)."""
+    from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
+    from agents.transport.keys import check_name
+    from agentspeak.errors import AslSyntaxError, SourceError
+    from agentspeak.parser import parse_program
+
+    out, err = out or sys.stdout, err or sys.stderr
+    try:
+        check_name(project.name, "MAS name")
+        for decl in project.agents:  # fail early, with file and line, before any process starts
+            parse_program(Path(decl.source).read_text(), decl.source)
+    except OSError as exc:
+        print(f"{project.file}: cannot read {exc.filename}: {exc.strerror or exc}", file=err)
+        return 2
+    except (AslSyntaxError, SourceError, ValueError) as exc:
+        print(exc, file=err)
+        return 2
+    hub = ZenohTransport(project.name, ZenohOptions(listen=(loopback_endpoint(),))).open()
+    launcher = _Launcher(project, hub, out, err)
+    try:
+        launcher.start()
+        reason = launcher.wait(timeout)
+    except KeyboardInterrupt:
+        reason = "interrupted"
+    finally:
+        launcher.stop_all()
+        hub.close()
+    if reason == "failed" or (reason != "interrupted" and launcher.failures):
+        for name, code in launcher.failures:
+            print(f"faultmas mas run: agent {name} exited with code {code}", file=err)
+        return EXIT_CODES["failed"] if reason != "timeout" else EXIT_CODES["timeout"]
+    return EXIT_CODES[reason]
+
+
+class _Launcher:
+    """The children of one run, their output relays, and what the hub hears about them."""
+
+    def __init__(self, project, hub, out: IO[str], err: IO[str]) -> None:
+        self.project, self.hub, self.out, self.err = project, hub, out, err
+        self.names = project.agent_names()
+        self.children: dict[str, subprocess.Popen] = {}
+        self.relays: list[threading.Thread] = []
+        self.statuses: dict = {}
+        self.stop_requested = threading.Event()
+        self.failures: list[tuple[str, int]] = []
+        self._print_lock = threading.Lock()
+        self._stopping = False
+        hub.on_status(self._on_status)
+        hub.on_control(lambda message: self.stop_requested.set() if message.get("command") == "stop" else None)
+
+    def _on_status(self, status) -> None:
+        self.statuses[status.agent] = status
+
+    def start(self) -> None:
+        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        endpoint = self.hub.endpoints[0]
+        for decl in self.project.agents:
+            for name in decl.instance_names():
+                command = [sys.executable, "-m", "agents", "agent", "run", decl.source, "--name", name,
+                           "--mas", self.project.name, "--connect", endpoint, "--project", self.project.file,
+                           "--wait-for-peers", str(START_TIMEOUT)]
+                child = subprocess.Popen(command, cwd=REPO, env=env, text=True, stdin=subprocess.DEVNULL,
+                                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+                self.children[name] = child
+                for stream, sink in ((child.stdout, self.out), (child.stderr, self.err)):
+                    relay = threading.Thread(target=self._relay, args=(stream, sink), daemon=True)
+                    relay.start()
+                    self.relays.append(relay)
+
+    def _relay(self, stream: IO[str], sink: IO[str]) -> None:
+        for line in stream:
+            with self._print_lock:
+                sink.write(line)
+                sink.flush()
+
+    def wait(self, timeout: float | None) -> str:
+        """Block until the MAS ends; the reason ('stopped', 'idle', 'timeout' or 'failed')."""
+        from agents.transport.status import quiescent, totals
+
+        deadline = None if timeout is None else time.monotonic() + timeout
+        previous = None
+        while True:
+            if self.stop_requested.is_set():
+                return "stopped"
+            if deadline is not None and time.monotonic() >= deadline:
+                return "timeout"
+            if self._check_children():
+                return "failed"
+            statuses = [self.statuses.get(name) for name in self.names]
+            snapshot = None
+            if all(statuses) and quiescent(statuses):
+                snapshot = (totals(statuses), tuple(statuses))
+                if snapshot == previous:
+                    return "idle"
+            previous = snapshot
+            wait = CHECK_INTERVAL if deadline is None else max(0.0, min(CHECK_INTERVAL, deadline - time.monotonic()))
+            self.stop_requested.wait(wait)
+
+    def _check_children(self) -> bool:
+        """Record children that ended on their own; True when none is left running."""
+        for name, child in self.children.items():
+            code = child.poll()
+            if code is not None and code != 0 and (name, code) not in self.failures:
+                self.failures.append((name, code))
+        return all(child.poll() is not None for child in self.children.values())
+
+    def stop_all(self) -> None:
+        """Ask every child to stop, then insist: control message, SIGINT, SIGTERM, SIGKILL."""
+        running = [c for c in self.children.values() if c.poll() is None]
+        if running:
+            self.hub.publish_control("stop", by="launcher", delay=0.0)
+        for signum in (None, signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
+            running = [c for c in running if c.poll() is None]
+            if not running:
+                break
+            for child in running:
+                if signum is not None:
+                    try:
+                        child.send_signal(signum)
+                    except ProcessLookupError:
+                        pass
+            deadline = time.monotonic() + GRACE
+            for child in running:
+                try:
+                    child.wait(max(0.0, deadline - time.monotonic()))
+                except subprocess.TimeoutExpired:
+                    pass
+        for relay in self.relays:
+            relay.join(5.0)

@@ -1,0 +1,194 @@
+"""Puts the agents of a ``LocalRuntime`` on a ``Transport`` (Zenoh, or the in-memory one in tests).
+
+Outgoing: a ``Message`` to an agent that is not in this process becomes one ``Envelope`` whose content
+is the AgentSpeak text of the term (``to_str``) and whose id / ``in_reply_to`` are the message's own,
+so answers find the asking intention. Incoming: the envelope's content is parsed with the
+interpreter's parser and the ``Message`` goes to ``agent.deliver``. A message that cannot be used
+(unparsable content, plans from an untrusted sender) is dropped with one log line naming sender and
+reason and counted, through the transport's ``report_drop`` (the transport already drops what does
+not decode, is too large, names an unknown performative or comes from another MAS).
+
+Presence becomes percepts: ``agent_alive(Name)`` is added when agent ``Name`` of the MAS appears on
+the network and removed when it goes (its process exits, is killed, or its link lease expires), so
+``+agent_alive(N)`` / ``-agent_alive(N)`` plans fire. An agent does not perceive itself.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from functools import partial
+from typing import Iterable
+
+from agents.transport.base import Transport
+from agents.transport.envelope import BadMessage, Envelope
+from agents.transport.trust import CODE_PERFORMATIVES, TrustPolicy
+from agentspeak.agent import Agent
+from agentspeak.beliefs import SOURCE_PERCEPT
+from agentspeak.communication import Message
+from agentspeak.errors import FaultmasError
+from agentspeak.parser import parse_term
+from agentspeak.program import ADD, BEL, DEL, Trigger
+from agentspeak.runtime import LocalArch, LocalRuntime
+from agentspeak.terms import Literal, to_str
+
+log = logging.getLogger("faultmas.agents")
+
+PRESENCE_FUNCTOR = "agent_alive"
+"""The percept ``agent_alive(Name)``: agent ``Name`` of this MAS is reachable right now."""
+
+IDLE_GRACE = 0.01
+"""Seconds the runtime must stay idle before 'idle' is published (a busy ring publishes nothing)."""
+
+
+class NetworkArch(LocalArch):
+    """``LocalArch`` whose MAS extends beyond this process: names, stop and trust come from the bridge."""
+
+    def __init__(self, runtime: LocalRuntime, bridge: "TransportBridge") -> None:
+        super().__init__(runtime)
+        self.bridge = bridge
+
+    def all_names(self, agent: Agent) -> list[str]:
+        return self.bridge.all_names()
+
+    def stop_mas(self, agent: Agent, delay: float = 0.0) -> None:
+        self.bridge.stop_mas(agent.name, delay)
+
+    def accepts_plans_from(self, agent: Agent, sender: str) -> bool:
+        return self.bridge.may_tell_how(sender)
+
+
+class TransportBridge:
+    """Connects every agent of ``runtime`` to ``transport``; ``attach`` once the agents are added.
+
+    ``declared``: the agents of the project file (trusted to send plans, part of ``.all_names``);
+    ``allowed_code_senders``: other agents the project allows to send plans.
+    """
+
+    def __init__(self, runtime: LocalRuntime, transport: Transport, *, declared: Iterable[str] = (),
+                 allowed_code_senders: Iterable[str] = ()) -> None:
+        self.runtime = runtime
+        self.transport = transport
+        self.mas = transport.mas
+        self.policy = TrustPolicy(transport.mas, frozenset(declared), frozenset(allowed_code_senders))
+        self.published_idle: bool | None = None
+        self._attached = False
+
+    # -- set-up --------------------------------------------------------------------------------
+    def attach(self) -> "TransportBridge":
+        """Register the runtime's agents on the transport (announcing them) and route remote sends."""
+        if self._attached:
+            return self
+        self.runtime.remote = self.send_remote
+        self.transport.on_control(self._on_control)
+        for agent in self.runtime.agents.values():
+            agent.arch = NetworkArch(self.runtime, self)
+            self.transport.register(agent.name, partial(self._on_envelope, agent))
+        self.transport.on_presence(self._on_presence)
+        self._attached = True
+        return self
+
+    def detach(self) -> None:
+        """Withdraw the agents from the network (others see ``-agent_alive``)."""
+        for name in self.runtime.agents:
+            self.transport.unregister(name)
+        self.runtime.remote = None
+        self._attached = False
+
+    # -- names and trust -----------------------------------------------------------------------
+    def all_names(self) -> list[str]:
+        """Agents of the project, agents of this process and every agent seen alive on the network."""
+        names = set(self.policy.declared_agents) | set(self.runtime.agents) | self.transport.alive_agents()
+        return sorted(names)
+
+    def may_tell_how(self, sender: str) -> bool:
+        return sender in self.runtime.agents or self.policy.may_tell_how(sender)
+
+    # -- outgoing ------------------------------------------------------------------------------
+    def send_remote(self, message: Message) -> bool:
+        """``LocalRuntime.remote``: send a message for an agent outside this process; False if unreachable."""
+        try:
+            envelope = Envelope(self.mas, message.sender, (message.receiver,), message.performative,
+                                to_str(message.content), in_reply_to=message.in_reply_to,
+                                message_id=message.msg_id)
+        except BadMessage as bad:
+            log.warning("[%s] cannot send %s to %s: %s", message.sender, message.performative,
+                        message.receiver, bad)
+            return True  # reported here; not an unknown receiver
+        return not self.transport.send(envelope)
+
+    def stop_mas(self, by: str, delay: float = 0.0) -> None:
+        """``.stopMAS``: every process of the MAS (this one too) stops after ``delay`` seconds."""
+        self.transport.publish_control("stop", by=by, delay=delay)
+        self.runtime.stop(delay)
+
+    # -- incoming (network threads: never block, never raise) ---------------------------------
+    def _on_envelope(self, agent: Agent, envelope: Envelope) -> None:
+        if envelope.performative in CODE_PERFORMATIVES and not self.may_tell_how(envelope.sender) \
+                and envelope.in_reply_to not in agent.pending_asks:  # an askHow answer is not refused
+            self._refuse(agent, envelope, "untrusted_code", "plans only from agents declared in the project")
+            return
+        check = self.policy.extra_check
+        if check is not None and not check(envelope):
+            self._refuse(agent, envelope, "refused_by_policy")
+            return
+        try:
+            content = parse_term(envelope.content)
+        except (FaultmasError, ValueError, RecursionError) as exc:
+            detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            self._refuse(agent, envelope, "unparsable_content", detail[:100])
+            return
+        agent.deliver(Message(envelope.sender, agent.name, envelope.performative, content,
+                              msg_id=envelope.message_id, in_reply_to=envelope.in_reply_to))
+
+    def _refuse(self, agent: Agent, envelope: Envelope, reason: str, detail: str = "") -> None:
+        agent.count_dropped(reason)
+        self.transport.report_drop(envelope, agent.name, reason, detail)
+
+    def _on_presence(self, name: str, alive: bool) -> None:
+        for agent in list(self.runtime.agents.values()):
+            if agent.name != name:
+                agent.post_feedback(partial(_presence_percept, agent, name, alive))
+
+    def _on_control(self, message: dict) -> None:
+        if message.get("command") == "stop":
+            delay = message.get("delay", 0.0)
+            self.runtime.stop(float(delay) if isinstance(delay, (int, float)) else 0.0)
+
+    # -- status and the run loop ---------------------------------------------------------------
+    def publish_status(self, busy: bool) -> None:
+        """Publish every local agent as idle or busy with its message counters (for launchers)."""
+        self.published_idle = not busy
+        for name in self.runtime.agents:
+            self.transport.publish_status(name, busy)
+
+    def run(self, timeout: float | None = None) -> str:
+        """Run the runtime until ``.stopMAS`` (any process) or ``timeout``: 'stopped' or 'timeout'.
+        Never stops on idle (other processes may still send): publishes idle/busy instead."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        runtime = self.runtime
+        self.publish_status(busy=True)
+        while True:
+            remaining = None if deadline is None else max(0.0, deadline - time.monotonic())
+            why = runtime.run(timeout=remaining, stop_when_idle=True)
+            if why != "idle":
+                return why
+            if not self.published_idle and not runtime.wait_for_work(IDLE_GRACE):
+                self.publish_status(busy=False)
+            remaining = None if deadline is None else max(0.0, deadline - time.monotonic())
+            if remaining == 0.0:
+                return "timeout"
+            if runtime.wait_for_work(0.5 if remaining is None else min(remaining, 0.5)) and self.published_idle:
+                self.publish_status(busy=True)
+
+
+def _presence_percept(agent: Agent, name: str, alive: bool) -> None:
+    """Add or remove the percept ``agent_alive(name)`` (in the agent's own thread)."""
+    percept = Literal(PRESENCE_FUNCTOR, (Literal(name),), (SOURCE_PERCEPT,))
+    if alive:
+        added = agent.bb.add(percept)
+        if added is not None:
+            agent.post_external(Trigger(ADD, BEL, added))
+    else:
+        removed = agent.bb.remove(percept)
+        if removed is not None:
+            agent.post_external(Trigger(DEL, BEL, removed))
