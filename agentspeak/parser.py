@@ -63,6 +63,7 @@ class _ToProgram(Transformer):
         self.vars: dict[str, Var] = {}
         self.line = 0
         self.warnings: list[str] = []
+        self.prefix_nots: set[int] = set()
 
     # -- helpers -----------------------------------------------------------------------------
     def _var(self, name: str) -> Var:
@@ -246,29 +247,34 @@ class _ToProgram(Transformer):
         return PlanTerm(rule=Rule(c[0], c[1], self.source_file, self.line))
 
     # -- expressions -------------------------------------------------------------------------------
+    def prefixed(self, c):
+        tok, inner = c
+        kind = tok.type
+        if kind == "NOT":
+            node = Not(inner)
+            self.prefix_nots.add(id(node))
+            return node
+        if kind == "PLUS":
+            return inner
+        if type(inner) in (int, float):
+            return -inner
+        return Arith("-", inner)
+
     def expr(self, c):
+        """Precedence climbing over ``operand (operator operand)*``."""
         pos = [0]
+        prefix_nots = self.prefix_nots
 
-        def operand():
-            tok = c[pos[0]]
-            if isinstance(tok, Token) and tok.type in _PREFIX_TYPES:
+        def climb(min_prec, left=None):
+            if left is None:
+                left = c[pos[0]]
                 pos[0] += 1
-                if tok.type == "NOT":
-                    return Not(climb(_PREFIX_NOT_PREC))
-                inner = climb(8)
-                if tok.type == "PLUS":
-                    return inner
-                if type(inner) in (int, float):
-                    return -inner
-                return Arith("-", inner)
-            pos[0] += 1
-            return tok
-
-        def climb(min_prec):
-            left = operand()
+                if type(left) is Not and id(left) in prefix_nots and min_prec <= _PREFIX_NOT_PREC:
+                    # `not X > 3` is `not (X > 3)`: `not` binds looser than relational operators
+                    prefix_nots.discard(id(left))
+                    left = Not(climb(_PREFIX_NOT_PREC + 1, left.arg))
             while pos[0] < len(c):
-                tok = c[pos[0]]
-                op = str(tok)
+                op = c[pos[0]].value
                 prec, right_assoc = _INFIX[op]
                 if prec < min_prec:
                     break
@@ -287,7 +293,7 @@ class _ToProgram(Transformer):
         return c[0]
 
     def number(self, c):
-        text = str(c[0])
+        text = c[0].value
         if "." in text or "e" in text or "E" in text:
             value = float(text)
             return int(value) if value.is_integer() and abs(value) < 2 ** 53 else value
@@ -295,7 +301,7 @@ class _ToProgram(Transformer):
 
     def string(self, c):
         # Jason's lexer unescapes only \n and \" (other escapes stay as written)
-        return str(c[0])[1:-1].replace("\\n", "\n").replace('\\"', '"')
+        return c[0].value[1:-1].replace("\\n", "\n").replace('\\"', '"')
 
     # -- literals and terms ---------------------------------------------------------------------
     def literal(self, c):
@@ -307,7 +313,7 @@ class _ToProgram(Transformer):
 
     def var_literal(self, c):
         tok, annots = c
-        v = self._var(str(tok))
+        v = self._var(tok.value)
         if annots is not None and (annots[0] or annots[1] is not None):
             return AnnotatedVar(v, annots[0], annots[1])
         return v
@@ -323,7 +329,7 @@ class _ToProgram(Transformer):
     def functor(self, c):
         tok = c[0]
         self.line = tok.line
-        text = str(tok)
+        text = tok.value
         if tok.type == "QATOM":
             return text[1:-1]
         return text
@@ -341,16 +347,21 @@ class _ToProgram(Transformer):
         tail = None
         it = iter(c)
         for x in it:
-            if isinstance(x, Token) and x.type == "BAR":
+            if _is_token(x) and x.type == "BAR":
                 t = next(it)
-                if isinstance(t, Token):
-                    tail = self._var(str(t))
+                if _is_token(t):
+                    tail = self._var(t.value)
                 else:
                     tail = t
                 break
             if x is not None:
                 items.append(x)
         return items, tail
+
+
+def _is_token(x) -> bool:
+    """A lexer token (Lark's, or lark_cython's, which is not a ``lark.Token``)."""
+    return type(x) is Token or (hasattr(x, "type") and hasattr(x, "value") and not isinstance(x, (Literal, Var)))
 
 
 def trigger_line(trigger: Trigger, t: _ToProgram) -> int:
@@ -454,6 +465,18 @@ _TRANSFORMER = _ToProgram("<none>")
 _INLINE_PARSER: Lark | None = None
 
 
+def _speedups() -> dict:
+    """lark_cython (Lark's LALR parser and lexer compiled with Cython) when installed: ~1.5x faster.
+
+    Same grammar, same tokens (plus ``.value``/``.type``/``.line`` as Lark's); pure Lark otherwise.
+    """
+    try:
+        import lark_cython
+    except ImportError:
+        return {}
+    return {"_plugins": lark_cython.plugins}
+
+
 def _parse_items(text: str, source_file: str) -> list:
     """Parse with the transformer called during parsing (LALR: no tree is built, which is faster).
 
@@ -463,9 +486,10 @@ def _parse_items(text: str, source_file: str) -> list:
     with _PARSE_LOCK:
         if _INLINE_PARSER is None:
             _INLINE_PARSER = Lark(_GRAMMAR.read_text(), parser="lalr", lexer="contextual",
-                                  maybe_placeholders=True, transformer=_TRANSFORMER)
+                                  maybe_placeholders=True, transformer=_TRANSFORMER, **_speedups())
         t = _TRANSFORMER
         t.source_file, t.vars, t.line, t.trigger_line = source_file, {}, 0, 0
+        t.prefix_nots = set()
         try:
             return _INLINE_PARSER.parse(text)
         except _BadInput as exc:
