@@ -12,6 +12,7 @@ costs a few milliseconds instead of hundreds of thousands of fresh Gaussian draw
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Sequence
@@ -197,32 +198,46 @@ class _Prism:
 
 
 class _Renderer:
-    """Per-camera constants and noise banks; one instance per rig (cached)."""
+    """Per-camera constants, noise banks and scratch buffers; one instance per rig (cached).
+
+    Banks are drawn once; a frame picks a random offset into them, so per-frame noise costs a slice
+    instead of fresh Gaussian draws. Scratch buffers are per thread (worlds may render in parallel).
+    """
 
     def __init__(self, rig: CameraRig, sensor: DepthSensor, seed: int = 12345) -> None:
+        import cv2
+
         cam = rig.camera
         self.rig, self.cam, self.sensor = rig, cam, sensor
         h, w = cam.height, cam.width
         self.tan_u = ((np.arange(w) - cam.cx) / cam.fx).astype(np.float32)          # x / z per column
+        self.tan_u64 = (np.arange(w) - cam.cx) / cam.fx
         self.k_v = ((np.arange(h) - cam.cy) / cam.fy).astype(np.float32)            # (down) / z per row
+        self.inv_k = (1.0 / ((np.arange(h) - cam.cy) / cam.fy))                      # cy is never a row
         with np.errstate(divide="ignore"):
             floor = np.where(self.k_v > 0, rig.height_m / self.k_v, np.inf)
         self.floor_z = floor.astype(np.float32)[:, None]
+        self.floor_z_image = np.ascontiguousarray(np.broadcast_to(self.floor_z, (h, w)))
         self.k_v32 = self.k_v.astype(np.float32)[:, None]
+        self.rows = np.arange(h, dtype=np.int16)[:, None]
         # floor shading per row: a little darker far away
         self.floor_shade = np.clip(0.72 + 0.28 * np.exp(-np.nan_to_num(floor, posinf=50) / 6), 0, 1)[:, None]
+        self.half_fov = math.atan((max(cam.cx, w - 1 - cam.cx) + 1) / cam.fx)
         rng = np.random.default_rng(seed)
         extra = 64
-        import cv2
         white = rng.standard_normal((h + extra, w + extra)).astype(np.float32)
         if sensor.noise_blur_px > 0:
             white = cv2.GaussianBlur(white, (0, 0), sensor.noise_blur_px)
             white /= white.std()
-        self.disparity_bank = white * np.float32(sensor.disparity_noise_px * sensor.subpixel)
-        self.keep_bank = np.where(rng.random((h + extra, w + extra)) < sensor.dropout, 0, 255).astype(np.uint8)
+        bank = white * np.float32(sensor.disparity_noise_px * sensor.subpixel)
+        # dropouts ride in the same bank: a hugely negative disparity is an invalid reading
+        bank[rng.random((h + extra, w + extra)) < sensor.dropout] = np.float32(-1e9)
+        self.disparity_bank = bank.ravel()          # a frame takes h * w values from a random offset
         colour = rng.normal(0.0, 1.0, (h + extra, w, 3)).astype(np.float32)
         self.colour_bank_unit = colour
         self._colour_cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+        self._floor_cache: dict[tuple, np.ndarray] = {}
+        self._local = threading.local()
         self.extra = extra
 
     def colour_noise(self, sigma: float) -> tuple[np.ndarray, np.ndarray]:
@@ -231,6 +246,27 @@ class _Renderer:
             n = np.rint(self.colour_bank_unit * sigma)
             self._colour_cache[sigma] = (np.clip(n, 0, 255).astype(np.uint8), np.clip(-n, 0, 255).astype(np.uint8))
         return self._colour_cache[sigma]
+
+    def floor_image(self, floor_rgb: RGB, backdrop_rgb: RGB, gain: float) -> np.ndarray:
+        """Packed colours of the floor (shaded per row) below the horizon and the backdrop above it."""
+        key = (floor_rgb, backdrop_rgb, gain)
+        img = self._floor_cache.get(key)
+        if img is None:
+            floor_row = np.where(self.k_v > 0, 1.0, 0.0)[:, None]
+            row_rgb = floor_row * np.asarray(floor_rgb) * self.floor_shade + (1 - floor_row) * np.asarray(backdrop_rgb)
+            img = np.ascontiguousarray(np.broadcast_to(_pack(row_rgb * gain)[:, None], (self.cam.height, self.cam.width)))
+            if len(self._floor_cache) >= 8:           # scenes with ever new lighting must not pile up
+                self._floor_cache.clear()
+            self._floor_cache[key] = img
+        return img
+
+    def scratch(self) -> tuple[np.ndarray, np.ndarray]:
+        """This thread's packed-colour and depth buffers (re-used frame after frame)."""
+        bufs = getattr(self._local, "bufs", None)
+        if bufs is None:
+            h, w = self.cam.height, self.cam.width
+            bufs = self._local.bufs = (np.empty((h, w), np.uint32), np.empty((h, w), np.float32))
+        return bufs
 
 
 @lru_cache(maxsize=32)
@@ -250,7 +286,7 @@ def render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sce
 
     Returns ``(rgb, depth)``: H x W x 3 uint8 in RGB order, H x W float32 metres (0 = no reading).
     """
-    rgb, depth, _ = render_with_pixels(rig, camera_pose, robots, scene, rng)
+    rgb, depth, _ = _render(rig, camera_pose, robots, scene, rng, count=False)
     return rgb, depth
 
 
@@ -258,6 +294,12 @@ def render_with_pixels(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose]
                        rng: np.random.Generator | None = None
                        ) -> tuple[np.ndarray, np.ndarray, list[MarkerPixels]]:
     """Like ``render``, plus each robot's visible and unoccluded marker pixel counts (ground truth)."""
+    return _render(rig, camera_pose, robots, scene, rng, count=True)
+
+
+def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Scene,
+            rng: np.random.Generator | None, count: bool
+            ) -> tuple[np.ndarray, np.ndarray, list[MarkerPixels]]:
     import cv2
 
     rng = rng if rng is not None else np.random.default_rng()
@@ -265,27 +307,30 @@ def render_with_pixels(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose]
     cam = r.cam
     h, w = cam.height, cam.width
     hc = rig.height_m
-
     gain = float(scene.gain)
-    # walls: depth per column; the background (floor rows, wall columns, backdrop) composited as
-    # packed 0xXXBBGGRR uint32 pixels, which numpy and OpenCV move far faster than 3-channel bytes
+    packed, depth = r.scratch()
+
+    # background: per column the backdrop above the wall's top, the wall, then the floor below the
+    # wall-floor line; the wall is a column band, floor and backdrop depend on the row only
     wall_z, wall_idx = _wall_depths(r, camera_pose, scene.walls)
     wall_top = np.array([wl.height_m for wl in scene.walls] + [0.0])[wall_idx]
-    wz32 = wall_z.astype(np.float32)[None, :]
-    kz = r.k_v32 * wz32                                                    # (hc - height) at the wall
-    is_wall = ((kz <= hc) & (kz >= (hc - wall_top).astype(np.float32)[None, :])).view(np.uint8)
-    floor_row = np.where(r.k_v > 0, 1.0, 0.0)[:, None]
-    row_rgb = (floor_row * np.asarray(scene.floor_rgb) * r.floor_shade
-               + (1 - floor_row) * np.asarray(scene.backdrop_rgb))
-    packed = np.repeat(_pack(row_rgb * gain)[:, None], w, axis=1)
-    cv2.copyTo(np.tile(_pack(_wall_colours(r, camera_pose, scene.walls, wall_idx, wall_z) * gain)[None, :],
-                       (h, 1)).view(np.uint8).reshape(h, w, 4), is_wall, packed.view(np.uint8).reshape(h, w, 4))
-    depth = np.repeat(r.floor_z, w, axis=1)
-    cv2.copyTo(np.repeat(wz32, h, axis=0), is_wall, depth)
+    with np.errstate(invalid="ignore"):
+        v_top = np.ceil(cam.cy + cam.fy * (hc - wall_top) / wall_z)
+        v_bottom = np.floor(cam.cy + cam.fy * hc / wall_z) + 1
+    no_wall = ~np.isfinite(wall_z)
+    v_top = np.clip(np.where(no_wall, h, v_top), 0, h).astype(np.int16)
+    v_bottom = np.clip(np.where(no_wall, h, v_bottom), 0, h).astype(np.int16)
+    not_wall = ((r.rows < v_top) | (r.rows >= v_bottom)).view(np.uint8)
+    wall_packed = _pack(_wall_colours(r, camera_pose, scene.walls, wall_idx, wall_z).astype(np.float64) * gain)
+    np.copyto(packed, wall_packed[None, :])
+    cv2.copyTo(r.floor_image(scene.floor_rgb, scene.backdrop_rgb, gain).view(np.int32), not_wall,
+               packed.view(np.int32))
+    np.copyto(depth, wall_z.astype(np.float32)[None, :])
+    cv2.copyTo(r.floor_z_image, not_wall, depth)
 
     # objects: robots (body + markers) and props, with a depth test per pixel
-    prisms, n_labels = _prisms(rig, camera_pose, robots, scene)
-    labels = np.zeros((h, w), np.int16) if n_labels else None
+    prisms, n_labels = _prisms(r, camera_pose, robots, scene, count)
+    labels = np.zeros((h, w), np.int16) if count and n_labels else None
     full = np.zeros(n_labels + 1, np.int64)
     shadows: list[tuple[int, int, int, float]] = []
     bands: dict[int, tuple[int, int, int, int]] = {}
@@ -296,19 +341,21 @@ def render_with_pixels(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose]
     if scene.rgb_noise > 0:
         pos, neg = r.colour_noise(float(scene.rgb_noise))
         off = int(rng.integers(0, r.extra))
-        image = cv2.subtract(cv2.add(image, pos[off:off + h]), neg[off:off + h])
+        cv2.add(image, pos[off:off + h], dst=image)
+        cv2.subtract(image, neg[off:off + h], dst=image)
 
     noisy = _depth_noise(r, depth, shadows, rng)
-    visible = np.zeros(n_labels + 1, np.int64)
-    for label, (v0, v1, u0, u1) in bands.items():
-        visible[label] = int(np.count_nonzero(labels[v0:v1, u0:u1] == label))
-    pixels = []
-    for i, robot in enumerate(robots):
-        view = true_view(rig, camera_pose, robot)
-        inside = [z > 0 and -0.5 <= u <= w - 0.5 for u, z in ((view.front_u, view.front_xz[1]),
-                                                               (view.rear_u, view.rear_xz[1]))]
-        pixels.append(MarkerPixels(int(visible[1 + 2 * i]), int(full[1 + 2 * i]), int(visible[2 + 2 * i]),
-                                   int(full[2 + 2 * i]), inside[0], inside[1]))
+    pixels: list[MarkerPixels] = []
+    if count:
+        visible = np.zeros(n_labels + 1, np.int64)
+        for label, (v0, v1, u0, u1) in bands.items():
+            visible[label] = int(np.count_nonzero(labels[v0:v1, u0:u1] == label))
+        for i, robot in enumerate(robots):
+            view = true_view(rig, camera_pose, robot)
+            inside = [z > 0 and -0.5 <= u <= w - 0.5 for u, z in ((view.front_u, view.front_xz[1]),
+                                                                   (view.rear_u, view.rear_xz[1]))]
+            pixels.append(MarkerPixels(int(visible[1 + 2 * i]), int(full[1 + 2 * i]), int(visible[2 + 2 * i]),
+                                       int(full[2 + 2 * i]), inside[0], inside[1]))
     return image, noisy, pixels
 
 
@@ -356,15 +403,30 @@ def _wall_colours(r: _Renderer, pose: Pose, walls: Sequence[Wall], idx: np.ndarr
     return np.clip(base * shade[:, None], 0, 255).astype(np.uint8)
 
 
-def _prisms(rig: CameraRig, pose: Pose, robots: Sequence[Pose], scene: Scene) -> tuple[list[_Prism], int]:
+def _prisms(r: _Renderer, pose: Pose, robots: Sequence[Pose], scene: Scene,
+            count: bool) -> tuple[list[_Prism], int]:
+    """The prisms to draw, robots outside the field of view left out (unless counting their pixels)."""
+    rig = r.rig
     look = scene.robot_look
     out: list[_Prism] = []
-    cyaw = pose[2]
+    cx, cy, cyaw = pose
+    cc, cs = math.cos(cyaw), math.sin(cyaw)
+    reach = max(look.body_radius_m, abs(markers.FRONT_OFFSET_M) + markers.CYLINDER_RADIUS_M,
+                abs(markers.REAR_OFFSET_M) + markers.CYLINDER_RADIUS_M)
+    sin_fov, cos_fov = math.sin(r.half_fov), math.cos(r.half_fov)
 
     def add_circle(x, y, radius, bottom, top, rgb, label=0):
-        out.append(_Prism("circle", to_camera(rig, pose, x, y), radius, (0, 0), (0, 0), bottom, top, rgb, label))
+        dx, dy = x - cx, y - cy
+        out.append(_Prism("circle", (cs * dx - cc * dy, cc * dx + cs * dy), radius, (0, 0), (0, 0), bottom, top,
+                          rgb, label))
 
     for i, (x, y, yaw) in enumerate(robots):
+        dx, dy = x - cx, y - cy
+        xr, zf = cs * dx - cc * dy, cc * dx + cs * dy
+        # the robot's bounding circle is behind the camera or beyond either edge of the view
+        if zf < _NEAR_M - reach or (-abs(xr) * cos_fov + zf * sin_fov) < -reach:
+            if not count:
+                continue
         add_circle(x, y, look.body_radius_m, 0.0, look.body_top_m, look.body_rgb)
         c, s = math.cos(yaw), math.sin(yaw)
         for off, rgb, label in ((markers.FRONT_OFFSET_M, look.front_rgb, 1 + 2 * i),
@@ -402,16 +464,19 @@ def _entry_exit(r: _Renderer, p: _Prism) -> tuple[int, int, np.ndarray, np.ndarr
     u1 = min(cam.width, int(math.ceil(cam.fx * math.tan(min(hi, 1.5)) + cam.cx)) + 1)
     if u1 <= u0:
         return None
-    tau = r.tan_u[u0:u1]
+    tau = r.tan_u64[u0:u1]
     if p.footprint == "circle":
+        # ray z * (tau, 1) meets the circle: a z^2 - 2 b z + c = 0
         a = 1.0 + tau * tau
-        b = -2.0 * (xc * tau + zc)
-        c = xc * xc + zc * zc - p.radius * p.radius
-        disc = b * b - 4 * a * c
+        b = xc * tau + zc
+        disc = b * b - a * (xc * xc + zc * zc - p.radius * p.radius)
         ok = disc >= 0
-        sq = np.sqrt(np.where(ok, disc, 0.0))
-        t1 = np.where(ok, (-b - sq) / (2 * a), np.inf)
-        t2 = np.where(ok, (-b + sq) / (2 * a), -np.inf)
+        sq = np.sqrt(np.maximum(disc, 0.0))
+        t1 = (b - sq) / a
+        t2 = (b + sq) / a
+        if not ok.all():
+            t1[~ok] = np.inf
+            t2[~ok] = -np.inf
     else:
         ax, az = p.axis                   # length axis; width axis is its perpendicular
         bx, bz = az, -ax
@@ -433,19 +498,39 @@ def _entry_exit(r: _Renderer, p: _Prism) -> tuple[int, int, np.ndarray, np.ndarr
         bad = t1 > t2
         t1 = np.where(bad, np.inf, t1)
         t2 = np.where(bad, -np.inf, t2)
-    return u0, u1, t1.astype(np.float32), t2.astype(np.float32)
+    return u0, u1, t1, t2
+
+
+_SHADE_LEVELS = 256
+
+
+@lru_cache(maxsize=256)
+def _face_palette(rgb: RGB, gain: float) -> np.ndarray:
+    """Packed colours of a lit vertical face for view-angle cosines 0..1 in 256 steps."""
+    cosv = np.linspace(0.0, 1.0, _SHADE_LEVELS)
+    return _pack((0.62 + 0.38 * cosv)[:, None] * np.asarray(rgb) * gain)
+
+
+@lru_cache(maxsize=256)
+def _cap_colour(rgb: RGB, factor: float) -> np.uint32:
+    return np.uint32(_pack(np.asarray(rgb) * factor))
 
 
 def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, labels: np.ndarray | None,
                 full: np.ndarray, shadows: list, gain: float, bands: dict) -> None:
     """Z-buffer one prism into the depth and packed-colour images (only its band of columns and rows)."""
+    import cv2
+
     span = _entry_exit(r, p)
     if span is None:
         return
     u0, u1, t1, t2 = span
-    hit_cols = np.isfinite(t1) & (t1 > _NEAR_M)
-    if not hit_cols.any():
-        return
+    hit_cols = (t1 > _NEAR_M) & (t1 < np.inf)
+    if not hit_cols.all():
+        if not hit_cols.any():
+            return
+        first, last = int(np.argmax(hit_cols)), len(hit_cols) - int(np.argmax(hit_cols[::-1]))
+        u0, u1, t1, t2, hit_cols = u0 + first, u0 + last, t1[first:last], t2[first:last], hit_cols[first:last]
     cam, hc = r.cam, r.rig.height_m
     zmin = float(t1[hit_cols].min())
     zmax = float(t2[hit_cols].max())
@@ -455,65 +540,66 @@ def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, l
     v1 = min(cam.height, int(math.ceil(max(ks) * cam.fy + cam.cy)) + 1)
     if v1 <= v0:
         return
-    k = r.k_v[v0:v1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        qa, qb = a / k, b / k
-    pos, neg = k > 0, k < 0
-    inside0 = (a <= 0) & (0 <= b)
-    lo = np.where(pos, qa, np.where(neg, qb, -np.inf if inside0 else np.inf)).astype(np.float32)[:, None]
-    hi = np.where(pos, qb, np.where(neg, qa, np.inf if inside0 else -np.inf)).astype(np.float32)[:, None]
-    t1c, t2c = t1[None, :], t2[None, :]
+    inv_k = r.inv_k[v0:v1]
+    qa, qb = a * inv_k, b * inv_k             # k > 0: qa <= z <= qb; k < 0: qb <= z <= qa
+    lo = np.minimum(qa, qb).astype(np.float32)[:, None]
+    hi = np.maximum(qa, qb).astype(np.float32)[:, None]
+    t1c, t2c = t1.astype(np.float32)[None, :], t2.astype(np.float32)[None, :]
     zhit = np.maximum(t1c, lo)
     hit = zhit <= np.minimum(t2c, hi)
     if p.label:
         full[p.label] += int(np.count_nonzero(hit))
         bands[p.label] = (v0, v1, u0, u1)
     region = depth[v0:v1, u0:u1]
-    closer = (zhit < region) & hit
+    closer = zhit < region
+    closer &= hit
     if not closer.any():
         return
-    face = t1c >= lo
     # shading: vertical faces by the angle between normal and view ray, caps flat
-    tau = r.tan_u[u0:u1]
+    tau = r.tan_u64[u0:u1]
+    t1f = np.where(hit_cols, t1, 0.0)
     if p.footprint == "circle":
-        t1f = np.where(np.isfinite(t1), t1, 0.0)
-        xh, zh = t1f * tau, t1f
-        nx, nz = (xh - p.cam_xz[0]) / p.radius, (zh - p.cam_xz[1]) / p.radius
+        nx, nz = (t1f * tau - p.cam_xz[0]) / p.radius, (t1f - p.cam_xz[1]) / p.radius
     else:
         ax, az = p.axis
         bx, bz = az, -ax
-        t1f = np.where(np.isfinite(t1), t1, 0.0)
         xh, zh = t1f * tau - p.cam_xz[0], t1f - p.cam_xz[1]
         u_ax = xh * ax + zh * az
         u_bx = xh * bx + zh * bz
         on_len = np.abs(np.abs(u_ax) - p.half[0]) < np.abs(np.abs(u_bx) - p.half[1])
         nx = np.where(on_len, np.sign(u_ax) * ax, np.sign(u_bx) * bx)
         nz = np.where(on_len, np.sign(u_ax) * az, np.sign(u_bx) * bz)
-    with np.errstate(invalid="ignore"):
-        view = np.nan_to_num(-(nx * tau + nz) / np.sqrt(1 + tau * tau))
-    face_col = _pack((0.62 + 0.38 * np.clip(view, 0, 1))[:, None] * np.asarray(p.rgb) * gain)
-    cap_col = _pack(np.asarray(p.rgb) * ((0.9 if p.top < hc else 0.45) * gain))   # lit top / dark underside
-    region[closer] = zhit[closer]
-    out = image[v0:v1, u0:u1]
-    out[closer] = np.where(face, face_col[None, :], cap_col)[closer]
+    view = -(nx * tau + nz) / np.sqrt(1 + tau * tau)
+    level = np.rint(np.clip(view, 0.0, 1.0) * (_SHADE_LEVELS - 1)).astype(np.intp)
+    face_col = _face_palette(p.rgb, gain)[level]
+    cap_col = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)   # lit top / dark underside
+    mask = closer.view(np.uint8)
+    cv2.copyTo(zhit, mask, region)
+    colours = np.where(t1c >= lo, face_col[None, :], cap_col)
+    cv2.copyTo(colours.view(np.int32), mask, image[v0:v1, u0:u1].view(np.int32))
     if labels is not None:
-        lab = labels[v0:v1, u0:u1]
-        lab[closer] = p.label
+        cv2.copyTo(np.full(mask.shape, p.label, np.int16), mask, labels[v0:v1, u0:u1])
     first = int(np.argmax(hit_cols))
     shadows.append((u0 + first, v0, v1, float(t1[first])))
 
 
 def _depth_noise(r: _Renderer, depth: np.ndarray, shadows: list, rng: np.random.Generator) -> np.ndarray:
-    """Kinect-like measurement of the true depth: shadows, noise, quantisation, holes, range limits."""
+    """Kinect-like measurement of the true depth: shadows, noise, quantisation, holes, range limits.
+
+    Works in disparity (1/z) like the sensor: noise and dropouts come from the bank at a random
+    offset, rounding to 1/subpixel steps quantises, and readings outside the range become 0.
+    ``depth`` (a scratch buffer) is modified in place; the returned image is new.
+    """
     import cv2
 
     s = r.sensor
     h, w = depth.shape
     z = depth
     if s.shadows and shadows:
-        z = depth.copy()
         cols = np.arange(w, dtype=np.float32)
         for u_left, v0, v1, zf in shadows:
+            if zf >= s.max_m:
+                continue            # nothing behind it is in range anyway
             # the projector sits beside the IR camera: the background just left of a nearer object gets
             # no pattern over the disparity difference fb * (1/z_object - 1/z_background)
             widest = int(s.focal_baseline_px_m / zf) + 1
@@ -525,18 +611,23 @@ def _depth_noise(r: _Renderer, depth: np.ndarray, shadows: list, rng: np.random.
                 gap = s.focal_baseline_px_m * (1 / zf - 1 / blk)
             blk[(blk > zf + 0.05) & ((u_left - cols[a:u_left])[None, :] <= gap)] = np.inf
 
-    oy, ox = int(rng.integers(0, r.extra)), int(rng.integers(0, r.extra))
+    k = max(0, int(s.registration_px))          # depth-to-colour registration error (columns)
+    n = h * w
+    off = int(rng.integers(0, r.disparity_bank.size - n + 1))
     fb = np.float32(s.focal_baseline_px_m * s.subpixel)           # disparity in 1/subpixel steps
+    # ``flat[k:k + n]`` as an image is ``out`` moved k columns right: computing it contiguously shifts
+    # depth against colour; what wraps into each row's first k columns is cleared afterwards
+    flat = np.empty(n + k, np.float32)
+    dst = flat[k:].reshape(h, w)
     with np.errstate(divide="ignore"):
-        disp = fb / z                                               # no surface (inf) -> 0 disparity
-        disp += r.disparity_bank[oy:oy + h, ox:ox + w]
-        np.rint(disp, out=disp)
-        zq = fb / disp
-    valid = cv2.inRange(zq, float(s.min_m), float(s.max_m))        # also drops inf and negatives
-    valid = cv2.bitwise_and(valid, r.keep_bank[oy:oy + h, ox:ox + w])
-    out = cv2.copyTo(zq, valid)
-    if s.registration_px:
-        k = s.registration_px
-        out[:, k:] = out[:, :-k].copy()
+        np.divide(fb, z, out=dst)                                   # no surface (inf) -> 0 disparity
+        np.add(dst, r.disparity_bank[off:off + n].reshape(h, w), out=dst)
+        np.rint(dst, out=dst)
+        np.divide(fb, dst, out=dst)
+    # readings outside [min, max] (also inf, and the negative ones the dropouts made) become 0
+    cv2.threshold(dst, float(s.max_m), 0, cv2.THRESH_TOZERO_INV, dst=dst)
+    cv2.threshold(dst, float(s.min_m) - 1e-6, 0, cv2.THRESH_TOZERO, dst=dst)
+    out = flat[:n].reshape(h, w)
+    if k:
         out[:, :k] = 0
     return out
