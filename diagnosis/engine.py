@@ -226,8 +226,8 @@ class Diagnoser:
             return conflict
         return check
 
-    def _hitting_sets(self, ubound: int) -> HittingSetSolver:
-        return HittingSetSolver(self.model.num_vars + 1, ubound, self._solver_name)
+    def _hitting_sets(self) -> HittingSetSolver:
+        return HittingSetSolver(self.model.num_vars + 1, self._solver_name)
 
     def _dominators(self, observations: Mapping[str, bool]) -> dict[int, set[int]]:
         """For each component c, the components along its fanout-free chain whose fault explains
@@ -245,7 +245,7 @@ class Diagnoser:
 
     def _conflict_levels(self, base: list[int], limit: int, deadline: Deadline,
                          dominators: Mapping[int, set[int]]) -> Iterator[list[str]]:
-        hs = self._hitting_sets(limit)
+        hs = self._hitting_sets()
         check = self._check(base, deadline)
         try:
             known: set[frozenset[int]] = set()
@@ -413,7 +413,7 @@ class Diagnoser:
     def _one_level(self, base: list[int], k: int, deadline: Deadline) -> Iterator[list[str]]:
         """Every diagnosis of size <= k, when k is the minimum cardinality (so all are minimal)."""
         if self.monotone:
-            hs = self._hitting_sets(k)
+            hs = self._hitting_sets()
             check = self._check(base, deadline)
             try:
                 while (candidate := next_diagnosis(hs, k, check)) is not None:
@@ -458,7 +458,7 @@ class Diagnoser:
         with self._query(deadline):
             base = self._base(observations)
             if self.monotone:
-                hs = self._hitting_sets(k)
+                hs = self._hitting_sets()
                 check = self._check(base, deadline)
                 try:
                     for c in asked:
