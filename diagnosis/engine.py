@@ -96,9 +96,14 @@ _SWAP_LIMIT = 4  # levels up to which equivalent candidates are tried directly (
 
 
 def _contains_known(candidate: list[int], known: set[frozenset[int]]) -> bool:
-    """Does the candidate contain (or equal) a diagnosis found before? Then it is not a new minimal one."""
-    return any(frozenset(sub) in known for r in range(len(candidate) + 1)
-               for sub in itertools.combinations(candidate, r))
+    """Does the candidate contain (or equal) a diagnosis found before? Then it is not a new minimal one.
+
+    Small candidates look their 2^k subsets up; large ones scan the known diagnoses instead."""
+    if 2 ** len(candidate) <= len(known):
+        return any(frozenset(sub) in known for r in range(len(candidate) + 1)
+                   for sub in itertools.combinations(candidate, r))
+    whole = frozenset(candidate)
+    return any(d <= whole for d in known)
 
 
 class TimedOut(Exception):
