@@ -21,6 +21,7 @@ import numpy as np
 
 from perception import markers
 from perception.camera import CameraModel
+from robot_bridge.sim.world import CameraFrame
 
 Pose = tuple[float, float, float]      # x, y, yaw (radians) in the world frame
 RGB = tuple[int, int, int]
@@ -214,6 +215,7 @@ class _Renderer:
         self.tan_u64 = (np.arange(w) - cam.cx) / cam.fx
         self.k_v = ((np.arange(h) - cam.cy) / cam.fy).astype(np.float32)            # (down) / z per row
         self.inv_k = (1.0 / ((np.arange(h) - cam.cy) / cam.fy))                      # cy is never a row
+        self.inv_k32 = self.inv_k.astype(np.float32)
         with np.errstate(divide="ignore"):
             floor = np.where(self.k_v > 0, rig.height_m / self.k_v, np.inf)
         self.floor_z = floor.astype(np.float32)[:, None]
@@ -297,11 +299,66 @@ def render_with_pixels(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose]
     return _render(rig, camera_pose, robots, scene, rng, count=True)
 
 
+_frames = [0]
+_frames_lock = threading.Lock()
+
+
+def frames_rendered() -> int:
+    """How many frames this process has rendered so far (for benchmarks: frames made, not frames due)."""
+    return _frames[0]
+
+
+class DeferredFrame(CameraFrame):
+    """A ``CameraFrame`` whose pixels are rendered the first time ``rgb`` or ``depth`` is read.
+
+    The scene (every robot's pose, the time) is fixed when the frame is taken, and the sensor noise
+    comes from a seed drawn then, so the pixels are the same whenever, and whether, they are read;
+    a 10 Hz camera whose frames nobody looks at costs a pose snapshot per frame, not a render.
+    """
+
+    def __init__(self, robot: str, time: float, pose: Pose, rig: CameraRig, robots: Sequence[Pose],
+                 scene: Scene, seed: int) -> None:
+        for name, value in (("robot", robot), ("time", time), ("pose", pose), ("camera", rig.camera),
+                            ("_job", (rig, pose, tuple(robots), scene, seed)), ("_pixels", None)):
+            object.__setattr__(self, name, value)
+
+    def _render(self) -> tuple[np.ndarray, np.ndarray]:
+        pixels = self._pixels
+        if pixels is None:
+            rig, pose, robots, scene, seed = self._job
+            pixels = render(rig, pose, robots, scene, np.random.default_rng(seed))
+            object.__setattr__(self, "_pixels", pixels)
+        return pixels
+
+    @property
+    def rendered(self) -> bool:
+        return self._pixels is not None
+
+    @property
+    def rgb(self) -> np.ndarray:            # type: ignore[override]
+        return self._render()[0]
+
+    @property
+    def depth(self) -> np.ndarray:          # type: ignore[override]
+        return self._render()[1]
+
+    def __reduce__(self):
+        return (CameraFrame, (self.robot, self.time, self.pose, self.camera, self.rgb, self.depth))
+
+
+def deferred_frame(robot: str, time: float, pose: Pose, rig: CameraRig, robots: Sequence[Pose], scene: Scene,
+                   rng: np.random.Generator) -> DeferredFrame:
+    """A frame of the camera at ``pose`` seeing ``robots`` now, rendered when its pixels are read."""
+    return DeferredFrame(robot, time, pose, rig, robots, scene, int(rng.integers(0, 2 ** 63)))
+
+
 def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Scene,
             rng: np.random.Generator | None, count: bool
             ) -> tuple[np.ndarray, np.ndarray, list[MarkerPixels]]:
     import cv2
 
+    with _frames_lock:
+        _frames[0] += 1
     rng = rng if rng is not None else np.random.default_rng()
     r = _renderer(rig, scene.depth)
     cam = r.cam
@@ -521,6 +578,9 @@ def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, l
     """Z-buffer one prism into the depth and packed-colour images (only its band of columns and rows)."""
     import cv2
 
+    if p.footprint == "circle":
+        _draw_circle(r, p, depth, image, labels, full, shadows, gain, bands)
+        return
     span = _entry_exit(r, p)
     if span is None:
         return
@@ -583,6 +643,72 @@ def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, l
     shadows.append((u0 + first, v0, v1, float(t1[first])))
 
 
+def _draw_circle(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, labels: np.ndarray | None,
+                 full: np.ndarray, shadows: list, gain: float, bands: dict) -> None:
+    """``_draw_prism`` for a vertical cylinder: the exact silhouette columns, few array operations."""
+    import cv2
+
+    cam = r.cam
+    xc, zc = p.cam_xz
+    rad = p.radius
+    if zc - rad < _NEAR_M:
+        return
+    rho = math.hypot(xc, zc)
+    beta = math.asin(rad / rho)
+    phi = math.atan2(xc, zc)
+    if phi + beta >= 1.5 or phi - beta <= -1.5:
+        return                                           # far outside a pinhole camera's view
+    # columns whose centre ray meets the circle (all of them: no misses to mask)
+    u0 = max(0, math.ceil(cam.fx * math.tan(phi - beta) + cam.cx))
+    u1 = min(cam.width, math.floor(cam.fx * math.tan(phi + beta) + cam.cx) + 1)
+    if u1 <= u0:
+        return
+    tau = r.tan_u64[u0:u1]
+    a2 = 1.0 + tau * tau
+    b2 = xc * tau + zc
+    sq = np.sqrt(np.maximum(b2 * b2 - a2 * (rho * rho - rad * rad), 0.0))
+    t1 = (b2 - sq) / a2                                  # where the ray enters and leaves the cylinder
+    t2 = (b2 + sq) / a2
+    zmin, zmax = float(t1.min()), float(t2.max())
+    hc = r.rig.height_m
+    a, b = hc - p.top, hc - p.bottom                     # a <= k*z <= b inside the height range
+    ks = (a / zmin, a / zmax, b / zmin, b / zmax)
+    v0 = max(0, math.floor(min(ks) * cam.fy + cam.cy))
+    v1 = min(cam.height, math.ceil(max(ks) * cam.fy + cam.cy) + 1)
+    if v1 <= v0:
+        return
+    inv_k = r.inv_k32[v0:v1]
+    qa, qb = inv_k * np.float32(a), inv_k * np.float32(b)   # k > 0: qa <= z <= qb; k < 0: reversed
+    lo = np.minimum(qa, qb)[:, None]
+    hi = np.maximum(qa, qb)[:, None]
+    t1c = t1.astype(np.float32)[None, :]
+    zhit = np.maximum(t1c, lo)
+    hit = zhit <= np.minimum(t2.astype(np.float32)[None, :], hi)
+    if p.label:
+        full[p.label] += int(np.count_nonzero(hit))
+        bands[p.label] = (v0, v1, u0, u1)
+    region = depth[v0:v1, u0:u1]
+    closer = zhit < region
+    closer &= hit
+    if not closer.any():
+        return
+    # shading: the side by the angle between its normal and the view ray, the caps flat
+    view = ((zc - t1) + (xc - t1 * tau) * tau) / (rad * np.sqrt(a2))
+    level = (np.clip(view, 0.0, 1.0) * (_SHADE_LEVELS - 1) + 0.5).astype(np.intp)
+    face_col = _face_palette(p.rgb, gain)[level]
+    mask = closer.view(np.uint8)
+    cv2.copyTo(zhit, mask, region)
+    if a < 0 < b:                                        # camera between bottom and top: side only
+        colours = np.repeat(face_col[None, :], v1 - v0, axis=0)
+    else:
+        cap_col = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)   # lit top / dark underside
+        colours = np.where(t1c >= lo, face_col[None, :], cap_col)
+    cv2.copyTo(colours.view(np.int32), mask, image[v0:v1, u0:u1].view(np.int32))
+    if labels is not None:
+        cv2.copyTo(np.full(mask.shape, p.label, np.int16), mask, labels[v0:v1, u0:u1])
+    shadows.append((u0, v0, v1, float(t1[0])))
+
+
 def _depth_noise(r: _Renderer, depth: np.ndarray, shadows: list, rng: np.random.Generator) -> np.ndarray:
     """Kinect-like measurement of the true depth: shadows, noise, quantisation, holes, range limits.
 
@@ -596,20 +722,23 @@ def _depth_noise(r: _Renderer, depth: np.ndarray, shadows: list, rng: np.random.
     h, w = depth.shape
     z = depth
     if s.shadows and shadows:
-        cols = np.arange(w, dtype=np.float32)
+        fb1 = s.focal_baseline_px_m
         for u_left, v0, v1, zf in shadows:
             if zf >= s.max_m:
                 continue            # nothing behind it is in range anyway
-            # the projector sits beside the IR camera: the background just left of a nearer object gets
-            # no pattern over the disparity difference fb * (1/z_object - 1/z_background)
-            widest = int(s.focal_baseline_px_m / zf) + 1
+            # the projector sits beside the IR camera: the background d columns left of a nearer object
+            # gets no pattern while d <= fb * (1/z_object - 1/z_background), i.e. beyond the depth
+            # 1 / (1/z_object - d/fb) (and at least 5 cm behind the object)
+            widest = int(fb1 / zf) + 1
             a = max(0, u_left - widest)
             if a >= u_left:
                 continue
+            d = np.arange(u_left - a, 0, -1, dtype=np.float64)
+            room = 1.0 / zf - d / fb1
+            beyond = np.where(room > 0, 1.0 / np.maximum(room, 1e-12), np.inf)
+            limit = np.maximum(beyond, zf + 0.05).astype(np.float32)
             blk = z[v0:v1, a:u_left]
-            with np.errstate(divide="ignore"):
-                gap = s.focal_baseline_px_m * (1 / zf - 1 / blk)
-            blk[(blk > zf + 0.05) & ((u_left - cols[a:u_left])[None, :] <= gap)] = np.inf
+            blk[blk >= limit[None, :]] = np.inf
 
     k = max(0, int(s.registration_px))          # depth-to-colour registration error (columns)
     n = h * w

@@ -382,8 +382,8 @@ class World:
         b = robot.base
         pose = rig.pose_of((b.x, b.y, b.yaw))
         others = [(o.base.x, o.base.y, o.base.yaw) for o in self._robots.values() if o is not robot]
-        rgb, depth = camera.render(rig, pose, others, self.scene(), robot.camera_rng)
-        return CameraFrame(robot.name, self.time, pose, rig.camera, rgb, depth)
+        # pixels are rendered when a listener first reads them (a snapshot of the scene until then)
+        return camera.deferred_frame(robot.name, self.time, pose, rig, others, self.scene(), robot.camera_rng)
 
     def scene(self) -> object:
         """What cameras see besides robots: the arena's walls, the obstacles, the lighting."""

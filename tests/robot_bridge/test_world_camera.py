@@ -96,3 +96,45 @@ def test_camera_bridge_perceives_through_the_pixels():
         assert bridge.act(Action("turn", (angle,))).done() is False
     finally:
         bridge.shutdown()
+
+
+def test_frames_are_rendered_when_read_and_the_same_whenever_read():
+    from robot_bridge.sim.camera import DeferredFrame, frames_rendered
+
+    def world_with_frames():
+        world = World(seed=8)
+        world.add_robot("a", camera=True)
+        world.add_robot("b", x=1.5, y=0.2, yaw_deg=30.0)
+        world.command("b", "rotate", (30.0,))
+        frames = []
+        world.subscribe_camera("a", frames.append)
+        return world, frames
+
+    world, frames = world_with_frames()
+    before = frames_rendered()
+    world.run(0.5)
+    assert len(frames) == 5 and all(isinstance(f, DeferredFrame) and not f.rendered for f in frames)
+    assert frames_rendered() == before                     # nobody looked: nothing rendered
+    late = frames[2].rgb, frames[2].depth                  # read after the world moved on
+    assert frames_rendered() == before + 1 and frames[2].rendered and not frames[3].rendered
+
+    eager_world, eager = world_with_frames()
+    eager_world.subscribe_camera("a", lambda frame: frame.rgb)     # a listener that reads every frame
+    eager_world.run(0.5)
+    assert all(f.rendered for f in eager)
+    assert np.array_equal(eager[2].rgb, late[0]) and np.array_equal(eager[2].depth, late[1])
+    assert not np.array_equal(eager[2].rgb, eager[3].rgb)          # the robot turned in between
+
+
+def test_a_deferred_frame_pickles_as_a_plain_frame_with_its_pixels():
+    import pickle
+
+    from robot_bridge.sim.world import CameraFrame
+
+    world = World(seed=2)
+    world.add_robot("a", camera=True)
+    world.add_robot("b", x=2.0)
+    frame = world.camera_frame("a")
+    copy = pickle.loads(pickle.dumps(frame))
+    assert type(copy) is CameraFrame and copy.time == frame.time and copy.pose == frame.pose
+    assert np.array_equal(copy.rgb, frame.rgb) and np.array_equal(copy.depth, frame.depth)
