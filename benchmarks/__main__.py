@@ -13,6 +13,7 @@ import time
 BENCHMARKS: dict[str, str] = {
     "asl": "benchmarks.bench_asl",
     "zenoh": "benchmarks.bench_zenoh",
+    "agents": "benchmarks.bench_agents_zenoh",
     "diagnosis": "benchmarks.bench_diagnosis",
     "sim": "benchmarks.bench_sim",
     "perception": "benchmarks.bench_perception",
