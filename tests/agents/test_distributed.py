@@ -1,0 +1,140 @@
+"""Agents in several OS processes over real Zenoh sessions (loopback only): every performative with
+the same results as in one process, presence percepts, trust, 10,000 bad messages, the ring."""
+from __future__ import annotations
+
+import json
+import re
+import signal
+from pathlib import Path
+
+import pytest
+
+from agents.mas_cli import build_local_mas
+from agents.transport import Envelope, ZenohOptions, ZenohTransport, loopback_endpoint
+from agentspeak.mas2j import load_mas2j
+from tests.agents.distributed_fixtures import (ALICE, ACTS_MAS2J, BOB, CAROL, FRIEND, INTRUDER, PINGER,
+                                               TEAM_MAS2J, WATCHER, agent_run, mas_run, write_files)
+from tests.agents.transport_fixtures import poll, unique_mas
+
+RING = Path("/work/shared/benchmarks/asl")
+
+
+def _by_agent(lines: list[str]) -> dict[str, list[str]]:
+    """Lines per agent, in order (the order between agents in different processes is not fixed)."""
+    agents: dict[str, list[str]] = {}
+    for line in lines:
+        name = line[1:line.index("]")]
+        agents.setdefault(name, []).append(line)
+    return agents
+
+
+def test_every_performative_across_processes_as_in_one_process(tmp_path):
+    write_files(tmp_path, {"alice.asl": ALICE, "bob.asl": BOB, "carol.asl": CAROL, "acts.mas2j": ACTS_MAS2J})
+    project = tmp_path / "acts.mas2j"
+    here: list[str] = []
+    build_local_mas(load_mas2j(str(project)), printer=lambda n, t: here.append(f"[{n}] {t}")).run(timeout=20)
+
+    run = mas_run(project, "--processes", "--timeout", "60")
+    assert run.finish() == 0, run.err[-20:]
+
+    assert _by_agent(run.out) == _by_agent(here)
+    for expected in ("[alice] askOne price(apple,3)[source(bob)]", "[alice] askOne unknown false",
+                     "[alice] after untell [price(apple,3)[source(bob)]]", "[bob] double 42",
+                     "[alice] askHow after untellHow []", "[bob] signal 7 from alice",
+                     "[alice] askOne timeout timeout", "[alice] names [alice,bob,carol1,carol2]",
+                     '[carol2] note a string, with "quotes" -2.5 [x,"y"] from alice',
+                     "[bob] hello from alice", "[carol1] hello from alice", "[carol2] hello from alice"):
+        assert expected in run.out
+    assert "[bob] work finished" not in run.out  # unachieve dropped it in the other process
+
+
+def test_ring_runs_unchanged_with_processes(tmp_path):
+    """ring10.mas2j as shipped; the hop count is scaled down in a copy of ring.asl to keep the test short."""
+    (tmp_path / "ring10.mas2j").write_text((RING / "ring10.mas2j").read_text())
+    (tmp_path / "ring.asl").write_text((RING / "ring.asl").read_text().replace("max_hops(10000)", "max_hops(1000)"))
+    run = mas_run(tmp_path / "ring10.mas2j", "--processes", "--timeout", "120")
+    assert run.finish(180) == 0, run.err[-20:]
+    assert run.out == ["[ring0] ring done 1000"]
+
+
+def test_launcher_timeout_wins_and_stops_every_child(tmp_path):
+    write_files(tmp_path, {"busy.asl": "!go.\n+!go <- .wait(100); !go.\n", "b.mas2j": "MAS b { agents: busy #2; }\n"})
+    run = mas_run(tmp_path / "b.mas2j", "--processes", "--timeout", "3")
+    assert run.finish(60) == 124
+
+
+def test_stop_mas_in_one_process_stops_all(tmp_path):
+    write_files(tmp_path, {"boss.asl": '!go.\n+!go <- .wait(200); .print("stopping"); .stopMAS.\n',
+                           "busy.asl": "!go.\n+!go <- .wait(100); !go.\n",
+                           "s.mas2j": "MAS s { agents: boss; busy #2; }\n"})
+    run = mas_run(tmp_path / "s.mas2j", "--processes", "--timeout", "60")
+    assert run.finish(60) == 0
+    assert run.out == ["[boss] stopping"]
+
+
+@pytest.fixture
+def team(tmp_path):
+    """A hub in this process, and watcher, friend, pinger (declared in team.mas2j) and intruder (not)."""
+    write_files(tmp_path, {"watcher.asl": WATCHER, "friend.asl": FRIEND, "intruder.asl": INTRUDER,
+                           "pinger.asl": PINGER, "team.mas2j": TEAM_MAS2J})
+    mas = unique_mas("team")
+    hub = ZenohTransport(mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
+    endpoint = hub.endpoints[0]
+    project = str(tmp_path / "team.mas2j")
+    procs = {"watcher": agent_run(tmp_path, "watcher", mas, endpoint, "--project", project,
+                                  "--max-message-size", "8192")}
+    assert hub.wait_for_agents(["watcher"], 60)
+    yield hub, mas, tmp_path, procs, project
+    for proc in procs.values():
+        proc.stop(signal.SIGKILL)
+    hub.close()
+
+
+def test_presence_trust_and_sigkill(team):
+    hub, mas, folder, procs, project = team
+    watcher = procs["watcher"]
+    procs["intruder"] = agent_run(folder, "intruder", mas, hub.endpoints[0])
+    assert watcher.wait_out("[watcher] done by intruder")  # its plan came before: it was refused
+    procs["friend"] = agent_run(folder, "friend", mas, hub.endpoints[0], "--project", project)
+    assert watcher.wait_out("[watcher] greeted")
+    assert "[watcher] hacked" not in watcher.out
+    assert watcher.wait_out("[watcher] alive friend") and "[watcher] alive intruder" in watcher.out
+
+    procs["friend"].process.kill()  # SIGKILL: no goodbye, only the link closing
+    assert watcher.wait_out("[watcher] gone friend", 10)
+
+    assert watcher.stop() == 0
+    refusals = [line for line in watcher.err if "untrusted_code" in line and "dropped message" in line]
+    assert len(refusals) == 1 and "from intruder" in refusals[0]
+
+
+def test_ten_thousand_bad_messages_during_a_conversation(team):
+    hub, mas, folder, procs, project = team
+    watcher = procs["watcher"]
+    pinger = procs["pinger"] = agent_run(folder, "pinger", mas, hub.endpoints[0], "--project", project)
+    assert pinger.wait_out("[pinger] conversation started")
+    good = Envelope(mas, "mallory", ("watcher",), "tell", "x(1)").encode().decode()
+    bad = {
+        "not_json": b"{not json",
+        "too_large": b"x" * 9000,
+        "unknown_performative": good.replace('"tell"', '"gossip"').encode(),
+        "unparsable_content": good.replace('"x(1)"', '"x(((1"').encode(),
+    }
+    for i in range(10_000):
+        hub.put_raw("watcher", list(bad.values())[i % 4])
+    hub.send(Envelope(mas, "tester", ("pinger",), "tell", "enough"))
+    assert poll(lambda: any(line.startswith("[pinger] conversation done") for line in pinger.out), 60)
+    assert watcher.process.poll() is None
+    done = int(next(line for line in pinger.out if line.startswith("[pinger] conversation done")).split()[-1])
+    assert done > 0
+    assert not [line for line in pinger.out if "lost answer" in line or "bad answer" in line]
+
+    def logged() -> list[str]:
+        return [line for line in list(watcher.err) if "dropped message on" in line]
+    poll(lambda: len(logged()) >= 10_000, 60)  # the network thread may still be working through them
+    assert watcher.process.poll() is None
+    assert watcher.stop() == 0
+    assert len(logged()) == 10_000
+    summary = next(line for line in watcher.err if "agent watcher: dropped" in line)
+    counts = dict(re.findall(r"(\w+)=(\d+)", summary))
+    assert counts == {reason: "2500" for reason in bad}
