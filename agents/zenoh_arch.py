@@ -15,7 +15,9 @@ the network and removed when it goes (its process exits, is killed, or its link 
 from __future__ import annotations
 
 import logging
+import threading
 import time
+from collections import OrderedDict
 from functools import partial
 from typing import Iterable
 
@@ -27,9 +29,9 @@ from agentspeak.beliefs import SOURCE_PERCEPT
 from agentspeak.communication import Message
 from agentspeak.errors import FaultmasError
 from agentspeak.parser import parse_term
-from agentspeak.program import ADD, BEL, DEL, Trigger
+from agentspeak.program import ADD, BEL, DEL, PlanTerm, Trigger
 from agentspeak.runtime import LocalArch, LocalRuntime
-from agentspeak.terms import Literal, to_str
+from agentspeak.terms import Literal, Term, is_ground, to_str
 
 log = logging.getLogger("faultmas.agents")
 
@@ -38,6 +40,37 @@ PRESENCE_FUNCTOR = "agent_alive"
 
 IDLE_GRACE = 0.01
 """Seconds the runtime must stay idle before 'idle' is published (a busy ring publishes nothing)."""
+
+
+class ContentCache:
+    """Parsed message contents by text, for ground terms only (immutable, so safe to share), within a
+    byte budget: the interpreter's parser costs ~75 µs per small term and repeated contents (status
+    reports, positions) are common. Hostile input cannot grow it past ``max_bytes``."""
+
+    def __init__(self, max_bytes: int = 4 * 1024 * 1024) -> None:
+        self.max_bytes = max_bytes
+        self._terms: OrderedDict[str, Term] = OrderedDict()
+        self._bytes = 0
+        self._lock = threading.Lock()  # network threads of several agents may parse at once
+
+    def parse(self, text: str) -> Term:
+        """The term for ``text`` (``AslSyntaxError`` if it is not one)."""
+        term = self._terms.get(text)
+        if term is not None:
+            return term
+        term = parse_term(text)
+        if len(text) <= self.max_bytes // 16 and type(term) is not PlanTerm and is_ground(term):
+            with self._lock:
+                if text not in self._terms:
+                    self._terms[text] = term
+                    self._bytes += len(text)
+                    while self._bytes > self.max_bytes:
+                        old, _ = self._terms.popitem(last=False)
+                        self._bytes -= len(old)
+        return term
+
+
+CONTENT_CACHE = ContentCache()
 
 
 class NetworkArch(LocalArch):
@@ -132,7 +165,7 @@ class TransportBridge:
             self._refuse(agent, envelope, "refused_by_policy")
             return
         try:
-            content = parse_term(envelope.content)
+            content = CONTENT_CACHE.parse(envelope.content)
         except (FaultmasError, ValueError, RecursionError) as exc:
             detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             self._refuse(agent, envelope, "unparsable_content", detail[:100])

@@ -1,0 +1,163 @@
+"""Agents over Zenoh: AgentSpeak ``tell`` messages per second between two processes vs raw Zenoh
+put/subscribe of the same payload sizes, and ``askOne`` round-trip latency (median, p99).
+
+``python -m benchmarks agents [--quick]`` (or ``python -m benchmarks.bench_agents_zenoh``). Raw rows
+reuse ``bench_zenoh``'s measurement (its child process counts puts in the Zenoh callback). Agent rows:
+agent ``bench`` in this process runs ``for (.range(I,1,N)) { .send(sink, tell, m(Payload)) }`` then
+``.send(sink, achieve, report(N))``; agent ``sink`` (``faultmas agent run`` in a child process) parses
+every tell (distinct contents: no parse cache hit), adds the belief, and its plan
+``+m(I,P)[source(S)] <- -m(I,P)[source(S)]`` consumes it; after ``report(N)`` it answers ``done(N)``;
+the rate is N over the time from the goal to the answer. Content ``m(I,"xx...")``: about the payload size. Round trip:
+``.nano_time`` around ``.send(sink, askOne, v(X), A)`` inside the asking agent (the sink answers from
+its belief base).
+"""
+from __future__ import annotations
+
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import uuid
+from pathlib import Path
+
+from benchmarks.bench_zenoh import REPO, SIZES, _RawSide
+
+SINK = """v(42).
++m(I, P)[source(S)] <- -m(I, P)[source(S)].
++!report(N)[source(S)] <- .send(S, tell, done(N)).
+"""
+
+BENCH = """+!blast(N, P) <- for (.range(I, 1, N)) { .send(sink, tell, m(I, P)) }; .send(sink, achieve, report(N)).
++done(N)[source(sink)] <- -done(N)[source(sink)]; .print("done ", N).
++!asks(T) <- for (.range(I, 1, T)) { .nano_time(T0); .send(sink, askOne, v(X), A); .nano_time(T1);
+                                   .print("rtt ", T1 - T0) }; .print("asks done").
+"""
+
+
+def run(quick: bool = False) -> str:
+    """Raw Zenoh rows, then agent rows, between this process and one child each; the table."""
+    count = 3_000 if quick else 20_000
+    trips = 300 if quick else 2_000
+    raw_rates, raw_rtt = _raw(count, trips)
+    agent_rates, agent_rtt = _agents(count, trips)
+    lines = [f"{'measure (2 processes, loopback)':36} {'raw Zenoh':>14} {'agents':>14} {'ratio':>7}"]
+    for size in SIZES:
+        raw_rate, agent_rate = raw_rates[size], agent_rates[size]
+        lines.append(f"{f'tell {size} B x{count}':36} {raw_rate:>10,.0f} m/s {agent_rate:>10,.0f} m/s "
+                     f"{agent_rate / raw_rate:>6.0%}")
+    for name, pick in (("median", statistics.median),
+                       ("p99", lambda v: sorted(v)[min(len(v) - 1, int(0.99 * len(v)))])):
+        raw_us, agent_us = pick(raw_rtt) * 1e6, pick(agent_rtt) * 1e6
+        lines.append(f"{f'askOne round trip {name} x{trips}':36} {raw_us:>11,.0f} µs {agent_us:>11,.0f} µs "
+                     f"{raw_us / agent_us:>6.0%}")
+    lines.append("raw round trip: 200 B ping/pong; ratio: agents / raw for rates, raw / agents for latencies")
+    lines.append("targets: tell >= 30% of raw; askOne median < 1,000 µs")
+    return "\n".join(lines)
+
+
+def _raw(count: int, trips: int) -> tuple[dict[int, float], list[float]]:
+    from agents.transport import ZenohTransport
+
+    mas = f"raw{uuid.uuid4().hex[:6]}"
+    with ZenohTransport(mas) as transport:
+        child = subprocess.Popen([sys.executable, "-m", "benchmarks.bench_zenoh", "--child", mas,
+                                  *transport.endpoints], cwd=REPO, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                 text=True, env=dict(os.environ, PYTHONUNBUFFERED="1"))
+        try:
+            if child.stdout.readline().strip() != "READY" or not transport.wait_for_agents(["sink"], 30):
+                raise RuntimeError("raw benchmark child did not come up")
+            raw = _RawSide(transport.session, mas)
+            rates = {size: raw.throughput(size, count) for size in SIZES}
+            rtt = raw.round_trips(200, trips)
+            raw.close()
+        finally:
+            child.stdin.close()
+            child.wait(30)
+    return rates, rtt
+
+
+class _Printed:
+    """The lines agent ``bench`` prints, with a way to wait for one."""
+
+    def __init__(self) -> None:
+        self.lines: list[str] = []
+        self.changed = threading.Condition()
+
+    def __call__(self, name: str, text: str) -> None:
+        with self.changed:
+            self.lines.append(text)
+            self.changed.notify_all()
+
+    def mark(self) -> int:
+        """A position in the output: ``wait_for`` looks only at lines printed after it."""
+        with self.changed:
+            return len(self.lines)
+
+    def wait_for(self, text: str, since: int, timeout: float = 120.0) -> None:
+        with self.changed:
+            if not self.changed.wait_for(lambda: text in self.lines[since:], timeout):
+                raise RuntimeError(f"benchmark agent did not print {text!r}")
+
+
+def _agents(count: int, trips: int) -> tuple[dict[int, float], list[float]]:
+    from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
+    from agents.zenoh_arch import TransportBridge
+    from agentspeak.program import ACHIEVE, ADD, Trigger
+    from agentspeak.parser import parse_term
+    from agentspeak.runtime import LocalRuntime
+
+    mas = f"agents{uuid.uuid4().hex[:6]}"
+    printed = _Printed()
+    runtime = LocalRuntime(printer=printed)
+    agent = runtime.add_agent("bench", BENCH)
+    transport = ZenohTransport(mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
+    bridge = TransportBridge(runtime, transport, declared=("bench", "sink")).attach()
+    folder = Path(tempfile.mkdtemp(prefix="bench_agents_"))
+    (folder / "sink.asl").write_text(SINK)
+    child = subprocess.Popen([sys.executable, "-m", "agents", "agent", "run", str(folder / "sink.asl"),
+                              "--name", "sink", "--mas", mas, "--connect", transport.endpoints[0]],
+                             cwd=REPO, stdin=subprocess.DEVNULL, env=dict(os.environ, PYTHONUNBUFFERED="1"))
+    loop = threading.Thread(target=bridge.run, daemon=True)
+    loop.start()
+
+    def goal(text: str) -> None:
+        literal = parse_term(text)
+        agent.post_feedback(lambda: agent.post_external(Trigger(ADD, ACHIEVE, literal), force=True))
+
+    try:
+        if not transport.wait_for_agents(["sink"], 60):
+            raise RuntimeError("agent sink did not come up")
+        rates = {}
+        for size in SIZES:
+            payload = '"' + "x" * (size - 5) + '"'  # m("x...") is `size` bytes of content
+            mark = printed.mark()
+            goal(f"blast(100, {payload})")  # warm-up: publishers declared, parser caches filled
+            printed.wait_for("done 100", mark)
+            mark = printed.mark()
+            started = time.perf_counter()
+            goal(f"blast({count}, {payload})")
+            printed.wait_for(f"done {count}", mark)
+            rates[size] = count / (time.perf_counter() - started)
+        mark = printed.mark()
+        goal(f"asks({trips})")
+        printed.wait_for("asks done", mark)
+        rtt = [int(line.split()[1]) / 1e9 for line in printed.lines[mark:] if line.startswith("rtt ")]
+    finally:
+        transport.publish_control("stop", by="bench")
+        runtime.stop()
+        loop.join(10)
+        bridge.detach()
+        transport.close()
+        try:
+            child.wait(10)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            child.wait()
+    return rates, rtt
+
+
+if __name__ == "__main__":
+    print(run(quick="--quick" in sys.argv))
