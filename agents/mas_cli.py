@@ -21,6 +21,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("project")
     run.add_argument("--timeout", type=float, default=None, help="stop after S seconds (always wins)")
     run.add_argument("--processes", action="store_true", help="one OS process per agent, over Zenoh")
+    run.add_argument("--listen", action="append", default=None, metavar="ENDPOINT",
+                     help="in one process: also be reachable over Zenoh here (agents elsewhere may join)")
+    run.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
+                     help="in one process: also talk over Zenoh to agents reached through ENDPOINT")
     run.set_defaults(func=cmd_mas_run)
     mas.set_defaults(func=lambda args: (mas.print_help(), 2)[1])
     add_agent_parser(sub)
@@ -82,18 +86,28 @@ def cmd_mas_run(args) -> int:
         print(exc, file=sys.stderr)
         return 2
     if args.processes:
-        try:
-            from agents.distributed import run_processes
-        except ModuleNotFoundError as exc:
-            if exc.name != "agents.distributed":
-                raise
-            print("--processes: the distributed runtime is not built yet (issue 3)", file=sys.stderr)
-            return 2
+        from agents.distributed import run_processes
         return run_processes(project, timeout=args.timeout)
     try:
         runtime = build_local_mas(project)
     except (AslSyntaxError, SourceError) as exc:
         print(exc, file=sys.stderr)
         return 2
+    if args.listen or args.connect:
+        return _run_networked(runtime, project, args)
     runtime.run(timeout=args.timeout)
     return 0
+
+
+def _run_networked(runtime, project, args) -> int:
+    """All agents in this process, also reachable over Zenoh; ends on .stopMAS or --timeout (not on
+    idle: agents elsewhere may still talk). Exit 0 after a stop, 124 after the timeout."""
+    from agents.transport import ZenohOptions, ZenohTransport
+    from agents.zenoh_arch import TransportBridge
+
+    options = ZenohOptions(listen=tuple(args.listen) if args.listen else None, connect=tuple(args.connect))
+    with ZenohTransport(project.name, options) as transport:
+        bridge = TransportBridge(runtime, transport, declared=project.agent_names()).attach()
+        why = bridge.run(timeout=args.timeout)
+        bridge.detach()
+    return 124 if why == "timeout" else 0

@@ -138,3 +138,17 @@ def test_ten_thousand_bad_messages_during_a_conversation(team):
     summary = next(line for line in watcher.err if "agent watcher: dropped" in line)
     counts = dict(re.findall(r"(\w+)=(\d+)", summary))
     assert counts == {reason: "2500" for reason in bad}
+
+
+def test_agent_joins_a_mas_running_in_one_process(tmp_path):
+    """``mas run --listen`` keeps its agents in one process but reachable; ``agent run`` joins it,
+    asks, and its ``.stopMAS`` stops the other process too."""
+    write_files(tmp_path, {"a.asl": "x(1).\n", "rr.mas2j": "MAS rr { agents: a; }\n",
+                           "b.asl": '+agent_alive(a) <- .send(a, askOne, x(X), A); .print("got ", A); .stopMAS.\n'})
+    endpoint = loopback_endpoint()
+    host = mas_run(tmp_path / "rr.mas2j", "--listen", endpoint, "--timeout", "60")
+    with ZenohTransport("rr", ZenohOptions(connect=(endpoint,))) as probe:
+        assert probe.wait_for_agents(["a"], 60)
+    joined = agent_run(tmp_path, "b", "rr", endpoint, "--timeout", "60")
+    assert joined.finish() == 0 and joined.out == ["[b] got x(1)[source(a)]"]
+    assert host.finish() == 0
