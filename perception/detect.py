@@ -213,10 +213,12 @@ def _place_on_circle(known: Blob, other: Blob, cam: CameraModel, cfg: DetectorCo
     """Put a cylinder without depth readings on the circle of radius ``spacing`` around its partner.
 
     Each point of the circle predicts where the cylinder's silhouette edges and its top edge appear
-    (the two tops are at one height); the best point must explain the pixels, and no clearly
-    different point may explain them about as well (else: ambiguous, None).
+    (the two tops are at one height; a top cut off by the image border is left out); the best point
+    must explain the pixels, and no clearly different point may explain them about as well (else:
+    ambiguous, None).
     """
-    if known.top_y_m is None or other.bbox[1] <= 0:
+    top_seen = other.bbox[1] > 0                        # else clipped by the image's top border
+    if known.top_y_m is None and top_seen:
         return None
     r = cfg.radius_m
     bx = known.x_m + cfg.spacing_m * np.sin(_GRID)
@@ -237,15 +239,15 @@ def _place_on_circle(known: Blob, other: Blob, cam: CameraModel, cfg: DetectorCo
             continue
         hidden = (z_side == -1.0) | (z_side < limit)
         cost += np.where(hidden, np.maximum(outward, 0.0) ** 2, res * res)
-    v_top = cam.cy + cam.fy * known.top_y_m / np.maximum((rho - r) * np.cos(phi), 0.05)
-    cost += ((other.bbox[1] - 0.5 - v_top) / 0.8) ** 2
+    if top_seen:
+        v_top = cam.cy + cam.fy * known.top_y_m / np.maximum((rho - r) * np.cos(phi), 0.05)
+        cost += ((other.bbox[1] - 0.5 - v_top) / 0.8) ** 2
     cost = np.where(ok, cost, np.inf)
     k = int(np.argmin(cost))
     if not cost[k] < 12.0:
         return None
-    far = np.hypot(bx - bx[k], bz - bz[k]) > 0.06
-    if far.any() and float(cost[far].min()) < cost[k] + 6.0:
-        return None                                     # another place fits about as well: ambiguous
+    if _ambiguous(cost, k, bx, bz, cost[k] + 6.0):
+        return None                                     # another place fits about as well
     rho_k, phi_k = float(rho[k]), float(phi[k])
     if not _size_plausible(other.bbox[2], other.bbox[3], other.area_px, rho_k, cam, cfg):
         return None
@@ -254,6 +256,31 @@ def _place_on_circle(known: Blob, other: Blob, cam: CameraModel, cfg: DetectorCo
                    range_m=rho_k, range_sigma_m=0.01 + 0.005 * rho_k,
                    cross_sigma_m=rho_k * cfg.pixel_sigma_px / cam.fx * 2,
                    top_y_m=known.top_y_m, occluded=occluded, ranged=True, placed=True)
+
+
+def _ambiguous(cost: np.ndarray, k: int, bx: np.ndarray, bz: np.ndarray, bar: float,
+               spread_m: float = 0.10) -> bool:
+    """Whether points other than the minimum ``k``'s own valley fit under ``bar`` (a second
+    explanation of the pixels), or the valley itself reaches further than ``spread_m`` from ``k``.
+
+    Anywhere in the valley explains the pixels; the pair's midpoint moves half as far as the placed
+    cylinder, so 0.10 m keeps it within 5 cm, half the 0.1 m a detection may be off at most.
+    """
+    n = cost.size
+    below = cost < bar
+    if below.all():
+        return True
+    # the valley: the run of grid points under the bar around k (the grid is a closed circle)
+    right = k
+    while below[(right + 1) % n] and (right + 1) % n != k:
+        right += 1
+    left = k
+    while below[(left - 1) % n]:
+        left -= 1
+    valley = np.arange(left, right + 1) % n
+    if np.count_nonzero(below) > valley.size:
+        return True
+    return float(np.hypot(bx[valley] - bx[k], bz[valley] - bz[k]).max()) > spread_m
 
 
 def _check_inputs(rgb: np.ndarray, depth: np.ndarray, camera: CameraModel) -> None:

@@ -27,10 +27,11 @@ class HsvRange:
 
 
 # Wider in V than the seed paper's orange (0,136,159)-(29,255,255) so that dim scenes (gain 0.5) pass;
-# higher in S (painted markers are S > 0.85), which keeps cardboard, wood and skin (S ~ 0.4-0.6) out.
+# higher in S (painted markers are S > 0.85), which keeps cardboard, wood and skin (S ~ 0.4-0.6) out;
+# blue from S 200 (0.78): navy things (S ~ 0.75) are not the blue marker.
 # H starts at 5, not 0, so that red things (H 170-179 and 0-3) are not orange.
 ORANGE_HSV = HsvRange((5, 170, 60), (24, 255, 255))
-BLUE_HSV = HsvRange((98, 150, 40), (128, 255, 255))
+BLUE_HSV = HsvRange((98, 200, 40), (128, 255, 255))
 GREEN_HSV = HsvRange((41, 81, 63), (66, 215, 255))     # the seed paper's green, for its colour scheme
 
 FRONT_COLOUR = "orange"

@@ -7,7 +7,7 @@ import pytest
 
 from perception import markers
 from perception.camera import CameraModel
-from perception.detect import DetectorConfig, detect, detect_all
+from perception.detect import DetectorConfig, _kernel, colour_mask, detect, detect_all
 from robot_bridge.sim.camera import (CameraRig, CylinderProp, RobotLook, Scene, Wall, render, render_with_pixels,
                                      true_view)
 from robot_bridge.sim.render_scenes import random_scene
@@ -165,3 +165,42 @@ def test_empty_frame_and_bad_inputs():
         detect(rgb.astype(np.float32), depth, CAM)
     with pytest.raises(ValueError, match="camera model"):
         detect(rgb, depth, CameraModel.from_fov(width=320, height=240))
+
+
+NAVY = (30, 40, 120)                                   # a navy prop: blue hue, but not marker-blue
+
+
+@pytest.mark.parametrize("gain", [0.5, 1.0, 1.5])
+def test_navy_things_are_not_the_blue_marker(gain):
+    pole = CylinderProp(2.0, 0.2, 0.05, 0.0, 1.2, NAVY)
+    rgb, _ = _frame([], props=(pole,), gain=gain)
+    hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
+    lo = markers.BLUE_HSV.lo
+    assert cv2.countNonZero(cv2.inRange(hsv, (lo[0], 100, 30), markers.BLUE_HSV.hi)) > 5000    # blue-ish
+    # noisy pixels of a dim scene may pass the thresholds, never enough to survive the opening
+    assert cv2.countNonZero(colour_mask(hsv, markers.BLUE_HSV, _kernel(5))) == 0
+    robot = _robot_at(2.0, -5, 60)                      # while the marker itself stays blue
+    rgb, depth = _frame([robot], gain=gain)
+    _assert_matches(detect(rgb, depth, CAM).detection, true_view(RIG, ORIGIN, robot))
+
+
+def test_a_near_cylinder_cut_by_the_top_border_is_placed_from_its_edges():
+    robot = _robot_at(0.8, 12, 170)                    # facing the camera: front top above the image
+    truth = true_view(RIG, ORIGIN, robot)
+    assert CAM.cy + CAM.fy * (0.30 - markers.CYLINDER_TOP_M) / (truth.front_xz[1] - 0.03) < 0
+    rgb, depth = _frame([robot])
+    res = detect(rgb, depth, CAM)
+    _assert_matches(res.detection, truth, angle=0.5, depth=0.05, yaw=15.0)
+    assert res.detection.front.placed
+
+
+def test_placement_is_refused_when_two_places_or_a_wide_valley_fit():
+    from perception.detect import _GRID, _ambiguous
+
+    bx, bz = 0.227 * np.sin(_GRID), 2.0 + 0.227 * np.cos(_GRID)
+    one = ((_GRID - 0.5) / 0.05) ** 2                  # one narrow valley at 0.5 rad
+    assert not _ambiguous(one, int(np.argmin(one)), bx, bz, one.min() + 6)
+    two = np.minimum(one, ((_GRID + 1.5) / 0.05) ** 2 + 2.0)
+    assert _ambiguous(two, int(np.argmin(two)), bx, bz, two.min() + 6)
+    wide = ((_GRID - 0.5) / 0.6) ** 2                   # pinned to no better than ~0.2 m
+    assert _ambiguous(wide, int(np.argmin(wide)), bx, bz, wide.min() + 6)
