@@ -92,6 +92,7 @@ class Deadline:
             solver.clear_interrupt()
 
 
+_EAGER_BOUND = 4  # hitting-set totalizers are built for up to this many faults at once, then raised
 _SWAP_LIMIT = 4  # levels up to which equivalent candidates are tried directly (subset test is 2^k)
 
 
@@ -231,8 +232,8 @@ class Diagnoser:
             return conflict
         return check
 
-    def _hitting_sets(self) -> HittingSetSolver:
-        return HittingSetSolver(self.model.num_vars + 1, self._solver_name)
+    def _hitting_sets(self, levels: int) -> HittingSetSolver:
+        return HittingSetSolver(self.model.num_vars + 1, self._solver_name, ubound=min(levels, _EAGER_BOUND))
 
     def _dominators(self, observations: Mapping[str, bool]) -> dict[int, set[int]]:
         """For each component c, the components along its fanout-free chain whose fault explains
@@ -250,7 +251,7 @@ class Diagnoser:
 
     def _conflict_levels(self, base: list[int], limit: int, deadline: Deadline,
                          dominators: Mapping[int, set[int]]) -> Iterator[list[str]]:
-        hs = self._hitting_sets()
+        hs = self._hitting_sets(limit)
         check = self._check(base, deadline)
         try:
             known: set[frozenset[int]] = set()
@@ -418,7 +419,7 @@ class Diagnoser:
     def _one_level(self, base: list[int], k: int, deadline: Deadline) -> Iterator[list[str]]:
         """Every diagnosis of size <= k, when k is the minimum cardinality (so all are minimal)."""
         if self.monotone:
-            hs = self._hitting_sets()
+            hs = self._hitting_sets(k)
             check = self._check(base, deadline)
             try:
                 while (candidate := next_diagnosis(hs, k, check)) is not None:
@@ -463,7 +464,7 @@ class Diagnoser:
         with self._query(deadline):
             base = self._base(observations)
             if self.monotone:
-                hs = self._hitting_sets()
+                hs = self._hitting_sets(k)
                 check = self._check(base, deadline)
                 try:
                     for c in asked:

@@ -25,10 +25,12 @@ from pysat.solvers import Solver
 class HittingSetSolver:
     """Candidates that hit every conflict seen so far and contain no blocked set."""
 
-    def __init__(self, first_free_var: int, solver: str) -> None:
+    def __init__(self, first_free_var: int, solver: str, ubound: int = 1) -> None:
         self.solver = Solver(name=solver)
         self.top = first_free_var - 1
-        self.ubound = 1  # the totalizer counts up to this; raised level by level (its size grows with it)
+        # the totalizer counts up to ubound; raised when a higher level asks. Its size grows with the
+        # bound, but one built for the final small bound searches much faster than one raised to it.
+        self.ubound = max(ubound, 1)
         self.members: list[int] = []       # health variables that occur in some conflict
         self._member_set: set[int] = set()
         self.totalizer: ITotalizer | None = None
