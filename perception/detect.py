@@ -137,19 +137,25 @@ def _run(rgb: np.ndarray, depth: np.ndarray, camera: CameraModel, cfg: DetectorC
     depth = np.ascontiguousarray(depth, dtype=np.float32)
     cam = camera
     fronts = _blobs(hsv, depth, camera, cfg, cfg.front_hsv, cfg.front_name, kernel)
-    if not fronts:
-        return DetectionResult(None, f"no_{cfg.front_name}_blob")
-    rears = _blobs(hsv, depth, camera, cfg, cfg.rear_hsv, cfg.rear_name, kernel)
+    rears = _blobs(hsv, depth, camera, cfg, cfg.rear_hsv, cfg.rear_name, kernel) if fronts else []
     blobs = tuple(fronts + rears)
-    if not rears:
-        return DetectionResult(None, f"no_{cfg.rear_name}_blob", blobs=blobs)
-    pairs = _pairs(fronts, rears, cam, cfg)
-    if not pairs:                   # merged look-alikes can hide a pair: retry with depth layers
+    pairs = _pairs(fronts, rears, cam, cfg) if fronts and rears else []
+    if not pairs and fronts and rears:      # merged look-alikes can hide a pair: retry with depth layers
         fronts2 = _resplit(fronts, depth, cam, cfg)
         rears2 = _resplit(rears, depth, cam, cfg)
         if fronts2 is not fronts or rears2 is not rears:
             pairs = _pairs(fronts2, rears2, cam, cfg)
+    if not pairs:                   # a cylinder left as a sliver beside a nearer one: too thin to open
+        fronts3 = fronts + _slivers(hsv, depth, cam, cfg, cfg.front_hsv, cfg.front_name, kernel)
+        if fronts3:
+            rears3 = rears + _slivers(hsv, depth, cam, cfg, cfg.rear_hsv, cfg.rear_name, kernel)
+            if (len(fronts3), len(rears3)) != (len(fronts), len(rears)) and rears3:
+                pairs = _pairs(fronts3, rears3, cam, cfg)
     if not pairs:
+        if not fronts:
+            return DetectionResult(None, f"no_{cfg.front_name}_blob")
+        if not rears:
+            return DetectionResult(None, f"no_{cfg.rear_name}_blob", blobs=blobs)
         return DetectionResult(None, "no_pair_within_spacing", blobs=blobs)
     pairs.sort(key=lambda p: p[0])
     found: list[Detection] = []
@@ -162,6 +168,30 @@ def _run(rgb: np.ndarray, depth: np.ndarray, camera: CameraModel, cfg: DetectorC
         if not every:
             break
     return DetectionResult(found[0], "", tuple(found), blobs)
+
+
+def _slivers(hsv: np.ndarray, depth: np.ndarray, cam: CameraModel, cfg: DetectorConfig, rng: HsvRange,
+             name: str, kernel: np.ndarray | None) -> list[Blob]:
+    """Upright strips of the colour narrower than the opening kernel (which removes them), as
+    bearing-only blobs: their few depth pixels sit on the rim, so only a partner may place them."""
+    import cv2
+
+    if kernel is None:
+        return []
+    k = kernel.shape[0]
+    raw = colour_mask(hsv, rng, None)
+    upright = cv2.morphologyEx(raw, cv2.MORPH_OPEN, np.ones((2 * k, 2), np.uint8))
+    upright &= ~cv2.dilate(colour_mask(hsv, rng, kernel), kernel)      # only what the opening lost
+    out = []
+    for x, y, sub, area, v_c in _components(upright, cfg.min_area_px):
+        if sub.shape[1] >= k:
+            continue
+        blob = _measure(sub, x, y, v_c, depth, cam, cfg, name, area)
+        if blob is not None:
+            out.append(replace(blob, x_m=math.nan, z_m=math.nan, range_m=math.nan, range_sigma_m=math.inf,
+                               cross_sigma_m=math.inf, top_y_m=None, depth_px=0, from_size=False,
+                               ranged=False))
+    return out
 
 
 def _resplit(blobs: list[Blob], depth: np.ndarray, cam: CameraModel, cfg: DetectorConfig) -> list[Blob]:

@@ -204,3 +204,13 @@ def test_placement_is_refused_when_two_places_or_a_wide_valley_fit():
     assert _ambiguous(two, int(np.argmin(two)), bx, bz, two.min() + 6)
     wide = ((_GRID - 0.5) / 0.6) ** 2                   # pinned to no better than ~0.2 m
     assert _ambiguous(wide, int(np.argmin(wide)), bx, bz, wide.min() + 6)
+
+
+@pytest.mark.parametrize("z,yaw", [(3.0, 174), (3.8, -174)])
+def test_a_cylinder_left_as_a_sliver_beside_its_partner_is_placed(z, yaw):
+    robot = _robot_at(z, 0, yaw)                      # facing the camera: the rear peeks out beside the front
+    rgb, depth, px = render_with_pixels(RIG, ORIGIN, [robot], Scene(walls=ROOM), np.random.default_rng(0))
+    assert px[0].rear_visible < 0.4 * px[0].rear_full    # a few columns only: the opening removes it
+    res = detect(rgb, depth, CAM)
+    _assert_matches(res.detection, true_view(RIG, ORIGIN, robot), angle=0.3, depth=0.05, yaw=15.0)
+    assert res.detection.rear.placed
