@@ -8,6 +8,10 @@ vertical prism whose silhouette is a band of columns. Output follows the Kinect'
 the optical axis, 0 = no reading) with depth-dependent noise, disparity quantisation, dropouts,
 projector shadows and out-of-range holes. Noise comes from banks drawn once per camera, so a frame
 costs a few milliseconds instead of hundreds of thousands of fresh Gaussian draws.
+
+The world hands out ``DeferredFrame``s: a snapshot of the scene and a noise seed, rendered the first
+time someone reads the pixels, so a camera nobody looks at costs nothing. ``frames_rendered`` counts
+the frames actually made.
 """
 from __future__ import annotations
 
@@ -377,7 +381,8 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     no_wall = ~np.isfinite(wall_z)
     v_top = np.clip(np.where(no_wall, h, v_top), 0, h).astype(np.int16)
     v_bottom = np.clip(np.where(no_wall, h, v_bottom), 0, h).astype(np.int16)
-    not_wall = ((r.rows < v_top) | (r.rows >= v_bottom)).view(np.uint8)
+    # row - top, taken as unsigned, is below the wall's height in rows only on the wall
+    not_wall = ((r.rows - v_top).view(np.uint16) >= np.maximum(v_bottom - v_top, 0).view(np.uint16)).view(np.uint8)
     wall_packed = _pack(_wall_colours(r, camera_pose, scene.walls, wall_idx, wall_z).astype(np.float64) * gain)
     np.copyto(packed, wall_packed[None, :])
     cv2.copyTo(r.floor_image(scene.floor_rgb, scene.backdrop_rgb, gain).view(np.int32), not_wall,
@@ -693,9 +698,10 @@ def _draw_circle(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, 
     if not closer.any():
         return
     # shading: the side by the angle between its normal and the view ray, the caps flat
-    view = ((zc - t1) + (xc - t1 * tau) * tau) / (rad * np.sqrt(a2))
-    level = (np.clip(view, 0.0, 1.0) * (_SHADE_LEVELS - 1) + 0.5).astype(np.intp)
-    face_col = _face_palette(p.rgb, gain)[level]
+    view = ((zc - t1) + (xc - t1 * tau) * tau) * ((_SHADE_LEVELS - 1) / rad) / np.sqrt(a2)
+    np.maximum(view, 0.0, out=view)
+    np.minimum(view, _SHADE_LEVELS - 1, out=view)
+    face_col = _face_palette(p.rgb, gain)[(view + 0.5).astype(np.intp)]
     mask = closer.view(np.uint8)
     cv2.copyTo(zhit, mask, region)
     if a < 0 < b:                                        # camera between bottom and top: side only
