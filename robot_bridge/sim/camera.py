@@ -323,15 +323,19 @@ class DeferredFrame(CameraFrame):
     def __init__(self, robot: str, time: float, pose: Pose, rig: CameraRig, robots: Sequence[Pose],
                  scene: Scene, seed: int) -> None:
         for name, value in (("robot", robot), ("time", time), ("pose", pose), ("camera", rig.camera),
-                            ("_job", (rig, pose, tuple(robots), scene, seed)), ("_pixels", None)):
+                            ("_job", (rig, pose, tuple(robots), scene, seed)), ("_pixels", None),
+                            ("_lock", threading.Lock())):
             object.__setattr__(self, name, value)
 
     def _render(self) -> tuple[np.ndarray, np.ndarray]:
         pixels = self._pixels
         if pixels is None:
-            rig, pose, robots, scene, seed = self._job
-            pixels = render(rig, pose, robots, scene, np.random.default_rng(seed))
-            object.__setattr__(self, "_pixels", pixels)
+            with self._lock:                # listeners in several threads: render once
+                pixels = self._pixels
+                if pixels is None:
+                    rig, pose, robots, scene, seed = self._job
+                    pixels = render(rig, pose, robots, scene, np.random.default_rng(seed))
+                    object.__setattr__(self, "_pixels", pixels)
         return pixels
 
     @property

@@ -138,3 +138,18 @@ def test_a_deferred_frame_pickles_as_a_plain_frame_with_its_pixels():
     copy = pickle.loads(pickle.dumps(frame))
     assert type(copy) is CameraFrame and copy.time == frame.time and copy.pose == frame.pose
     assert np.array_equal(copy.rgb, frame.rgb) and np.array_equal(copy.depth, frame.depth)
+
+
+def test_a_frame_read_from_several_threads_is_rendered_once():
+    from concurrent.futures import ThreadPoolExecutor
+
+    from robot_bridge.sim.camera import frames_rendered
+
+    world = World(seed=3)
+    world.add_robot("a", camera=True)
+    world.add_robot("b", x=2.0)
+    frame = world.camera_frame("a")
+    before = frames_rendered()
+    with ThreadPoolExecutor(4) as pool:
+        images = list(pool.map(lambda _: frame.rgb, range(8)))
+    assert frames_rendered() == before + 1 and all(img is images[0] for img in images)
