@@ -260,7 +260,8 @@ class _Renderer:
         if img is None:
             floor_row = np.where(self.k_v > 0, 1.0, 0.0)[:, None]
             row_rgb = floor_row * np.asarray(floor_rgb) * self.floor_shade + (1 - floor_row) * np.asarray(backdrop_rgb)
-            img = np.ascontiguousarray(np.broadcast_to(_pack(row_rgb * gain)[:, None], (self.cam.height, self.cam.width)))
+            shape = (self.cam.height, self.cam.width)
+            img = np.ascontiguousarray(np.broadcast_to(_pack(row_rgb * gain)[:, None], shape))
             if len(self._floor_cache) >= 8:           # scenes with ever new lighting must not pile up
                 self._floor_cache.clear()
             self._floor_cache[key] = img
