@@ -10,6 +10,10 @@ connected components, then per blob a *cylinder* measurement rather than a box c
   curved surface it lies (law of cosines with the 0.03 m radius), then a robust mean; when the depth
   image has no reading there (closer than the Kinect's 0.8 m), from the silhouette's angular width.
 
+A cylinder without a range of its own (in a projector shadow, closer than 0.8 m and cut by the image
+border, or only a sliver beside its partner) is placed on the circle of the spacing around its partner
+where its silhouette edges and top edge fit, unless another place fits about as well.
+
 Front/rear pairs must be 0.20-0.26 m apart in 3D; the heading is fitted on the circle |h| = 0.227 m
 weighting range (noisy) and cross-range (precise) errors separately. Frame: x right, y down, z forward.
 """
