@@ -125,7 +125,7 @@ def run(quick: bool = False, first_seed: int = 50_000, n: int | None = None) -> 
             reasons[r["reason"]] = reasons.get(r["reason"], 0) + 1
     if reasons:
         lines.append("misses on visible scenes: " + ", ".join(f"{k} {v}" for k, v in sorted(reasons.items())))
-    lines.append(f"same measure on fresh seeds ({n} scenes each; seeds {first_seed}.. above):")
+    lines.append(f"the same on fresh seeds ({n} scenes each; the table above is seeds {first_seed}..):")
     for fresh in FRESH_SEEDS:
         f_rate, f_hits, f_vis, f_far = _rate(_scenes(fresh, n)[0])
         lines.append(f"  seeds {fresh}..{fresh + n - 1}: detection {f_hits}/{f_vis} = {f_rate:.1f}% "
