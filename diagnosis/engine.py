@@ -111,6 +111,21 @@ class TimedOut(Exception):
     """A SAT call hit the query's deadline."""
 
 
+def _collect(stream: Iterator[list[str]], max_count: int | None) -> tuple[list[list[str]], bool]:
+    """Up to max_count answers of a stream, and whether the stream was exhausted (no limit hit)."""
+    out: list[list[str]] = []
+    try:
+        for d in stream:
+            if max_count is not None and len(out) >= max_count:
+                return out, False
+            out.append(d)
+    except TimedOut:
+        return out, False
+    finally:
+        stream.close()
+    return out, True
+
+
 class Diagnoser:
     """All queries for one model. Thread-safe: queries on one Diagnoser run one at a time."""
 
@@ -371,19 +386,7 @@ class Diagnoser:
         deadline = Deadline(timeout)
         if min_card_only:
             return self._diagnose_min_card(observations, max_count, deadline, started)
-        diagnoses: list[list[str]] = []
-        complete = True
-        stream = self.minimal_diagnoses(observations, max_card, deadline)
-        try:
-            for d in stream:
-                if max_count is not None and len(diagnoses) >= max_count:
-                    complete = False
-                    break
-                diagnoses.append(d)
-        except TimedOut:
-            complete = False
-        finally:
-            stream.close()
+        diagnoses, complete = _collect(self.minimal_diagnoses(observations, max_card, deadline), max_count)
         # levels run in order and each is exhausted before the next: the first answer has minimum size
         min_card = len(diagnoses[0]) if diagnoses else None
         consistent = bool(diagnoses) or not complete or self._explainable(observations)
@@ -398,21 +401,8 @@ class Diagnoser:
         if k is None:
             return DiagnosisResult([], None, True, time.perf_counter() - started, consistent_with_model=False)
         # every diagnosis of minimum size is subset-minimal: enumerate just that level
-        diagnoses: list[list[str]] = []
-        complete = True
         with self._query(deadline):
-            base = self._base(observations)
-            stream = self._one_level(base, k, deadline)
-            try:
-                for d in stream:
-                    if max_count is not None and len(diagnoses) >= max_count:
-                        complete = False
-                        break
-                    diagnoses.append(d)
-            except TimedOut:
-                complete = False
-            finally:
-                stream.close()
+            diagnoses, complete = _collect(self._one_level(self._base(observations), k, deadline), max_count)
         diagnoses.sort(key=self._order)
         return DiagnosisResult(diagnoses, k, complete, time.perf_counter() - started, k)
 

@@ -146,6 +146,19 @@ def literals(formula: Formula) -> list[Literal]:
     return out
 
 
+def evaluate(formula: Formula, values: "dict[Literal, bool]") -> bool:
+    """Truth value under a full assignment of the formula's literals (for checks and debugging)."""
+    if isinstance(formula, Const):
+        return formula.value
+    if isinstance(formula, (Atom, Ab)):
+        return values[formula]
+    if isinstance(formula, Not):
+        return not evaluate(formula.arg, values)
+    if isinstance(formula, And):
+        return all(evaluate(a, values) for a in formula.args)
+    return any(evaluate(a, values) for a in formula.args)
+
+
 def _nnf(f: Formula, positive: bool = True) -> Formula:
     """Push negations down to literals and flatten nested And/Or."""
     if isinstance(f, Const):

@@ -6,7 +6,7 @@ import itertools
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from diagnosis.engine import Diagnoser
-from diagnosis.formula import Ab, And, Atom, Const, Not, parse_formula
+from diagnosis.formula import Ab, Atom, evaluate, parse_formula
 from diagnosis.loader import load_model
 from diagnosis.system_yaml import load_system
 from diagnosis.yaml_source import YamlSource
@@ -14,18 +14,6 @@ from diagnosis.yaml_source import YamlSource
 COMPONENTS = ["c0", "c1", "c2", "c3"]
 OBSERVATIONS = ["o0", "o1", "o2"]
 VARIABLES = ["v0", "v1"]
-
-
-def evaluate(f, values) -> bool:
-    if isinstance(f, Const):
-        return f.value
-    if isinstance(f, (Atom, Ab)):
-        return values[f]
-    if isinstance(f, Not):
-        return not evaluate(f.arg, values)
-    if isinstance(f, And):
-        return all(evaluate(a, values) for a in f.args)
-    return any(evaluate(a, values) for a in f.args)
 
 
 def consistent(formulas, observations, faulty) -> bool:

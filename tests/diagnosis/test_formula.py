@@ -6,20 +6,7 @@ import itertools
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from diagnosis.formula import (Ab, And, Atom, Const, FormulaSyntaxError, Not, Or, literals, parse_formula,
-                               to_cnf)
-
-
-def evaluate(f, values) -> bool:
-    if isinstance(f, Const):
-        return f.value
-    if isinstance(f, (Atom, Ab)):
-        return values[f]
-    if isinstance(f, Not):
-        return not evaluate(f.arg, values)
-    if isinstance(f, And):
-        return all(evaluate(a, values) for a in f.args)
-    return any(evaluate(a, values) for a in f.args)
+from diagnosis.formula import Ab, Atom, FormulaSyntaxError, evaluate, literals, parse_formula, to_cnf
 
 
 def test_precedence_and_right_associative_implication():
