@@ -739,18 +739,23 @@ def _belief_literal(term: Term, b: dict) -> Literal:
     return lit
 
 
+def _post_belief_event(ag: Agent, trigger: Trigger, intention: Intention, new_focus: bool) -> None:
+    """A +b/-b from a plan body: on the same intention (it waits for the event) when a plan is
+    relevant, a new intention for ``++b``/``--b``; with no relevant plan the intention just goes on."""
+    if new_focus:
+        ag.post_external(trigger)
+    elif ag.plans.relevant(trigger):
+        ag.post_internal(trigger, intention)
+    else:
+        ag._notify_waiters(trigger)
+
+
 def _exec_add_bel(ag: Agent, intention, im, frame, instr, at_end: bool = False, new_focus: bool = False) -> None:
     lit = _belief_literal(instr.term, im.b)
     added = ag.bb.add(lit, at_end=at_end)
     frame.pc += 1
     if added is not None:
-        trigger = Trigger(ADD, BEL, added)
-        if new_focus:
-            ag.post_external(trigger)
-        elif ag.plans.relevant(trigger):
-            ag.post_internal(trigger, intention)
-        else:
-            ag._notify_waiters(trigger)
+        _post_belief_event(ag, Trigger(ADD, BEL, added), intention, new_focus)
 
 
 def _exec_add_bel_end(ag, intention, im, frame, instr) -> None:
@@ -789,13 +794,7 @@ def _exec_del_bel(ag: Agent, intention, im, frame, instr, new_focus: bool = Fals
         return
     removed = ag.bb.remove(resolve(pattern, im.b))
     if removed is not None:
-        trigger = Trigger(DEL, BEL, removed)
-        if new_focus:
-            ag.post_external(trigger)
-        elif ag.plans.relevant(trigger):
-            ag.post_internal(trigger, intention)
-        else:
-            ag._notify_waiters(trigger)
+        _post_belief_event(ag, Trigger(DEL, BEL, removed), intention, new_focus)
 
 
 def _exec_del_bel_new(ag, intention, im, frame, instr) -> None:
