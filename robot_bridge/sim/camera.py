@@ -218,8 +218,7 @@ class _Renderer:
         self.tan_u = ((np.arange(w) - cam.cx) / cam.fx).astype(np.float32)          # x / z per column
         self.tan_u64 = (np.arange(w) - cam.cx) / cam.fx
         self.k_v = ((np.arange(h) - cam.cy) / cam.fy).astype(np.float32)            # (down) / z per row
-        self.inv_k = (1.0 / ((np.arange(h) - cam.cy) / cam.fy))                      # cy is never a row
-        self.inv_k32 = self.inv_k.astype(np.float32)
+        self.inv_k32 = (1.0 / ((np.arange(h) - cam.cy) / cam.fy)).astype(np.float32)  # cy is never a row
         with np.errstate(divide="ignore"):
             floor = np.where(self.k_v > 0, rig.height_m / self.k_v, np.inf)
         self.floor_z = floor.astype(np.float32)[:, None]
@@ -583,6 +582,36 @@ def _cap_colour(rgb: RGB, factor: float) -> np.uint32:
     return np.uint32(_pack(np.asarray(rgb) * factor))
 
 
+def _zbuffer_band(r: _Renderer, p: _Prism, depth: np.ndarray, u0: int, u1: int, t1: np.ndarray,
+                  t2: np.ndarray, zmin: float, zmax: float, full: np.ndarray, bands: dict):
+    """The rows a prism spans in columns ``u0:u1`` (rays enter at ``t1``, leave at ``t2``), where it is
+    hit and where it is nearer than what is drawn; None when it covers nothing. Shared by boxes and
+    cylinders; counts the prism's pixels for the visibility bookkeeping."""
+    cam, hc = r.cam, r.rig.height_m
+    a, b = hc - p.top, hc - p.bottom                     # a <= k*z <= b inside the height range
+    ks = (a / zmin, a / zmax, b / zmin, b / zmax)
+    v0 = max(0, math.floor(min(ks) * cam.fy + cam.cy))
+    v1 = min(cam.height, math.ceil(max(ks) * cam.fy + cam.cy) + 1)
+    if v1 <= v0:
+        return None
+    inv_k = r.inv_k32[v0:v1]
+    qa, qb = inv_k * np.float32(a), inv_k * np.float32(b)   # k > 0: qa <= z <= qb; k < 0: reversed
+    lo = np.minimum(qa, qb)[:, None]
+    hi = np.maximum(qa, qb)[:, None]
+    t1c = t1.astype(np.float32)[None, :]
+    zhit = np.maximum(t1c, lo)
+    hit = zhit <= np.minimum(t2.astype(np.float32)[None, :], hi)
+    if p.label:
+        full[p.label] += int(np.count_nonzero(hit))
+        bands[p.label] = (v0, v1, u0, u1)
+    region = depth[v0:v1, u0:u1]
+    closer = zhit < region
+    closer &= hit
+    if not closer.any():
+        return None
+    return v0, v1, region, zhit, closer, lo, t1c
+
+
 def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, labels: np.ndarray | None,
                 full: np.ndarray, shadows: list, gain: float, bands: dict) -> None:
     """Z-buffer one prism into the depth and packed-colour images (only its band of columns and rows)."""
@@ -601,44 +630,23 @@ def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, l
             return
         first, last = int(np.argmax(hit_cols)), len(hit_cols) - int(np.argmax(hit_cols[::-1]))
         u0, u1, t1, t2, hit_cols = u0 + first, u0 + last, t1[first:last], t2[first:last], hit_cols[first:last]
-    cam, hc = r.cam, r.rig.height_m
-    zmin = float(t1[hit_cols].min())
-    zmax = float(t2[hit_cols].max())
-    a, b = hc - p.top, hc - p.bottom          # a <= k*z <= b inside the prism's height range
-    ks = [a / zmin, a / zmax, b / zmin, b / zmax]
-    v0 = max(0, int(math.floor(min(ks) * cam.fy + cam.cy)))
-    v1 = min(cam.height, int(math.ceil(max(ks) * cam.fy + cam.cy)) + 1)
-    if v1 <= v0:
+    hc = r.rig.height_m
+    band = _zbuffer_band(r, p, depth, u0, u1, t1, t2, float(t1[hit_cols].min()), float(t2[hit_cols].max()),
+                         full, bands)
+    if band is None:
         return
-    inv_k = r.inv_k[v0:v1]
-    qa, qb = a * inv_k, b * inv_k             # k > 0: qa <= z <= qb; k < 0: qb <= z <= qa
-    lo = np.minimum(qa, qb).astype(np.float32)[:, None]
-    hi = np.maximum(qa, qb).astype(np.float32)[:, None]
-    t1c, t2c = t1.astype(np.float32)[None, :], t2.astype(np.float32)[None, :]
-    zhit = np.maximum(t1c, lo)
-    hit = zhit <= np.minimum(t2c, hi)
-    if p.label:
-        full[p.label] += int(np.count_nonzero(hit))
-        bands[p.label] = (v0, v1, u0, u1)
-    region = depth[v0:v1, u0:u1]
-    closer = zhit < region
-    closer &= hit
-    if not closer.any():
-        return
+    v0, v1, region, zhit, closer, lo, t1c = band
     # shading: vertical faces by the angle between normal and view ray, caps flat
     tau = r.tan_u64[u0:u1]
     t1f = np.where(hit_cols, t1, 0.0)
-    if p.footprint == "circle":
-        nx, nz = (t1f * tau - p.cam_xz[0]) / p.radius, (t1f - p.cam_xz[1]) / p.radius
-    else:
-        ax, az = p.axis
-        bx, bz = az, -ax
-        xh, zh = t1f * tau - p.cam_xz[0], t1f - p.cam_xz[1]
-        u_ax = xh * ax + zh * az
-        u_bx = xh * bx + zh * bz
-        on_len = np.abs(np.abs(u_ax) - p.half[0]) < np.abs(np.abs(u_bx) - p.half[1])
-        nx = np.where(on_len, np.sign(u_ax) * ax, np.sign(u_bx) * bx)
-        nz = np.where(on_len, np.sign(u_ax) * az, np.sign(u_bx) * bz)
+    ax, az = p.axis
+    bx, bz = az, -ax
+    xh, zh = t1f * tau - p.cam_xz[0], t1f - p.cam_xz[1]
+    u_ax = xh * ax + zh * az
+    u_bx = xh * bx + zh * bz
+    on_len = np.abs(np.abs(u_ax) - p.half[0]) < np.abs(np.abs(u_bx) - p.half[1])
+    nx = np.where(on_len, np.sign(u_ax) * ax, np.sign(u_bx) * bx)
+    nz = np.where(on_len, np.sign(u_ax) * az, np.sign(u_bx) * bz)
     view = -(nx * tau + nz) / np.sqrt(1 + tau * tau)
     level = np.rint(np.clip(view, 0.0, 1.0) * (_SHADE_LEVELS - 1)).astype(np.intp)
     face_col = _face_palette(p.rgb, gain)[level]
@@ -679,29 +687,11 @@ def _draw_circle(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, 
     sq = np.sqrt(np.maximum(b2 * b2 - a2 * (rho * rho - rad * rad), 0.0))
     t1 = (b2 - sq) / a2                                  # where the ray enters and leaves the cylinder
     t2 = (b2 + sq) / a2
-    zmin, zmax = float(t1.min()), float(t2.max())
     hc = r.rig.height_m
-    a, b = hc - p.top, hc - p.bottom                     # a <= k*z <= b inside the height range
-    ks = (a / zmin, a / zmax, b / zmin, b / zmax)
-    v0 = max(0, math.floor(min(ks) * cam.fy + cam.cy))
-    v1 = min(cam.height, math.ceil(max(ks) * cam.fy + cam.cy) + 1)
-    if v1 <= v0:
+    band = _zbuffer_band(r, p, depth, u0, u1, t1, t2, float(t1.min()), float(t2.max()), full, bands)
+    if band is None:
         return
-    inv_k = r.inv_k32[v0:v1]
-    qa, qb = inv_k * np.float32(a), inv_k * np.float32(b)   # k > 0: qa <= z <= qb; k < 0: reversed
-    lo = np.minimum(qa, qb)[:, None]
-    hi = np.maximum(qa, qb)[:, None]
-    t1c = t1.astype(np.float32)[None, :]
-    zhit = np.maximum(t1c, lo)
-    hit = zhit <= np.minimum(t2.astype(np.float32)[None, :], hi)
-    if p.label:
-        full[p.label] += int(np.count_nonzero(hit))
-        bands[p.label] = (v0, v1, u0, u1)
-    region = depth[v0:v1, u0:u1]
-    closer = zhit < region
-    closer &= hit
-    if not closer.any():
-        return
+    v0, v1, region, zhit, closer, lo, t1c = band
     # shading: the side by the angle between its normal and the view ray, the caps flat
     view = ((zc - t1) + (xc - t1 * tau) * tau) * ((_SHADE_LEVELS - 1) / rad) / np.sqrt(a2)
     np.maximum(view, 0.0, out=view)
@@ -709,7 +699,7 @@ def _draw_circle(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, 
     face_col = _face_palette(p.rgb, gain)[(view + 0.5).astype(np.intp)]
     mask = closer.view(np.uint8)
     cv2.copyTo(zhit, mask, region)
-    if a < 0 < b:                                        # camera between bottom and top: side only
+    if p.bottom < hc < p.top:                            # camera between bottom and top: side only
         colours = np.repeat(face_col[None, :], v1 - v0, axis=0)
     else:
         cap_col = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)   # lit top / dark underside
