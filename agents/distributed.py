@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import logging
 import os
-import signal
 import subprocess
 import sys
 import threading
 import time
 from pathlib import Path
 from typing import IO
+
+from robot_bridge.processes import ESCALATION, stop_processes
 
 log = logging.getLogger("faultmas.agents")
 
@@ -145,21 +146,6 @@ class _Launcher:
         running = [c for c in self.children.values() if c.poll() is None]
         if running:
             self.hub.publish_control("stop", by="launcher", delay=0.0)
-        for signum in (None, signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
-            running = [c for c in running if c.poll() is None]
-            if not running:
-                break
-            for child in running:
-                if signum is not None:
-                    try:
-                        child.send_signal(signum)
-                    except ProcessLookupError:
-                        pass
-            deadline = time.monotonic() + GRACE
-            for child in running:
-                try:
-                    child.wait(max(0.0, deadline - time.monotonic()))
-                except subprocess.TimeoutExpired:
-                    pass
+        stop_processes(running, GRACE, (None, *ESCALATION))
         for relay in self.relays:
             relay.join(5.0)

@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import math
 import os
-import signal
 import subprocess
 import sys
 import time
 from dataclasses import dataclass, field
 from typing import Sequence
 
+from robot_bridge.processes import stop_processes
 from robot_bridge.ros2.runtime import loopback_env
 
 SPACING_M = 1.5
@@ -103,21 +103,7 @@ class Supervisor:
 
     def stop(self, grace: float = 5.0) -> list[int]:
         """SIGINT, then SIGTERM, then SIGKILL, ``grace`` seconds apart; returns the exit codes."""
-        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
-            alive = [p for p in self.processes if p.poll() is None]
-            if not alive:
-                break
-            for proc in alive:
-                try:
-                    proc.send_signal(sig)
-                except ProcessLookupError:
-                    pass
-            deadline = time.monotonic() + grace
-            for proc in alive:
-                try:
-                    proc.wait(timeout=max(0.0, deadline - time.monotonic()))
-                except subprocess.TimeoutExpired:
-                    pass
+        stop_processes(self.processes, grace)
         return [p.wait() for p in self.processes]
 
 
