@@ -22,9 +22,9 @@ from types import GeneratorType
 from typing import Any, Callable, Iterator
 
 from agentspeak import program as P
-from agentspeak.beliefs import PERCEPT, SELF, SOURCE_PERCEPT, SOURCE_SELF, BeliefBase, has_source, source
+from agentspeak.beliefs import SELF, SOURCE_PERCEPT, SOURCE_SELF, BeliefBase, has_source
 from agentspeak.intentions import Event, Frame, IntendedMeans, Intention, PlanLibrary
-from agentspeak.program import ACHIEVE, ADD, BEL, DEL, TEST, Plan, PlanTerm, Program, Rule, Trigger
+from agentspeak.program import ACHIEVE, ADD, BEL, DEL, TEST, Plan, PlanTerm, Program, Trigger
 from agentspeak.solver import SolveError, solve, solve_first
 from agentspeak.stdlib.registry import STDLIB, IAError, Registry, Suspend
 from agentspeak.terms import (
@@ -434,7 +434,7 @@ class Agent:
             if instr is not None and type(instr) in (P.Achieve, P.Test):
                 trail: list = []
                 if type(instr.term) is Literal or type(instr.term) is Var:
-                    unify(instr.term, _strip_for_caller(value), caller.b, trail)
+                    unify(instr.term, value, caller.b, trail)
             self._advance(caller)
         # the intention is finished
         self._finished(intention)
@@ -697,10 +697,6 @@ def _add_annots(lit: Literal, annots: tuple) -> Literal:
     for a in annots:
         lit = lit.add_annot(a)
     return lit
-
-
-def _strip_for_caller(value: Term) -> Term:
-    return value
 
 
 # ---------------------------------------------------------------------- body formulas
@@ -977,4 +973,3 @@ _DISPATCH: dict = {
 }
 
 __all__ = ["Agent", "IAContext"]
-_ = (source, PERCEPT, Rule, DEL)

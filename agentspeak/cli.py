@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import argparse
 import logging
-import os
 import sys
 from pathlib import Path
 
@@ -71,7 +70,7 @@ def cmd_run(args) -> int:
     name = args.name or Path(args.file).stem
     runtime = LocalRuntime()
     try:
-        runtime.add_agent(name, text, os.path.abspath(args.file) if False else args.file)
+        runtime.add_agent(name, text, args.file)
     except AslSyntaxError as exc:
         print(exc, file=sys.stderr)
         return 2

@@ -15,7 +15,7 @@ import uuid
 from dataclasses import dataclass, field
 from typing import Any
 
-from agentspeak.beliefs import SELF, SOURCE_SELF, has_source, source
+from agentspeak.beliefs import SELF, SOURCE_SELF, source
 from agentspeak.program import ACHIEVE, ADD, BEL, DEL, Plan, PlanTerm, Trigger
 from agentspeak.solver import SolveError, solve
 from agentspeak.terms import NIL, Cons, Literal, Term, Var, is_ground, list_items, make_list, resolve, to_str
@@ -220,4 +220,3 @@ _HANDLERS = {
 }
 
 __all__ = ["Message", "receive_message", "PERFORMATIVES", "new_message_id"]
-_ = (BEL, has_source)

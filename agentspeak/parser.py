@@ -12,16 +12,16 @@ import threading
 from pathlib import Path
 
 from lark import Lark, Token, Transformer
-from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from agentspeak.errors import AslSyntaxError
 from agentspeak.program import (
     ACHIEVE, ADD, BEL, DEL, META, TEST, Achieve, AchieveNew, Action, AddBel, AddBelEnd, AddBelNew,
-    AddPlan, Constraint, DelBel, DelBelNew, ExecVar, Fork, If, Instr, InternalAction, Plan, PlanTerm,
-    Program, RemovePlan, Rule, Test, Trigger, TriggerInstr, UpdBel, While, For, body_variables,
+    AddPlan, Constraint, DelBel, DelBelNew, ExecVar, Fork, If, InternalAction, Plan, PlanTerm,
+    Program, RemovePlan, Rule, Test, Trigger, TriggerInstr, UpdBel, While, For,
 )
 from agentspeak.terms import (
-    NIL, And, Arith, Cons, Literal, Not, Or, Rel, Term, Var, is_ground, make_list, resolve, variables,
+    And, Arith, Literal, Not, Or, Rel, Term, Var, is_ground, make_list, resolve,
 )
 
 _GRAMMAR = Path(__file__).with_name("agentspeak.lark")

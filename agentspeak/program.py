@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from agentspeak.terms import (
-    Bindings, Cons, Literal, Term, Var, rename, resolve, to_str, variables,
+    Bindings, Literal, Term, Var, rename, resolve, to_str, variables,
 )
 
 # trigger operators and types, as Jason names them
@@ -495,8 +495,6 @@ def is_var(t: Term) -> bool:
     return type(t) is Var
 
 
-__all__ = [n for n in dir() if not n.startswith("_")]
-_ = Cons  # re-exported for convenience of the parser
 
 
 class PyCall(Instr):

@@ -11,11 +11,10 @@ running to exhaustion undoes everything.
 from __future__ import annotations
 
 import logging
-from typing import Callable, Iterator, Protocol
+from typing import Iterator, Protocol
 
-from agentspeak.program import Rule
 from agentspeak.terms import (
-    NIL, And, Arith, ArithmeticError_, Cons, Literal, Not, Or, Rel, Term, Var, compare, deref,
+    And, Arith, ArithmeticError_, Cons, Literal, Not, Or, Rel, Term, Var, compare, deref,
     is_list, list_items, make_list, rename, resolve, to_str,
 )
 from agentspeak.unify import undo, unify, unify_annots_all
@@ -304,7 +303,6 @@ def _items(t: Term) -> list | None:
 
 
 __all__ = ["solve", "solve_first", "SolveError", "KnowledgeBase", "compare_equal"]
-_ = (Rule, NIL, Callable, log)
 
 
 # ---------------------------------------------------------------------- compiled formulas

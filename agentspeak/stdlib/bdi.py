@@ -2,10 +2,10 @@
 from __future__ import annotations
 
 from agentspeak.intentions import Intention
-from agentspeak.program import ACHIEVE, ADD, DEL, Trigger
-from agentspeak.stdlib.registry import IAError, Suspend, internal_action, wrong_arguments
-from agentspeak.terms import Literal, Var, resolve
-from agentspeak.unify import undo, unifies, unify
+from agentspeak.program import ACHIEVE, ADD
+from agentspeak.stdlib.registry import IAError, Suspend, internal_action
+from agentspeak.terms import Literal, resolve
+from agentspeak.unify import undo, unifies
 
 
 @internal_action(".fail", args=(0, None))
@@ -212,4 +212,3 @@ def suspended(ctx, goal, reason):
                 undo(ctx.b, ctx.trail, mark)
 
 
-_ = (DEL, Trigger, Var, unify, wrong_arguments)

@@ -2,10 +2,10 @@
 from __future__ import annotations
 
 from agentspeak.beliefs import SOURCE_SELF, has_source
-from agentspeak.program import ADD, BEL, DEL, Rule, Trigger
+from agentspeak.program import ADD, BEL, DEL, Trigger
 from agentspeak.stdlib.lists import _set
 from agentspeak.stdlib.registry import internal_action, wrong_arguments
-from agentspeak.terms import Literal, Var, is_ground, make_list, resolve
+from agentspeak.terms import Literal, is_ground, make_list, resolve
 from agentspeak.unify import undo
 
 
@@ -88,4 +88,3 @@ def belief(ctx, pattern):
         undo(ctx.b, ctx.trail, mark)
 
 
-_ = (Rule, Var)

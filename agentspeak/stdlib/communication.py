@@ -3,9 +3,8 @@ from __future__ import annotations
 
 from concurrent.futures import Future
 
-from agentspeak.communication import Message, PERFORMATIVES
-from agentspeak.program import PlanTerm
-from agentspeak.stdlib.registry import IAError, Suspend, internal_action, wrong_arguments
+from agentspeak.communication import Message
+from agentspeak.stdlib.registry import Suspend, internal_action, wrong_arguments
 from agentspeak.terms import NIL, Literal, Var, list_items, make_list, to_str
 
 _ASK = ("askOne", "askAll", "askHow")
@@ -143,4 +142,3 @@ def all_names(ctx, result):
     return ctx.unify(result, make_list([Literal(n) for n in sorted(ctx.agent.arch.all_names(ctx.agent))]))
 
 
-_ = (IAError, PERFORMATIVES, PlanTerm)

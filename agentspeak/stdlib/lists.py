@@ -5,7 +5,7 @@ import random as _random
 
 from agentspeak.stdlib.registry import IAError, internal_action, wrong_arguments
 from agentspeak.terms import (
-    NIL, Cons, Literal, SortKey, Var, compare, is_list, list_items, make_list, normalise_number, to_str,
+    NIL, SortKey, compare, is_list, list_items, make_list, normalise_number, to_str,
 )
 
 
@@ -44,7 +44,6 @@ def concat(ctx, *args):
         for p in parts:
             out.extend(items_of(p, ".concat"))
         return ctx.unify(result, make_list(out))
-    from agentspeak.terms import to_print_str
     return ctx.unify(result, "".join(p if isinstance(p, str) else to_str(p) for p in parts))
 
 
@@ -105,28 +104,16 @@ def sort(ctx, lst, result):
 
 @internal_action(".max", args=2)
 def max_(ctx, lst, result):
-    """Greatest element by the standard order (fails on an empty list)."""
+    """Greatest element by the standard order of terms (fails on an empty list)."""
     seq = items_of(lst, ".max")
-    if not seq:
-        return False
-    best = seq[0]
-    for e in seq[1:]:
-        if compare(e, best) > 0:
-            best = e
-    return ctx.unify(result, best)
+    return bool(seq) and ctx.unify(result, max(seq, key=SortKey))
 
 
 @internal_action(".min", args=2)
 def min_(ctx, lst, result):
-    """Smallest element by the standard order (fails on an empty list)."""
+    """Smallest element by the standard order of terms (fails on an empty list)."""
     seq = items_of(lst, ".min")
-    if not seq:
-        return False
-    best = seq[0]
-    for e in seq[1:]:
-        if compare(e, best) < 0:
-            best = e
-    return ctx.unify(result, best)
+    return bool(seq) and ctx.unify(result, min(seq, key=SortKey))
 
 
 @internal_action(".sum", args=2)
@@ -197,4 +184,3 @@ def is_list_(ctx, x):
     return is_list(x)
 
 
-_ = (Cons, Literal, Var)

@@ -1,7 +1,7 @@
 """Plan library actions: add_plan, remove_plan, relevant_plans, plan_label, list_plans."""
 from __future__ import annotations
 
-from agentspeak.program import Plan, PlanTerm
+from agentspeak.program import PlanTerm
 from agentspeak.stdlib.registry import internal_action, wrong_arguments
 from agentspeak.terms import Literal, Term, list_items, make_list, to_str
 
@@ -84,4 +84,3 @@ def list_plans(ctx, trigger_term=None):
         ctx.agent.arch.print_line(ctx.agent, str(p) + ".")
 
 
-_ = Plan

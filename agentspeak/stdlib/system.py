@@ -5,9 +5,9 @@ import datetime
 import random as _random
 import time
 
-from agentspeak.program import PlanTerm, Trigger
+from agentspeak.program import PlanTerm
 from agentspeak.stdlib.registry import Suspend, internal_action, wrong_arguments
-from agentspeak.terms import Literal, Var, normalise_number, resolve
+from agentspeak.terms import normalise_number
 
 
 @internal_action(".time", args=(3, 4))
@@ -110,4 +110,3 @@ def include(ctx, path, namespace=None):
         ctx.agent.load(parse_program(f.read(), full))
 
 
-_ = (Literal, Trigger, Var, resolve)
