@@ -253,25 +253,25 @@ class _Renderer:
         return self._colour_cache[sigma]
 
     def floor_image(self, floor_rgb: RGB, backdrop_rgb: RGB, gain: float) -> np.ndarray:
-        """Packed colours of the floor (shaded per row) below the horizon and the backdrop above it."""
+        """Colours of the floor (shaded per row) below the horizon and the backdrop above it."""
         key = (floor_rgb, backdrop_rgb, gain)
         img = self._floor_cache.get(key)
         if img is None:
             floor_row = np.where(self.k_v > 0, 1.0, 0.0)[:, None]
             row_rgb = floor_row * np.asarray(floor_rgb) * self.floor_shade + (1 - floor_row) * np.asarray(backdrop_rgb)
-            shape = (self.cam.height, self.cam.width)
-            img = np.ascontiguousarray(np.broadcast_to(_pack(row_rgb * gain)[:, None], shape))
+            shape = (self.cam.height, self.cam.width, 3)
+            img = np.ascontiguousarray(np.broadcast_to(_rgb8(row_rgb * gain)[:, None], shape))
             if len(self._floor_cache) >= 8:           # scenes with ever new lighting must not pile up
                 self._floor_cache.clear()
             self._floor_cache[key] = img
         return img
 
     def scratch(self) -> tuple[np.ndarray, np.ndarray]:
-        """This thread's packed-colour and depth buffers (re-used frame after frame)."""
+        """This thread's colour and depth buffers (re-used frame after frame)."""
         bufs = getattr(self._local, "bufs", None)
         if bufs is None:
             h, w = self.cam.height, self.cam.width
-            bufs = self._local.bufs = (np.empty((h, w), np.uint32), np.empty((h, w), np.float32))
+            bufs = self._local.bufs = (np.empty((h, w, 3), np.uint8), np.empty((h, w), np.float32))
         return bufs
 
 
@@ -280,10 +280,9 @@ def _renderer(rig: CameraRig, sensor: DepthSensor) -> _Renderer:
     return _Renderer(rig, sensor)
 
 
-def _pack(rgb) -> np.ndarray:
-    """RGB values (..., 3), any real type, -> packed little-endian uint32 (R in the lowest byte)."""
-    c = np.clip(np.rint(np.asarray(rgb, np.float64)), 0, 255).astype(np.uint32)
-    return c[..., 0] | (c[..., 1] << 8) | (c[..., 2] << 16) | np.uint32(0xFF000000)
+def _rgb8(rgb) -> np.ndarray:
+    """RGB values (..., 3), any real type, -> uint8 (rounded, saturating)."""
+    return np.clip(np.rint(np.asarray(rgb, np.float64)), 0, 255).astype(np.uint8)
 
 
 def render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Scene,
@@ -373,7 +372,7 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     h, w = cam.height, cam.width
     hc = rig.height_m
     gain = float(scene.gain)
-    packed, depth = r.scratch()
+    canvas, depth = r.scratch()
 
     # background: per column the backdrop above the wall's top, the wall, then the floor below the
     # wall-floor line; the wall is a column band, floor and backdrop depend on the row only
@@ -387,11 +386,10 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     v_bottom = np.clip(np.where(no_wall, h, v_bottom), 0, h).astype(np.int16)
     # row - top, taken as unsigned, is below the wall's height in rows only on the wall
     not_wall = ((r.rows - v_top).view(np.uint16) >= np.maximum(v_bottom - v_top, 0).view(np.uint16)).view(np.uint8)
-    wall_packed = _pack(_wall_colours(r, camera_pose, scene.walls, wall_idx, wall_z).astype(np.float64) * gain)
-    np.copyto(packed, wall_packed[None, :])
-    cv2.copyTo(r.floor_image(scene.floor_rgb, scene.backdrop_rgb, gain).view(np.int32), not_wall,
-               packed.view(np.int32))
-    np.copyto(depth, wall_z.astype(np.float32)[None, :])
+    wall_rgb = _rgb8(_wall_colours(r, camera_pose, scene.walls, wall_idx, wall_z).astype(np.float64) * gain)
+    cv2.repeat(wall_rgb[None], h, 1, dst=canvas)            # a row broadcast, faster than numpy's
+    cv2.copyTo(r.floor_image(scene.floor_rgb, scene.backdrop_rgb, gain), not_wall, canvas)
+    cv2.repeat(wall_z.astype(np.float32)[None], h, 1, dst=depth)
     cv2.copyTo(r.floor_z_image, not_wall, depth)
 
     # objects: robots (body + markers) and props, with a depth test per pixel
@@ -400,15 +398,19 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     full = np.zeros(n_labels + 1, np.int64)
     shadows: list[tuple[int, int, int, float]] = []
     bands: dict[int, tuple[int, int, int, int]] = {}
+    _draw_circles(r, [p for p in prisms if p.footprint == "circle"], depth, canvas, labels, full, shadows, gain,
+                  bands)
     for p in prisms:
-        _draw_prism(r, p, depth, packed, labels, full, shadows, gain, bands)
+        if p.footprint != "circle":
+            _draw_prism(r, p, depth, canvas, labels, full, shadows, gain, bands)
 
-    image = cv2.cvtColor(packed.view(np.uint8).reshape(h, w, 4), cv2.COLOR_RGBA2RGB)
-    if scene.rgb_noise > 0:
+    if scene.rgb_noise > 0:                 # the new image is made by the first noise pass
         pos, neg = r.colour_noise(float(scene.rgb_noise))
         off = int(rng.integers(0, r.extra))
-        cv2.add(image, pos[off:off + h], dst=image)
+        image = cv2.add(canvas, pos[off:off + h])
         cv2.subtract(image, neg[off:off + h], dst=image)
+    else:
+        image = canvas.copy()
 
     noisy = _depth_noise(r, depth, shadows, rng)
     pixels: list[MarkerPixels] = []
@@ -572,14 +574,14 @@ _SHADE_LEVELS = 256
 
 @lru_cache(maxsize=256)
 def _face_palette(rgb: RGB, gain: float) -> np.ndarray:
-    """Packed colours of a lit vertical face for view-angle cosines 0..1 in 256 steps."""
+    """Colours (256 x 3 uint8) of a lit vertical face for view-angle cosines 0..1 in 256 steps."""
     cosv = np.linspace(0.0, 1.0, _SHADE_LEVELS)
-    return _pack((0.62 + 0.38 * cosv)[:, None] * np.asarray(rgb) * gain)
+    return _rgb8((0.62 + 0.38 * cosv)[:, None] * np.asarray(rgb) * gain)
 
 
 @lru_cache(maxsize=256)
-def _cap_colour(rgb: RGB, factor: float) -> np.uint32:
-    return np.uint32(_pack(np.asarray(rgb) * factor))
+def _cap_colour(rgb: RGB, factor: float) -> np.ndarray:
+    return _rgb8(np.asarray(rgb) * factor)
 
 
 def _zbuffer_band(r: _Renderer, p: _Prism, depth: np.ndarray, u0: int, u1: int, t1: np.ndarray,
@@ -598,9 +600,9 @@ def _zbuffer_band(r: _Renderer, p: _Prism, depth: np.ndarray, u0: int, u1: int, 
     qa, qb = inv_k * np.float32(a), inv_k * np.float32(b)   # k > 0: qa <= z <= qb; k < 0: reversed
     lo = np.minimum(qa, qb)[:, None]
     hi = np.maximum(qa, qb)[:, None]
-    t1c = t1.astype(np.float32)[None, :]
+    t1c = t1.astype(np.float32, copy=False)[None, :]
     zhit = np.maximum(t1c, lo)
-    hit = zhit <= np.minimum(t2.astype(np.float32)[None, :], hi)
+    hit = zhit <= np.minimum(t2.astype(np.float32, copy=False)[None, :], hi)
     if p.label:
         full[p.label] += int(np.count_nonzero(hit))
         bands[p.label] = (v0, v1, u0, u1)
@@ -614,12 +616,9 @@ def _zbuffer_band(r: _Renderer, p: _Prism, depth: np.ndarray, u0: int, u1: int, 
 
 def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, labels: np.ndarray | None,
                 full: np.ndarray, shadows: list, gain: float, bands: dict) -> None:
-    """Z-buffer one prism into the depth and packed-colour images (only its band of columns and rows)."""
+    """Z-buffer one box into the depth and colour images (only its band of columns and rows)."""
     import cv2
 
-    if p.footprint == "circle":
-        _draw_circle(r, p, depth, image, labels, full, shadows, gain, bands)
-        return
     span = _entry_exit(r, p)
     if span is None:
         return
@@ -653,61 +652,80 @@ def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, l
     cap_col = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)   # lit top / dark underside
     mask = closer.view(np.uint8)
     cv2.copyTo(zhit, mask, region)
-    colours = np.where(t1c >= lo, face_col[None, :], cap_col)
-    cv2.copyTo(colours.view(np.int32), mask, image[v0:v1, u0:u1].view(np.int32))
+    colours = np.where((t1c >= lo)[..., None], face_col[None, :], cap_col)
+    cv2.copyTo(colours, mask, image[v0:v1, u0:u1])
     if labels is not None:
         cv2.copyTo(np.full(mask.shape, p.label, np.int16), mask, labels[v0:v1, u0:u1])
     first = int(np.argmax(hit_cols))
     shadows.append((u0 + first, v0, v1, float(t1[first])))
 
 
-def _draw_circle(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, labels: np.ndarray | None,
-                 full: np.ndarray, shadows: list, gain: float, bands: dict) -> None:
-    """``_draw_prism`` for a vertical cylinder: the exact silhouette columns, few array operations."""
+def _draw_circles(r: _Renderer, prisms: list[_Prism], depth: np.ndarray, image: np.ndarray,
+                  labels: np.ndarray | None, full: np.ndarray, shadows: list, gain: float, bands: dict) -> None:
+    """``_draw_prism`` for vertical cylinders: the exact silhouette columns of all of them computed in
+    one go (a frame with many robots has dozens), then each drawn near to far, so that hidden ones stop
+    at the depth test before their colours are made."""
     import cv2
 
+    if not prisms:
+        return
     cam = r.cam
-    xc, zc = p.cam_xz
-    rad = p.radius
-    if zc - rad < _NEAR_M:
+    xc = np.array([p.cam_xz[0] for p in prisms])
+    zc = np.array([p.cam_xz[1] for p in prisms])
+    rad = np.array([p.radius for p in prisms])
+    rho = np.hypot(xc, zc)
+    with np.errstate(invalid="ignore"):
+        beta = np.arcsin(np.minimum(rad / rho, 1.0))
+    phi = np.arctan2(xc, zc)
+    # in front of the camera and not far outside a pinhole camera's view
+    keep = (zc - rad >= _NEAR_M) & (phi + beta < 1.5) & (phi - beta > -1.5)
+    with np.errstate(invalid="ignore"):
+        # columns whose centre ray meets the circle (all of them: no misses to mask)
+        u0 = np.maximum(0, np.ceil(cam.fx * np.tan(phi - beta) + cam.cx))
+        u1 = np.minimum(cam.width, np.floor(cam.fx * np.tan(phi + beta) + cam.cx) + 1)
+    keep &= u1 > u0
+    order = np.flatnonzero(keep)
+    if not order.size:
         return
-    rho = math.hypot(xc, zc)
-    beta = math.asin(rad / rho)
-    phi = math.atan2(xc, zc)
-    if phi + beta >= 1.5 or phi - beta <= -1.5:
-        return                                           # far outside a pinhole camera's view
-    # columns whose centre ray meets the circle (all of them: no misses to mask)
-    u0 = max(0, math.ceil(cam.fx * math.tan(phi - beta) + cam.cx))
-    u1 = min(cam.width, math.floor(cam.fx * math.tan(phi + beta) + cam.cx) + 1)
-    if u1 <= u0:
-        return
-    tau = r.tan_u64[u0:u1]
+    order = order[np.argsort(rho[order], kind="stable")]           # near to far
+    u0, u1 = u0[order].astype(np.intp), u1[order].astype(np.intp)
+    xc, zc, rad, rho = xc[order], zc[order], rad[order], rho[order]
+    lens = u1 - u0
+    ends = np.cumsum(lens)
+    starts = ends - lens
+    col = np.arange(int(ends[-1])) + np.repeat(u0 - starts, lens)
+    tau = r.tan_u64[col]
+    x, z, rr = np.repeat(xc, lens), np.repeat(zc, lens), np.repeat(rad, lens)
     a2 = 1.0 + tau * tau
-    b2 = xc * tau + zc
-    sq = np.sqrt(np.maximum(b2 * b2 - a2 * (rho * rho - rad * rad), 0.0))
+    b2 = x * tau + z
+    sq = np.sqrt(np.maximum(b2 * b2 - a2 * (np.repeat(rho * rho - rad * rad, lens)), 0.0))
     t1 = (b2 - sq) / a2                                  # where the ray enters and leaves the cylinder
     t2 = (b2 + sq) / a2
-    hc = r.rig.height_m
-    band = _zbuffer_band(r, p, depth, u0, u1, t1, t2, float(t1.min()), float(t2.max()), full, bands)
-    if band is None:
-        return
-    v0, v1, region, zhit, closer, lo, t1c = band
     # shading: the side by the angle between its normal and the view ray, the caps flat
-    view = ((zc - t1) + (xc - t1 * tau) * tau) * ((_SHADE_LEVELS - 1) / rad) / np.sqrt(a2)
-    np.maximum(view, 0.0, out=view)
-    np.minimum(view, _SHADE_LEVELS - 1, out=view)
-    face_col = _face_palette(p.rgb, gain)[(view + 0.5).astype(np.intp)]
-    mask = closer.view(np.uint8)
-    cv2.copyTo(zhit, mask, region)
-    if p.bottom < hc < p.top:                            # camera between bottom and top: side only
-        colours = np.repeat(face_col[None, :], v1 - v0, axis=0)
-    else:
-        cap_col = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)   # lit top / dark underside
-        colours = np.where(t1c >= lo, face_col[None, :], cap_col)
-    cv2.copyTo(colours.view(np.int32), mask, image[v0:v1, u0:u1].view(np.int32))
-    if labels is not None:
-        cv2.copyTo(np.full(mask.shape, p.label, np.int16), mask, labels[v0:v1, u0:u1])
-    shadows.append((u0, v0, v1, float(t1[0])))
+    view = ((z - t1) + (x - t1 * tau) * tau) * (_SHADE_LEVELS - 1) / rr / np.sqrt(a2)
+    np.clip(view, 0.0, _SHADE_LEVELS - 1, out=view)
+    level = (view + 0.5).astype(np.intp)
+    t1_32, t2_32 = t1.astype(np.float32), t2.astype(np.float32)
+    zmin, zmax = np.minimum.reduceat(t1, starts).tolist(), np.maximum.reduceat(t2, starts).tolist()
+    hc = r.rig.height_m
+    for i, (s, e, c0, c1) in enumerate(zip(starts.tolist(), ends.tolist(), u0.tolist(), u1.tolist())):
+        p = prisms[order[i]]
+        band = _zbuffer_band(r, p, depth, c0, c1, t1_32[s:e], t2_32[s:e], zmin[i], zmax[i], full, bands)
+        if band is None:
+            continue
+        v0, v1, region, zhit, closer, lo, t1c = band
+        face_col = _face_palette(p.rgb, gain)[level[s:e]]
+        mask = closer.view(np.uint8)
+        cv2.copyTo(zhit, mask, region)
+        if p.bottom < hc < p.top:                        # camera between bottom and top: side only
+            colours = np.repeat(face_col[None], v1 - v0, axis=0)
+        else:
+            cap_col = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)   # lit top / dark underside
+            colours = np.where((t1c >= lo)[..., None], face_col[None], cap_col)
+        cv2.copyTo(colours, mask, image[v0:v1, c0:c1])
+        if labels is not None:
+            cv2.copyTo(np.full(mask.shape, p.label, np.int16), mask, labels[v0:v1, c0:c1])
+        shadows.append((c0, v0, v1, float(t1[s])))
 
 
 def _depth_noise(r: _Renderer, depth: np.ndarray, shadows: list, rng: np.random.Generator) -> np.ndarray:
