@@ -25,7 +25,7 @@ from agentspeak import program as P
 from agentspeak.beliefs import SELF, SOURCE_PERCEPT, SOURCE_SELF, BeliefBase, has_source
 from agentspeak.intentions import Event, Frame, IntendedMeans, Intention, PlanLibrary
 from agentspeak.program import ACHIEVE, ADD, BEL, DEL, TEST, Plan, PlanTerm, Program, Trigger
-from agentspeak.solver import SolveError, solve, solve_first
+from agentspeak.solver import _COMPILED, SolveError, _true_k, compiled, solve, solve_first
 from agentspeak.stdlib.registry import STDLIB, IAError, Registry, Suspend
 from agentspeak.terms import (
     ArithmeticError_, Literal, Term, Var, is_ground, rename, resolve, to_str, variables,
@@ -69,6 +69,7 @@ class Agent:
         from agentspeak.arch import AgentArch  # local import: arch depends on agent's types only
 
         self.name = name
+        self._perceive = None
         self.arch = arch if arch is not None else AgentArch()
         self.registry = registry
         self.tro = tro
@@ -93,6 +94,18 @@ class Agent:
         self.dropped: dict[str, int] = {}
         if program is not None:
             self.load(program)
+
+    @property
+    def arch(self) -> Any:
+        """The agent architecture (replaceable, e.g. when a bridge puts the agent on a network)."""
+        return self._arch
+
+    @arch.setter
+    def arch(self, arch: Any) -> None:
+        from agentspeak.arch import AgentArch
+        self._arch = arch
+        # the default perceive() never returns percepts: the sense phase skips the call
+        self._perceive = None if type(arch).perceive is AgentArch.perceive else arch.perceive
 
     # ------------------------------------------------------------------ loading
     def load(self, program: Program) -> None:
@@ -163,7 +176,8 @@ class Agent:
 
     def post_internal(self, trigger: Trigger, intention: Intention) -> None:
         """An event on ``intention``, which waits until the event is handled."""
-        self._notify_waiters(trigger)
+        if self.event_waiters:
+            self._notify_waiters(trigger)
         self.events.append(Event(trigger, intention))
         intention.suspended = "event"
 
@@ -184,7 +198,10 @@ class Agent:
     def cycle(self) -> bool:
         """One reasoning cycle. Returns True if anything happened."""
         self.cycles += 1
-        did = self.sense()
+        if self._perceive is not None or self.feedback or self.timers or self.mailbox:
+            did = self.sense()
+        else:
+            did = False
         if self.events and self.deliberate():
             did = True
         if self.running:
@@ -207,10 +224,12 @@ class Agent:
     # -- sense
     def sense(self) -> bool:
         did = False
-        percepts = self.arch.perceive(self)
-        if percepts is not None:
-            self.buf(percepts)
-            did = True
+        perceive = self._perceive
+        if perceive is not None:
+            percepts = perceive(self)
+            if percepts is not None:
+                self.buf(percepts)
+                did = True
         while self.feedback:
             self.feedback.popleft()()
             did = True
@@ -255,9 +274,12 @@ class Agent:
         return events.popleft()
 
     def deliberate(self) -> bool:
-        ev = self.sel_ev()
-        if ev is None:
-            return False
+        if self.atomic_intention is None:
+            ev = self.events.popleft()
+        else:
+            ev = self.sel_ev()
+            if ev is None:
+                return False
         trigger = ev.trigger
         intention = ev.intention
         if intention is not None and intention.dropped:
@@ -269,12 +291,14 @@ class Agent:
         lit = trigger.literal
         for plan in relevant:
             b: dict = {}
-            trail: list = []
-            if not unify(plan.trigger.literal, lit, b, trail):
+            if not unify(plan.trigger.literal, lit, b, []):
                 continue
-            if plan.context is not None:
+            context = plan.context
+            if context is not None:
                 try:
-                    if not solve_first(self, plan.context, b):
+                    entry = _COMPILED.get(id(context))
+                    fn = entry[1] if entry is not None and entry[0] is context else compiled(context)
+                    if not fn(self, b, [], _true_k):
                         continue
                 except SolveError as exc:
                     log.warning("[%s] error in the context of the plan at %s:%s: %s", self.name,
@@ -313,26 +337,36 @@ class Agent:
 
     def push_im(self, ev: Event, plan: Plan, b: dict) -> None:
         """Rule AddIM (with tail-recursion optimisation)."""
-        im = IntendedMeans(plan, b, ev.trigger.literal)
+        trigger = ev.trigger
+        im = IntendedMeans(plan, b, trigger.literal)
         intention = ev.intention
         if intention is None:
             intention = Intention()
-        else:
-            if ev.handles is not None or (ev.trigger.op == DEL and ev.trigger.kind != BEL):
-                im.handles = ev.handles if ev.handles is not None else _PENDING_GOAL
-            elif self.tro and ev.trigger.op == ADD and ev.trigger.kind == ACHIEVE and intention.stack:
-                top = intention.stack[-1]
-                tt = top.plan.trigger
-                if (tt.op == ADD and tt.kind == ACHIEVE and top.handles is None and top.at_last_step()
-                        and type(tt.literal) is Literal and type(plan.trigger.literal) is Literal
-                        and tt.literal.functor == plan.trigger.literal.functor
-                        and len(tt.literal.args) == len(plan.trigger.literal.args)
-                        and not plan.atomic and not top.plan.atomic):
+            intention.stack.append(im)
+            if plan.atomic:
+                intention.atomic += 1
+                self.atomic_intention = intention
+            self.running.append(intention)  # a new intention: not in any queue yet
+            return
+        stack = intention.stack
+        if ev.handles is not None or (trigger.op == DEL and trigger.kind != BEL):
+            im.handles = ev.handles if ev.handles is not None else _PENDING_GOAL
+        elif self.tro and trigger.kind == ACHIEVE and trigger.op == ADD and stack:
+            top = stack[-1]
+            tt = top.plan.trigger
+            frames = top.frames
+            if (len(frames) == 1 and frames[0].pc == len(frames[0].body) - 1  # at its last step
+                    and tt.kind == ACHIEVE and tt.op == ADD and top.handles is None
+                    and not plan.atomic and not top.plan.atomic):
+                tl, pl = tt.literal, plan.trigger.literal
+                if (type(tl) is Literal and type(pl) is Literal and tl.functor == pl.functor
+                        and len(tl.args) == len(pl.args)):
                     # Tail call: the finished caller is replaced; the callee reports its result
                     # directly to the caller's caller, so the stack stays flat.
-                    im.result = resolve(top.result, top.b)
-                    intention.stack.pop()
-        intention.stack.append(im)
+                    stack.pop()
+                    if stack:  # at the bottom of the stack nobody reads the result
+                        im.result = resolve(top.result, top.b)
+        stack.append(im)
         if plan.atomic:
             intention.atomic += 1
             self.atomic_intention = intention
@@ -643,6 +677,23 @@ class Agent:
     def _fresh_goal(self, lit: Term, b: dict) -> Term:
         """Apply bindings, rename unbound variables apart (binding the caller's to the new ones),
         and add ``source(self)``: the literal of a goal event (Jason's prepareBodyForEvent)."""
+        if type(lit) is Literal and lit.annots is None and lit.annot_tail is None:
+            # the usual goal: arguments that resolve to numbers, strings or atoms; built once
+            args = []
+            for a in lit.args:
+                ta = type(a)
+                if ta is Var:
+                    a = b.get(a, a)
+                    ta = type(a)
+                if ta is not int and ta is not float and ta is not str:
+                    a = resolve(a, b)
+                    ta = type(a)
+                    if not (ta is int or ta is float or ta is str
+                            or (ta is Literal and not a.args and a.annots is None)):
+                        break
+                args.append(a)
+            else:
+                return Literal(lit.functor, tuple(args), _SOURCE_SELF_ONLY, lit.neg)
         value = resolve(lit, b)
         if type(value) is Literal:
             if value.annots or value.annot_tail is not None or not _simple_args(value.args):
@@ -681,6 +732,9 @@ def _simple_args(args: tuple) -> bool:
             continue
         return False
     return True
+
+
+_SOURCE_SELF_ONLY = (SOURCE_SELF,)
 
 
 class _PendingGoal:

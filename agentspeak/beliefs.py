@@ -145,7 +145,11 @@ class BeliefBase:
 
     def candidates(self, lit: Literal, b: dict) -> list[Literal]:
         """Stored beliefs that may unify with ``lit`` (first-argument index when it is bound)."""
-        bucket = self._facts.get(lit.key)
+        return self.candidates_by_key((lit.neg, lit.functor, len(lit.args)), lit, b)
+
+    def candidates_by_key(self, key: tuple, lit: Literal, b: dict) -> list[Literal]:
+        """``candidates`` when the caller already knows ``lit.key`` (compiled formulas do)."""
+        bucket = self._facts.get(key)
         if bucket is None:
             return []
         if lit.args:
@@ -192,7 +196,10 @@ class BeliefBase:
         return False
 
     def rules_for(self, lit: Literal) -> list[Rule]:
-        return self._rules.get(lit.key, ())
+        return self._rules.get((lit.neg, lit.functor, len(lit.args)), ())
+
+    def has_rules(self, key: tuple) -> bool:
+        return bool(self._rules.get(key))
 
     def rules(self) -> Iterable[Rule]:
         for rules in self._rules.values():

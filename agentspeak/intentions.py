@@ -148,7 +148,8 @@ class PlanLibrary:
 
     def relevant(self, trigger: Trigger) -> list[Plan]:
         index = self._index if self._index is not None else self._build()
-        key = trigger.key
+        lit = trigger.literal
+        key = (trigger.op, trigger.kind, lit.neg, lit.functor, len(lit.args)) if type(lit) is Literal else None
         if key is None:
             return [p for p in self.plans if p.trigger.op == trigger.op and p.trigger.kind == trigger.kind]
         found = index.get(key)

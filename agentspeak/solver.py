@@ -11,19 +11,27 @@ running to exhaustion undoes everything.
 from __future__ import annotations
 
 import logging
-from typing import Iterator, Protocol
+import operator
+from typing import TYPE_CHECKING, Iterator, Protocol
 
 from agentspeak.terms import (
     And, Arith, ArithmeticError_, Cons, Literal, Not, Or, Rel, Term, Var, compare, deref,
-    is_list, list_items, make_list, rename, resolve, to_str,
+    is_list, list_items, make_list, resolve, to_str,
 )
+from agentspeak.copier import rule_copier
 from agentspeak.unify import undo, unify, unify_annots_all
+
+if TYPE_CHECKING:
+    from agentspeak.beliefs import BeliefBase
 
 log = logging.getLogger("faultmas.agentspeak")
 
 
 class KnowledgeBase(Protocol):
-    """What the solver needs from an agent: facts, rules and internal actions usable in formulas."""
+    """What the solver needs from an agent: facts, rules and internal actions usable in formulas
+    (compiled formulas go to the belief base ``bb`` directly)."""
+
+    bb: "BeliefBase"
 
     def candidates(self, lit: Literal, b: dict) -> list: ...
     def rules_for(self, lit: Literal) -> list: ...
@@ -170,10 +178,9 @@ def solve(kb: KnowledgeBase, formula: Term, b: dict, trail: list | None = None) 
                 while ri < len(rules):
                     rule = rules[ri]
                     ri += 1
-                    mapping: dict = {}
-                    head = rename(rule.head, mapping)
+                    copier = rule.__dict__.get("_copier") or rule_copier(rule)
+                    head, body = copier()
                     if unify(goal, head, b, trail):
-                        body = rename(rule.body, mapping)
                         if fi >= len(facts) and ri >= len(rules):
                             choices.pop()  # last alternative: no choice point left (keeps the stack flat)
                         else:
@@ -351,6 +358,8 @@ def _compile(f: Term):
             undo(b, trail, mark)
             return (not found) and k()
         return negation
+    if tf is Rel and f.op in _ORDER_OPS:
+        return _compile_order(f)
     if tf is Rel:
         def relation(kb, b, trail, k):
             mark = len(trail)
@@ -380,14 +389,16 @@ def _compile(f: Term):
                 return False
             return internal
         annot_vars = f.annots is not None and _annots_have_vars(f)
+        key = (f.neg, f.functor, len(f.args))
 
         def literal(kb, b, trail, k):
-            if kb.rules_for(f) or annot_vars:
+            bb = kb.bb
+            if annot_vars or bb.has_rules(key):
                 for _ in solve(kb, f, b, trail):
                     if k():
                         return True
                 return False
-            for fact in kb.candidates(f, b):
+            for fact in bb.candidates_by_key(key, f, b):
                 mark = len(trail)
                 if unify(f, fact, b, trail) and k():
                     return True
@@ -401,6 +412,45 @@ def _compile(f: Term):
                 return True
         return False
     return general
+
+
+_ORDER_OPS = {"<": operator.lt, ">": operator.gt, "<=": operator.le, ">=": operator.ge}
+
+
+def _compile_order(f: Rel):
+    """``<`` ``>`` ``<=`` ``>=``: numbers compared at once (no bindings to undo); others via ``_rel``."""
+    cmp = _ORDER_OPS[f.op]
+    left0, right0 = f.left, f.right
+
+    def order(kb, b, trail, k):
+        x = left0
+        while type(x) is Var:
+            v = b.get(x)
+            if v is None:
+                break
+            x = v
+        tx = type(x)
+        if tx is not int and tx is not float:
+            x = resolve(x, b)
+            tx = type(x)
+        y = right0
+        while type(y) is Var:
+            v = b.get(y)
+            if v is None:
+                break
+            y = v
+        ty = type(y)
+        if ty is not int and ty is not float:
+            y = resolve(y, b)
+            ty = type(y)
+        if (tx is int or tx is float) and (ty is int or ty is float):
+            return cmp(x, y) and k()
+        try:
+            ok = _rel(kb, f, b, trail)
+        except ArithmeticError_ as exc:
+            raise SolveError("wrong_arguments", str(exc)) from None
+        return ok and k()
+    return order
 
 
 def solve_first_compiled(kb: KnowledgeBase, formula: Term, b: dict) -> bool:
