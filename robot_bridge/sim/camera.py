@@ -242,6 +242,7 @@ class _Renderer:
         self.colour_bank_unit = colour
         self._colour_cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         self._floor_cache: dict[tuple, np.ndarray] = {}
+        self._height_cache: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
         self._local = threading.local()
         self.extra = extra
 
@@ -265,6 +266,20 @@ class _Renderer:
                 self._floor_cache.clear()
             self._floor_cache[key] = img
         return img
+
+    def height_limits(self, bottom: float, top: float) -> tuple[np.ndarray, np.ndarray]:
+        """Per row (h x 1 float32), the depths between which a ray is within ``bottom..top`` in height."""
+        key = (bottom, top)
+        limits = self._height_cache.get(key)
+        if limits is None:
+            hc = self.rig.height_m
+            qa = self.inv_k32 * np.float32(hc - top)       # k > 0: qa <= z <= qb; k < 0: reversed
+            qb = self.inv_k32 * np.float32(hc - bottom)
+            limits = (np.minimum(qa, qb)[:, None], np.maximum(qa, qb)[:, None])
+            if len(self._height_cache) >= 64:              # scenes with ever new props must not pile up
+                self._height_cache.clear()
+            self._height_cache[key] = limits
+        return limits
 
     def scratch(self) -> tuple[np.ndarray, np.ndarray]:
         """This thread's colour and depth buffers (re-used frame after frame)."""
@@ -596,13 +611,15 @@ def _zbuffer_band(r: _Renderer, p: _Prism, depth: np.ndarray, u0: int, u1: int, 
     v1 = min(cam.height, math.ceil(max(ks) * cam.fy + cam.cy) + 1)
     if v1 <= v0:
         return None
-    inv_k = r.inv_k32[v0:v1]
-    qa, qb = inv_k * np.float32(a), inv_k * np.float32(b)   # k > 0: qa <= z <= qb; k < 0: reversed
-    lo = np.minimum(qa, qb)[:, None]
-    hi = np.maximum(qa, qb)[:, None]
+    lo, hi = r.height_limits(p.bottom, p.top)
+    lo, hi = lo[v0:v1], hi[v0:v1]
     t1c = t1.astype(np.float32, copy=False)[None, :]
-    zhit = np.maximum(t1c, lo)
-    hit = zhit <= np.minimum(t2.astype(np.float32, copy=False)[None, :], hi)
+    if a < 0 < b:           # camera between bottom and top: no cap in sight, the side at the entry depth
+        zhit = np.broadcast_to(t1c, (v1 - v0, u1 - u0))
+        hit = t1c <= hi
+    else:
+        zhit = np.maximum(t1c, lo)
+        hit = zhit <= np.minimum(t2.astype(np.float32, copy=False)[None, :], hi)
     if p.label:
         full[p.label] += int(np.count_nonzero(hit))
         bands[p.label] = (v0, v1, u0, u1)
@@ -718,7 +735,7 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], depth: np.ndarray, image: 
         mask = closer.view(np.uint8)
         cv2.copyTo(zhit, mask, region)
         if p.bottom < hc < p.top:                        # camera between bottom and top: side only
-            colours = np.repeat(face_col[None], v1 - v0, axis=0)
+            colours = np.broadcast_to(face_col[None], (v1 - v0, c1 - c0, 3))
         else:
             cap_col = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)   # lit top / dark underside
             colours = np.where((t1c >= lo)[..., None], face_col[None], cap_col)
