@@ -23,6 +23,7 @@ from typing import Any, Callable, Iterator
 
 from agentspeak import program as P
 from agentspeak.beliefs import SELF, SOURCE_PERCEPT, SOURCE_SELF, BeliefBase, has_source
+from agentspeak.communication import receive_message
 from agentspeak.intentions import Event, Frame, IntendedMeans, Intention, PlanLibrary
 from agentspeak.program import ACHIEVE, ADD, BEL, DEL, TEST, Plan, PlanTerm, Program, Trigger
 from agentspeak.solver import _COMPILED, SolveError, _true_k, compiled, solve, solve_first
@@ -69,8 +70,8 @@ class Agent:
         from agentspeak.arch import AgentArch  # local import: arch depends on agent's types only
 
         self.name = name
-        self._perceive = None
         self.arch = arch if arch is not None else AgentArch()
+        self._see_arch(self.arch)
         self.registry = registry
         self.tro = tro
         self.bb = BeliefBase()
@@ -95,16 +96,11 @@ class Agent:
         if program is not None:
             self.load(program)
 
-    @property
-    def arch(self) -> Any:
-        """The agent architecture (replaceable, e.g. when a bridge puts the agent on a network)."""
-        return self._arch
-
-    @arch.setter
-    def arch(self, arch: Any) -> None:
+    def _see_arch(self, arch: Any) -> None:
+        """A new architecture (set at start, or by a bridge): the default ``perceive`` never returns
+        percepts, so the sense phase skips calling it."""
         from agentspeak.arch import AgentArch
-        self._arch = arch
-        # the default perceive() never returns percepts: the sense phase skips the call
+        self._arch_seen = arch
         self._perceive = None if type(arch).perceive is AgentArch.perceive else arch.perceive
 
     # ------------------------------------------------------------------ loading
@@ -198,6 +194,8 @@ class Agent:
     def cycle(self) -> bool:
         """One reasoning cycle. Returns True if anything happened."""
         self.cycles += 1
+        if self.arch is not self._arch_seen:
+            self._see_arch(self.arch)
         if self._perceive is not None or self.feedback or self.timers or self.mailbox:
             did = self.sense()
         else:
@@ -240,7 +238,6 @@ class Agent:
                 callback()
             did = True
         if self.mailbox:
-            from agentspeak.communication import receive_message
             receive_message(self, self.mailbox.popleft())
             did = True
         return did
@@ -900,11 +897,11 @@ def _exec_internal(ag: Agent, intention, im, frame, instr) -> None:
     if spec is None:
         raise IAError("ia_failed", f"unknown internal action {lit.functor}")
     b = im.b
-    args = tuple(resolve(a, b) for a in lit.args) if lit.args else ()
-    ag._check_arity(spec, lit, args)
-    trail: list = []
-    ctx = IAContext(ag, intention, im, b, trail)
-    result = spec.function(ctx, *args)
+    args = tuple([resolve(a, b) for a in lit.args]) if lit.args else ()
+    n = len(args)
+    if n < spec.min_args or (spec.max_args is not None and n > spec.max_args):
+        ag._check_arity(spec, lit, args)
+    result = spec.function(IAContext(ag, intention, im, b, []), *args)
     if result is None or result is True:
         frame.pc += 1
         return

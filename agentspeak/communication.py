@@ -63,10 +63,30 @@ def _strip_self_source(lit: Literal) -> Literal:
     return Literal(lit.functor, lit.args, kept or None, lit.neg)
 
 
+_SOURCES: dict[str, Literal] = {}
+
+
+def _source_of(who: Term) -> Literal:
+    """``source(who)``, made once per sender name (hostile senders cannot grow the table much)."""
+    if type(who) is not Literal or who.args:
+        return source(who)
+    found = _SOURCES.get(who.functor)
+    if found is None:
+        found = source(who)
+        if len(_SOURCES) < 10_000:
+            _SOURCES[who.functor] = found
+    return found
+
+
 def _annotate(lit: Term, who: Term) -> Term:
     if isinstance(lit, Literal):
-        return Literal(lit.functor, lit.args, lit.annots, lit.neg).add_annot(source(who))
+        if lit.annots is None:  # the usual content: no annotations of its own
+            return Literal(lit.functor, lit.args, (_source_of(who),), lit.neg)
+        return Literal(lit.functor, lit.args, lit.annots, lit.neg).add_annot(_source_of(who))
     return lit
+
+
+_KQML_RECEIVED = Trigger(ADD, ACHIEVE, Literal("kqml_received", (Var(), Var(), Var(), Var())))
 
 
 def receive_message(agent: Any, msg: Message) -> None:
@@ -77,7 +97,7 @@ def receive_message(agent: Any, msg: Message) -> None:
     if msg.in_reply_to is not None and msg.in_reply_to in agent.pending_asks:
         agent.pending_asks.pop(msg.in_reply_to)(msg)
         return
-    if agent.plans.relevant(Trigger(ADD, ACHIEVE, Literal("kqml_received", (Var(), Var(), Var(), Var())))):
+    if agent.plans.relevant(_KQML_RECEIVED):
         goal = Literal("kqml_received", (sender, Literal(perf), msg.content, msg.msg_id), (SOURCE_SELF,))
         agent.post_external(Trigger(ADD, ACHIEVE, goal), force=True)
         return

@@ -61,6 +61,7 @@ class LocalRuntime:
                  environment: Callable[[Agent, Literal], object] | None = None) -> None:
         self.agents: dict[str, Agent] = {}
         self.ready: deque[Agent] = deque()
+        self._timed: set[Agent] = set()      # agents that had timers at the end of their last turn
         self._ready_set: set[str] = set()
         self._cond = threading.Condition()
         self._stop_at: float | None = None
@@ -138,6 +139,8 @@ class LocalRuntime:
         """Run until ``.stopMAS``, until idle (if asked) or until ``timeout`` seconds. Returns why."""
         deadline = None if timeout is None else time.monotonic() + timeout
         ready = self.ready
+        timed = self._timed
+        timed.update(a for a in self.agents.values() if a.timers)
         while True:
             now = time.monotonic()
             if self._stop_at is not None and now >= self._stop_at:
@@ -145,26 +148,33 @@ class LocalRuntime:
                 return "stopped"
             if deadline is not None and now >= deadline:
                 return "timeout"
-            # timers that are due make their agents ready
-            for agent in self.agents.values():
-                if agent.timers and agent.timers[0][0] <= now and agent.name not in self._ready_set:
-                    self._ready_set.add(agent.name)
-                    ready.append(agent)
+            # timers that are due make their agents ready (only agents that have timers are looked at)
+            if timed:
+                for agent in list(timed):
+                    if not agent.timers:
+                        timed.discard(agent)
+                    elif agent.timers[0][0] <= now and agent.name not in self._ready_set:
+                        self._ready_set.add(agent.name)
+                        ready.append(agent)
             if ready:
                 with self._cond:
                     agent = ready.popleft()
                     self._ready_set.discard(agent.name)
+                cycle = agent.cycle
                 for _ in range(CYCLES_PER_TURN):
-                    agent.cycle()
-                    if not agent.has_work() or self._stop_at is not None:
+                    cycle()
+                    if not (agent.events or agent.running or agent.mailbox or agent.feedback) \
+                            or self._stop_at is not None:
                         break
+                if agent.timers:
+                    timed.add(agent)  # timers are only set by the agent itself, during its turn
                 if agent.has_work() or (agent.timers and agent.timers[0][0] <= time.monotonic()):
                     self.wake(agent)
                 continue
             if stop_when_idle and self.idle() and not self._external_pending():
                 return "idle"
             # nothing ready: sleep until the next timer, a wake-up, or the deadline
-            waits = [a.timers[0][0] for a in self.agents.values() if a.timers]
+            waits = [a.timers[0][0] for a in timed if a.timers]
             if self._stop_at is not None:
                 waits.append(self._stop_at)
             if deadline is not None:

@@ -360,6 +360,8 @@ def _compile(f: Term):
         return negation
     if tf is Rel and f.op in _ORDER_OPS:
         return _compile_order(f)
+    if tf is Rel and f.op == "=":
+        return _compile_unify(f)
     if tf is Rel:
         def relation(kb, b, trail, k):
             mark = len(trail)
@@ -451,6 +453,35 @@ def _compile_order(f: Rel):
             raise SolveError("wrong_arguments", str(exc)) from None
         return ok and k()
     return order
+
+
+def _compile_unify(f: Rel):
+    """``X = expr``: both sides resolved (arithmetic evaluated), then unified."""
+    left0, right0 = f.left, f.right
+
+    def unify_rel(kb, b, trail, k):
+        mark = len(trail)
+        x = left0
+        if type(x) is Var:
+            x = deref(x, b)
+        if type(x) is not int and type(x) is not float and type(x) is not Var:
+            try:
+                x = resolve(x, b)
+            except ArithmeticError_ as exc:
+                raise SolveError("wrong_arguments", str(exc)) from None
+        y = right0
+        if type(y) is Var:
+            y = deref(y, b)
+        if type(y) is not int and type(y) is not float and type(y) is not Var:
+            try:
+                y = resolve(y, b)
+            except ArithmeticError_ as exc:
+                raise SolveError("wrong_arguments", str(exc)) from None
+        if unify(x, y, b, trail) and k():
+            return True
+        undo(b, trail, mark)
+        return False
+    return unify_rel
 
 
 def solve_first_compiled(kb: KnowledgeBase, formula: Term, b: dict) -> bool:

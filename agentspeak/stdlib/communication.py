@@ -11,6 +11,8 @@ _ASK = ("askOne", "askAll", "askHow")
 
 
 def _names(receiver) -> list[str]:
+    if type(receiver) is Literal and not receiver.args:
+        return [receiver.functor]  # the usual single receiver
     try:
         items = list_items(receiver)
     except TypeError:
