@@ -41,6 +41,13 @@ def add_agent_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--wait-for-peers", type=float, default=0.0, metavar="S",
                      help="with --project: wait up to S seconds until every project agent is reachable")
     run.add_argument("--timeout", type=float, default=None, metavar="S", help="stop after S seconds")
+    run.add_argument("--bridge", default=None, metavar="NAME",
+                     help="drive a robot through this bridge (entry point in faultmas.robot_bridges, e.g. "
+                          "zenoh for a simulator served over Zenoh, or ros2); the robot has the agent's name")
+    run.add_argument("--bridge-option", action="append", default=[], metavar="KEY=VALUE",
+                     help="an option for the bridge (repeatable; numbers are converted)")
+    run.add_argument("--bridge-timeout", type=float, default=30.0, metavar="S",
+                     help="seconds the robot gets to answer at start (default %(default)s)")
     run.set_defaults(func=cmd_agent_run)
     agent.set_defaults(func=lambda args: (agent.print_help(), 2)[1])
 
@@ -82,15 +89,29 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
     except (AslSyntaxError, SourceError, ValueError) as exc:
         print(exc, file=sys.stderr)
         return 2
+    try:
+        bridge_options = dict(_bridge_option(text) for text in args.bridge_option)
+    except ValueError as exc:
+        print(f"faultmas agent run: {exc}", file=sys.stderr)
+        return 2
     runtime = LocalRuntime()
-    runtime.add_agent(args.name, source_file=args.file, program=program, extra_beliefs=beliefs,
-                      extra_goals=goals)
     transport = ZenohTransport(args.mas, options, max_message_size=args.max_message_size or DEFAULT_MAX_SIZE)
     try:
         transport.open()
     except Exception as exc:  # zenoh.ZError: bad endpoint, port taken
         print(f"faultmas agent run: cannot join the network: {exc}", file=sys.stderr)
         return 1
+    robot = None
+    if args.bridge:
+        try:
+            robot = _open_robot(args, transport, bridge_options)
+        except Exception as exc:  # unknown bridge, bad options, robot silent: say which, exit 1
+            transport.close()
+            print(f"faultmas agent run: robot {args.name} via bridge {args.bridge!r}: {exc}", file=sys.stderr)
+            return 1
+    from agents.robot_arch import RobotArch
+    runtime.add_agent(args.name, source_file=args.file, program=program, extra_beliefs=beliefs,
+                      extra_goals=goals, arch=RobotArch(runtime, robot) if robot is not None else None)
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: runtime.stop())
     try:
@@ -103,6 +124,8 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
         why = bridge.run(timeout=args.timeout)
         bridge.detach()
     finally:
+        if robot is not None:
+            robot.shutdown()
         transport.close()
         _report_drops(args.name, transport.dropped)
     return EXIT_TIMEOUT if why == "timeout" else 0
@@ -113,3 +136,31 @@ def _report_drops(name: str, dropped: dict) -> None:
     if dropped:
         reasons = ", ".join(f"{reason}={count}" for reason, count in sorted(dropped.items()))
         log.warning("agent %s: dropped %d messages (%s)", name, sum(dropped.values()), reasons)
+
+
+def _bridge_option(text: str) -> tuple[str, object]:
+    """``KEY=VALUE`` from the command line; numbers become numbers, true/false booleans."""
+    key, sep, value = text.partition("=")
+    if not sep or not key.strip():
+        raise ValueError(f"--bridge-option expects KEY=VALUE, got {text!r}")
+    lowered = value.strip().lower()
+    if lowered in ("true", "false"):
+        return key.strip(), lowered == "true"
+    for convert in (int, float):
+        try:
+            return key.strip(), convert(value)
+        except ValueError:
+            pass
+    return key.strip(), value
+
+
+def _open_robot(args: argparse.Namespace, transport, options: dict):
+    """Create and set up the agent's robot bridge; a ``zenoh`` bridge shares the agent's session."""
+    from robot_bridge.registry import create
+
+    if args.bridge == "zenoh":
+        options.setdefault("mas", args.mas)
+        options.setdefault("session", transport.session)
+    bridge = create(args.bridge, args.name, **options)
+    bridge.setup(timeout=args.bridge_timeout)
+    return bridge

@@ -53,7 +53,7 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
         print(exc, file=err)
         return 2
     hub = ZenohTransport(project.name, ZenohOptions(listen=(loopback_endpoint(),))).open()
-    launcher = _Launcher(project, hub, out, err)
+    launcher = Launcher(project, hub, out, err)
     try:
         launcher.start()
         reason = launcher.wait(timeout)
@@ -69,11 +69,15 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
     return EXIT_CODES[reason]
 
 
-class _Launcher:
-    """The children of one run, their output relays, and what the hub hears about them."""
+class Launcher:
+    """The children of one run, their output relays, and what the hub hears about them.
 
-    def __init__(self, project, hub, out: IO[str], err: IO[str]) -> None:
+    ``extra_args``: more ``faultmas agent run`` options for every child (e.g. ``--bridge zenoh``).
+    """
+
+    def __init__(self, project, hub, out: IO[str], err: IO[str], extra_args: list[str] | None = None) -> None:
         self.project, self.hub, self.out, self.err = project, hub, out, err
+        self.extra_args = list(extra_args or ())
         self.names = project.agent_names()
         self.children: dict[str, subprocess.Popen] = {}
         self.relays: list[threading.Thread] = []
@@ -95,7 +99,7 @@ class _Launcher:
             for name in decl.instance_names():
                 command = [sys.executable, "-m", "agents", "agent", "run", decl.source, "--name", name,
                            "--mas", self.project.name, "--connect", endpoint, "--project", self.project.file,
-                           "--wait-for-peers", str(START_TIMEOUT)]
+                           "--wait-for-peers", str(START_TIMEOUT), *self.extra_args]
                 child = subprocess.Popen(command, cwd=REPO, env=env, text=True, stdin=subprocess.DEVNULL,
                                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
                 self.children[name] = child
@@ -110,7 +114,7 @@ class _Launcher:
                 sink.write(line)
                 sink.flush()
 
-    def wait(self, timeout: float | None) -> str:
+    def wait(self, timeout: float | None, stop_when_idle: bool = True) -> str:
         """Block until the MAS ends; the reason ('stopped', 'idle', 'timeout' or 'failed')."""
         from agents.transport.status import quiescent, totals
 
@@ -125,7 +129,7 @@ class _Launcher:
                 return "failed"
             statuses = [self.statuses.get(name) for name in self.names]
             snapshot = None
-            if all(statuses) and quiescent(statuses):
+            if stop_when_idle and all(statuses) and quiescent(statuses):
                 snapshot = (totals(statuses), tuple(statuses))
                 if snapshot == previous:
                     return "idle"

@@ -7,11 +7,14 @@ fails the action with the bridge's reason (``no_progress``, ``timeout``, ``unkno
 """
 from __future__ import annotations
 
+import logging
 from concurrent.futures import Future
 
 from agentspeak.runtime import LocalArch
 from agentspeak.terms import Literal, Term, list_items, make_list
 from robot_bridge.protocol import Action, Completion, Percept, RobotBridge
+
+log = logging.getLogger("faultmas.agents")
 
 
 def to_term(value: object) -> Term:
@@ -48,9 +51,17 @@ def percept_literal(p: Percept) -> Literal:
 class RobotArch(LocalArch):
     """A ``LocalArch`` whose environment is one robot bridge."""
 
-    def __init__(self, runtime, bridge: RobotBridge, **kwargs) -> None:
+    def __init__(self, runtime, bridge: RobotBridge, on_progress=None, **kwargs) -> None:
         super().__init__(runtime, **kwargs)
         self.bridge = bridge
+        self.on_progress = on_progress
+        """``on_progress(report)``: where ``.progress`` reports go (``agents.progress``); None: logged."""
+
+    def progress(self, agent, report) -> None:
+        if self.on_progress is not None:
+            self.on_progress(report)
+        else:
+            log.info("[%s] %s %s", report.agent, report.step, report.detail)
 
     def perceive(self, agent) -> list[Literal] | None:
         return [percept_literal(p) for p in self.bridge.percepts()]

@@ -74,11 +74,26 @@ CONTENT_CACHE = ContentCache()
 
 
 class NetworkArch(LocalArch):
-    """``LocalArch`` whose MAS extends beyond this process: names, stop and trust come from the bridge."""
+    """``LocalArch`` whose MAS extends beyond this process: names, stop and trust come from the bridge.
 
-    def __init__(self, runtime: LocalRuntime, bridge: "TransportBridge") -> None:
+    ``body``: the architecture the agent had before it joined the network (e.g. a ``RobotArch``); its
+    ``perceive`` and ``act`` stay in force, so a robot agent keeps its robot.
+    """
+
+    def __init__(self, runtime: LocalRuntime, bridge: "TransportBridge", body: LocalArch | None = None) -> None:
         super().__init__(runtime)
         self.bridge = bridge
+        self.body = body
+
+    def perceive(self, agent: Agent):
+        return self.body.perceive(agent) if self.body is not None else None
+
+    def act(self, agent: Agent, action: Literal):
+        return self.body.act(agent, action) if self.body is not None else super().act(agent, action)
+
+    def progress(self, agent: Agent, report) -> None:
+        """``.progress``: published on the MAS's control key for the process that runs the MAS."""
+        self.bridge.transport.publish_control("progress", **report.to_fields())
 
     def all_names(self, agent: Agent) -> list[str]:
         return self.bridge.all_names()
@@ -114,7 +129,8 @@ class TransportBridge:
         self.runtime.remote = self.send_remote
         self.transport.on_control(self._on_control)
         for agent in self.runtime.agents.values():
-            agent.arch = NetworkArch(self.runtime, self)
+            body = agent.arch if type(agent.arch) is not LocalArch else None
+            agent.arch = NetworkArch(self.runtime, self, body)
             self.transport.register(agent.name, partial(self._on_envelope, agent))
         self.transport.on_presence(self._on_presence)
         self._attached = True

@@ -17,39 +17,14 @@ percepts to plain ROS topics or services; such an action completes when its mess
 """
 from __future__ import annotations
 
-import threading
-import time
 from concurrent.futures import Future
-from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from robot_bridge import actions
+from robot_bridge.messaging import ANSWER_MARGIN_S, PendingActions, PerceptStore, answer_timeout
 from robot_bridge.protocol import Action, Completion, Percept, RobotBridge, completed
 from robot_bridge.ros2 import wire
 from robot_bridge.ros2.manifest import ActionMapping, PerceptionMapping, load_actions, load_perceptions
-
-ANSWER_MARGIN_S = 3.0
-"""How much longer than the motion's own time bound the bridge waits for the robot's answer."""
-
-
-def answer_timeout(action: Action, margin: float = ANSWER_MARGIN_S) -> float:
-    """Seconds to wait for the status of a (valid) action before failing it with ``timeout``."""
-    from robot_bridge.sim import motion
-    from robot_bridge.sim.odometry import Odometry
-
-    spec, args = actions.normalize(action)
-    if spec.motion:
-        bound = motion.start(spec.name, args, Odometry(), 0.0, (0.7, 3.0))
-        return bound.deadline + margin
-    return margin
-
-
-@dataclass
-class _Pending:
-    action: Action
-    future: "Future[Completion]"
-    deadline: float
-
 
 class Ros2Bridge(RobotBridge):
     """Drives one robot through its ROS 2 nodes (``motion_decomposer`` and the percept synthesizers).
@@ -72,10 +47,8 @@ class Ros2Bridge(RobotBridge):
         self.action_map: dict[str, ActionMapping] = load_actions(manifest) if manifest else {}
         manifest = options.get("perceptions_manifest")
         self.perception_map: dict[str, PerceptionMapping] = load_perceptions(manifest) if manifest else {}
-        self._lock = threading.Lock()
-        self._pending: dict[int, _Pending] = {}
-        self._single: dict[tuple[str, int], list[Percept]] = {}
-        self._snapshots: dict[str, tuple[tuple[Percept, ...], float]] = {}
+        self._pending = PendingActions()
+        self._store = PerceptStore(self.agent_name)
         self._ros = None
         self._node = None
         self._publishers: dict[str, Any] = {}
@@ -125,10 +98,7 @@ class Ros2Bridge(RobotBridge):
         return QoSProfile(depth=10)
 
     def shutdown(self) -> None:
-        with self._lock:
-            pending, self._pending = list(self._pending.values()), {}
-        for item in pending:
-            _resolve(item.future, Completion.failure("shutdown", f"{item.action} still running"))
+        self._pending.fail_all("shutdown")
         if self._ros is not None:
             self._ros.close()
             self._ros = None
@@ -146,9 +116,7 @@ class Ros2Bridge(RobotBridge):
             return completed(Completion.failure(
                 "timeout", f"nothing listens on {self.namespace.rstrip('/')}/jason/actions"))
         limit = float(self.action_timeout) if self.action_timeout else answer_timeout(action)
-        future: Future[Completion] = Future()
-        with self._lock:
-            self._pending[action.id] = _Pending(action, future, time.monotonic() + limit)
+        future = self._pending.add(action, limit)
         request = wire.ActionRequest(self.agent_name, action.name,
                                      tuple(wire.format_value(a) for a in action.args), action.id)
         from std_msgs.msg import String
@@ -166,17 +134,13 @@ class Ros2Bridge(RobotBridge):
         client = self._clients[mapping.action]
         if not client.service_is_ready():
             return completed(Completion.failure("timeout", f"service {mapping.name} is not available"))
-        future: Future[Completion] = Future()
         limit = float(self.action_timeout) if self.action_timeout else ANSWER_MARGIN_S
-        with self._lock:
-            self._pending[action.id] = _Pending(action, future, time.monotonic() + limit)
+        future = self._pending.add(action, limit)
 
         def done(call) -> None:
-            with self._lock:
-                self._pending.pop(action.id, None)
             error = call.exception()
-            _resolve(future, Completion.success() if error is None
-                     else Completion.failure("unsupported", f"{mapping.name}: {error}"))
+            self._pending.finish(action.id, Completion.success() if error is None
+                                 else Completion.failure("unsupported", f"{mapping.name}: {error}"))
         client.call_async(msg).add_done_callback(done)
         return future
 
@@ -188,64 +152,21 @@ class Ros2Bridge(RobotBridge):
             return
         if status.agent_name not in ("", self.agent_name):
             return
-        with self._lock:
-            item = self._pending.pop(status.id, None)
-        if item is not None:
-            _resolve(item.future, Completion.success() if status.result
-                     else Completion.failure(status.reason or "failed", status.detail))
+        self._pending.finish(status.id, Completion.success() if status.result
+                             else Completion.failure(status.reason or "failed", status.detail))
 
     def _expire(self) -> None:
-        now = time.monotonic()
-        with self._lock:
-            late = [i for i, p in self._pending.items() if p.deadline <= now]
-            items = [self._pending.pop(i) for i in late]
-        for item in items:
-            _resolve(item.future, Completion.failure(
-                "timeout", f"{self.namespace} did not answer {item.action} in time"))
+        self._pending.expire(self.namespace)
 
     # --- percepts ----------------------------------------------------------------------------
     def _on_percepts(self, msg) -> None:
         try:
-            data = wire.decode_percepts(msg.data)
+            self._store.receive(msg.data)
         except wire.WireError as exc:
             self._node.get_logger().error(f"jason/percepts: {exc}")
-            return
-        if data.agent_name not in ("", self.agent_name):
-            return
-        if isinstance(data, wire.PerceptSnapshot):
-            expires = time.monotonic() + data.ttl if data.ttl is not None else float("inf")
-            with self._lock:
-                self._snapshots[data.source] = (data.percepts, expires)
-        else:
-            self._store(data.percept(), data.update)
 
     def _on_mapped(self, mapping: PerceptionMapping, msg) -> None:
-        self._store(Percept(mapping.perception, mapping.values(msg)), mapping.update)
-
-    def _store(self, percept: Percept, update: bool) -> None:
-        key = (percept.name, len(percept.args))
-        with self._lock:
-            if update:
-                self._single[key] = [percept]
-            elif percept not in self._single.setdefault(key, []):
-                self._single[key].append(percept)
+        self._store.store(Percept(mapping.perception, mapping.values(msg)), mapping.update)
 
     def percepts(self) -> list[Percept]:
-        now = time.monotonic()
-        with self._lock:
-            result = [p for group in self._single.values() for p in group]
-            for source, (items, expires) in list(self._snapshots.items()):
-                if expires < now:
-                    del self._snapshots[source]
-                else:
-                    result.extend(items)
-        return result
-
-
-def _resolve(future: "Future[Completion]", completion: Completion) -> None:
-    if not future.done():
-        try:
-            future.set_result(completion)
-        except Exception:         # resolved concurrently
-            pass
-
+        return self._store.percepts()

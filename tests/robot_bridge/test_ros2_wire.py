@@ -144,7 +144,7 @@ def test_a_manifest_with_an_unknown_method_points_at_the_line(tmp_path):
 
 
 def test_the_bridge_waits_longer_than_the_motion_may_take():
-    from robot_bridge.ros2.bridge import answer_timeout
+    from robot_bridge.messaging import answer_timeout
     assert answer_timeout(Action("move", (2.0, 0.2))) > 2.0 / 0.2
     assert answer_timeout(Action("move", (0.5,))) < answer_timeout(Action("move", (5.0,)))
 

@@ -1,0 +1,304 @@
+"""The cooperative fault-diagnosis run: robots on the embedded simulator, one agent each, timed steps.
+
+A ``Scenario`` says where the robots stand, which are faulty and how; ``run_scenario`` runs it either
+with one OS process per agent talking over Zenoh (``processes=True``, the main job: the simulator is
+served to them by ``robot_bridge.sim.server``) or with every agent in this process (the evaluation's
+fast path: same plans, same simulator, no network). Agents report their steps with ``.progress``;
+a ``ProgressLog`` stamps each with simulated and wall time and ends the run once every robot has
+finished its task or its diagnosis.
+
+Fault ``none`` is the paper's false alarm: nothing is broken, but the robot is held for a moment while
+it starts (a transient stall, injected as ``both_actuators`` and cleared as soon as the robot reports the
+fault), so it raises an alarm that the diagnosis must dismiss.
+"""
+from __future__ import annotations
+
+import math
+import random
+import threading
+import time
+from dataclasses import dataclass, field
+from importlib import resources
+from typing import Callable, TextIO
+
+FAULTS = ("none", "encoders", "both_actuators", "left_actuator", "right_actuator", "stuck_wheels")
+EXPECTED = {"none": "none", "encoders": "encoders", "both_actuators": "both_actuators",
+            "stuck_wheels": "both_actuators", "left_actuator": "left_actuator", "right_actuator": "right_actuator"}
+"""The outcome the plans must reach for each injected fault (stuck wheels count as both actuators)."""
+FINAL_STEPS = ("arrived", "diagnosed", "undiagnosed")
+STEP_NAMES = ("fault_detection", "robot_detection", "diagnosis", "total")
+
+
+@dataclass(frozen=True)
+class RobotSetup:
+    name: str
+    x: float
+    y: float
+    yaw_deg: float
+    fault: str = "none"
+    program: str = "helper.asl"
+    false_alarm: bool = False
+    """A transient stall at the start (fault ``none`` of a robot that must raise an alarm)."""
+
+    @property
+    def under_test(self) -> bool:
+        return self.fault != "none" or self.false_alarm
+
+
+@dataclass(frozen=True)
+class Scenario:
+    robots: tuple[RobotSetup, ...]
+    seed: int = 1
+    destination: float = 1.0
+    lighting: float = 1.0
+    mas: str = "coop"
+
+    @property
+    def under_test(self) -> list[RobotSetup]:
+        return [r for r in self.robots if r.under_test]
+
+
+def paper_scenario(fault: str = "encoders", seed: int = 1) -> Scenario:
+    """The paper's set-up: Faulty and Helper side by side, 1.5 m apart, both facing the same way."""
+    return Scenario((RobotSetup("faulty", 0.0, 0.0, 0.0, fault, "faulty.asl", fault == "none"),
+                     RobotSetup("helper", 0.0, -1.5, 0.0)), seed=seed)
+
+
+def random_pair_scenario(fault: str, seed: int) -> Scenario:
+    """The evaluation's set-up: the helper 1-3 m away at any bearing, with any heading of its own; the
+    faulty robot shows it its side (40-140 degrees between its heading and the line of sight: end-on,
+    its two cylinders hide each other from any marker detector), lighting 0.6-1.4."""
+    rng = random.Random(seed)
+    distance = rng.uniform(1.0, 3.0)
+    bearing = rng.uniform(-180.0, 180.0)              # where the helper stands, seen from the faulty robot
+    side = rng.choice((-1.0, 1.0)) * rng.uniform(40.0, 140.0)
+    faulty_yaw = bearing - side
+    hx, hy = distance * math.cos(math.radians(bearing)), distance * math.sin(math.radians(bearing))
+    return Scenario((RobotSetup("faulty", 0.0, 0.0, _wrap(faulty_yaw), fault, "faulty.asl", fault == "none"),
+                     RobotSetup("helper", hx, hy, rng.uniform(-180.0, 180.0))),
+                    seed=seed, lighting=rng.uniform(0.6, 1.4))
+
+
+def team_scenario(robots: int, faulty: int, seed: int) -> Scenario:
+    """``robots`` robots at random places at least 1.6 m apart, ``faulty`` of them with random faults;
+    every robot runs ``team_robot.asl`` (its own task, and help for the others when free)."""
+    if not 2 <= robots <= 12 or not 1 <= faulty < robots:
+        raise ValueError(f"--robots must be 2..12 and --faulty 1..robots-1, got {robots} and {faulty}")
+    rng = random.Random(seed)
+    spots: list[tuple[float, float]] = []
+    while len(spots) < robots:
+        x, y = rng.uniform(-3.5, 3.5), rng.uniform(-3.5, 3.5)
+        if all(math.hypot(x - a, y - b) >= 1.6 for a, b in spots):
+            spots.append((x, y))
+    broken = set(rng.sample(range(robots), faulty))
+    kinds = ("encoders", "both_actuators", "left_actuator", "right_actuator")
+    setups = tuple(RobotSetup(f"robot{i + 1}", x, y, rng.uniform(-180.0, 180.0),
+                              rng.choice(kinds) if i in broken else "none", "team_robot.asl")
+                   for i, (x, y) in enumerate(spots))
+    return Scenario(setups, seed=seed, destination=0.5)
+
+
+def _wrap(deg: float) -> float:
+    return (deg + 180.0) % 360.0 - 180.0
+
+
+# ---- the steps, as reported by the agents ---------------------------------------------------------
+@dataclass
+class Mark:
+    agent: str
+    step: str
+    detail: str
+    sim: float
+    wall: float
+
+
+@dataclass
+class RobotResult:
+    name: str
+    fault: str
+    expected: str
+    diagnosis: str | None
+    steps_sim: dict[str, float | None]
+    steps_wall: dict[str, float | None]
+
+    @property
+    def correct(self) -> bool:
+        return self.diagnosis == self.expected
+
+
+@dataclass
+class RunResult:
+    scenario: Scenario
+    robots: list[RobotResult]
+    marks: list[Mark]
+    finished: bool
+    """Every robot ended its task or its diagnosis before the time limit."""
+    world: object = None
+
+    @property
+    def correct(self) -> bool:
+        return self.finished and all(r.correct for r in self.robots)
+
+
+class ProgressLog:
+    """``.progress`` reports stamped with simulated and wall time; calls ``on_done`` once all robots
+    have reported a final step, and clears a false alarm's transient stall once the fault is seen."""
+
+    def __init__(self, scenario: Scenario, world, on_done: Callable[[], None],
+                 echo: Callable[[Mark], None] | None = None) -> None:
+        self.scenario, self.world, self.on_done, self.echo = scenario, world, on_done, echo
+        self.marks: list[Mark] = []
+        self.start = time.monotonic()
+        self._lock = threading.Lock()
+        self._final: set[str] = set()
+        self.done = threading.Event()
+
+    def record(self, report) -> None:
+        """Takes an ``agents.progress.ProgressReport`` (from any thread)."""
+        mark = Mark(report.agent, report.step, report.detail, self.world.time if self.world else 0.0,
+                    time.monotonic() - self.start)
+        with self._lock:
+            self.marks.append(mark)
+            if report.step in FINAL_STEPS:
+                self._final.add(report.agent)
+            complete = self._final >= {r.name for r in self.scenario.robots if r.under_test} and \
+                self._final | {r.name for r in self.scenario.robots if r.program == "helper.asl"} >= \
+                {r.name for r in self.scenario.robots}
+        setup = next((r for r in self.scenario.robots if r.name == report.agent), None)
+        if report.step == "fault_detected" and setup is not None and setup.false_alarm and self.world:
+            self.world.set_fault(report.agent, "none")      # the transient stall is over
+        if self.echo is not None:
+            self.echo(mark)
+        if complete and not self.done.is_set():
+            self.done.set()
+            self.on_done()
+
+    def results(self) -> list[RobotResult]:
+        return [self._result(r) for r in self.scenario.robots if r.under_test or r.program != "helper.asl"]
+
+    def _first(self, agent: str, steps: tuple[str, ...], detail: str | None = None) -> Mark | None:
+        return next((m for m in self.marks if m.agent == agent and m.step in steps
+                     and (detail is None or m.detail == detail)), None)
+
+    def _result(self, robot: RobotSetup) -> RobotResult:
+        started = self._first(robot.name, ("started",))
+        detected = self._first(robot.name, ("fault_detected",))
+        final = self._first(robot.name, ("diagnosed", "undiagnosed"))
+        searching = next((m for m in self.marks if m.step == "searching" and m.detail == robot.name), None)
+        found = next((m for m in self.marks if m.step == "robot_found" and m.detail == robot.name
+                      and searching is not None and m.agent == searching.agent), None)
+        diagnosis_from = found or detected
+        pairs = {"fault_detection": (started, detected), "robot_detection": (searching, found),
+                 "diagnosis": (diagnosis_from, final), "total": (started, final)}
+        sim = {k: (b.sim - a.sim if a and b else None) for k, (a, b) in pairs.items()}
+        wall = {k: (b.wall - a.wall if a and b else None) for k, (a, b) in pairs.items()}
+        if final is not None and final.step == "diagnosed":
+            diagnosis = final.detail
+        elif final is not None:
+            diagnosis = "undiagnosed"
+        else:
+            diagnosis = "none" if self._first(robot.name, ("arrived",)) else None
+        return RobotResult(robot.name, robot.fault, EXPECTED[robot.fault], diagnosis, sim, wall)
+
+
+# ---- running ---------------------------------------------------------------------------------------
+def plans_dir():
+    return resources.files("plans")
+
+
+def build_world(scenario: Scenario, speed: float = 0.0):
+    """The world and one ``SimBridge`` (with camera) per robot, set up."""
+    from robot_bridge.sim.bridge import SimBridge
+    from robot_bridge.sim.world import World
+
+    world = World(seed=scenario.seed, lighting=scenario.lighting)
+    bridges = {}
+    for r in scenario.robots:
+        fault = "both_actuators" if r.false_alarm else r.fault
+        bridges[r.name] = SimBridge(r.name, world=world, x=r.x, y=r.y, yaw_deg=r.yaw_deg, fault=fault,
+                                    camera=True, speed=speed)
+    for bridge in bridges.values():
+        bridge.setup()
+    return world, bridges
+
+
+def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float = 120.0,
+                 out: TextIO | None = None, err: TextIO | None = None,
+                 echo: Callable[[Mark], None] | None = None) -> RunResult:
+    """Run ``scenario`` to the end (or ``timeout`` wall seconds); agents' lines go to ``out``."""
+    world, bridges = build_world(scenario)
+    try:
+        if processes:
+            finished = _run_processes(scenario, world, bridges, timeout, out, err, echo)
+        else:
+            finished = _run_in_process(scenario, world, bridges, timeout, out, echo)
+    finally:
+        for bridge in bridges.values():
+            bridge.shutdown()
+    log = finished
+    return RunResult(scenario, log.results(), log.marks, log.done.is_set(), world)
+
+
+def _beliefs(scenario: Scenario) -> list[str]:
+    return [f"destination({scenario.destination})"]
+
+
+def _run_in_process(scenario, world, bridges, timeout, out, echo) -> ProgressLog:
+    from agents.robot_arch import RobotArch
+    from agentspeak.parser import parse_program, parse_term
+    from agentspeak.runtime import LocalRuntime
+
+    def printer(name: str, text: str) -> None:
+        if out is not None:
+            out.write(f"[{name}] {text}\n")
+
+    runtime = LocalRuntime(printer=printer)
+    log = ProgressLog(scenario, world, lambda: runtime.stop(0.2), echo)
+    beliefs = [parse_term(b) for b in _beliefs(scenario)]
+    programs: dict[str, object] = {}
+    for r in scenario.robots:
+        path = plans_dir().joinpath(r.program)
+        if r.program not in programs:
+            programs[r.program] = parse_program(path.read_text(), str(path))
+        runtime.add_agent(r.name, program=programs[r.program], source_file=str(path), extra_beliefs=beliefs,
+                          arch=RobotArch(runtime, bridges[r.name], on_progress=log.record))
+    runtime.run(timeout=timeout, stop_when_idle=False)
+    return log
+
+
+def _run_processes(scenario, world, bridges, timeout, out, err, echo) -> ProgressLog:
+    import sys
+    import tempfile
+    from pathlib import Path
+
+    from agents.distributed import Launcher
+    from agents.progress import ProgressReport
+    from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
+    from agentspeak.mas2j import load_mas2j
+    from robot_bridge.sim.server import SimServer
+
+    out, err = out or sys.stdout, err or sys.stderr
+    with tempfile.TemporaryDirectory(prefix="faultmas-run-") as tmp:
+        project_file = Path(tmp) / f"{scenario.mas}.mas2j"
+        beliefs = ", ".join(_beliefs(scenario))
+        lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{beliefs}"];' for r in scenario.robots]
+        project_file.write_text(f"MAS {scenario.mas} {{\n  agents:\n" + "\n".join(lines) + "\n}\n")
+        project = load_mas2j(str(project_file))
+        hub = ZenohTransport(scenario.mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
+        server = SimServer(hub.session, scenario.mas, bridges).start()
+        launcher = Launcher(project, hub, out, err, extra_args=["--bridge", "zenoh"])
+        log = ProgressLog(scenario, world, launcher.stop_requested.set, echo)
+
+        def on_control(message: dict) -> None:
+            report = ProgressReport.from_message(message)
+            if report is not None:
+                log.record(report)
+        hub.on_control(on_control)
+        try:
+            launcher.start()
+            launcher.wait(timeout, stop_when_idle=False)
+        finally:
+            launcher.stop_all()
+            server.stop()
+            hub.close()
+    return log

@@ -1,0 +1,186 @@
+// Cooperative fault diagnosis: the side of a robot that finds out something is wrong with itself.
+//
+// goToDestination -> on failure diagnoseAlone (own sensors + the model-based diagnoser) -> if the
+// diagnosis is still ambiguous, broadcastHelp -> with the first helper that accepts: it finds me
+// (findRobot), trackMe, tryMove, giveMeFeedback -> diagnose again with what the helper saw -> thanks.
+// The decision is the diagnoser's (.diagnose on plans/turtlebot_hardware.yaml); outcome/2 only names
+// the minimal diagnosis it returns. Steps worth timing are reported with .progress (agents/progress.py).
+//
+// Percepts (robot_bridge/percepts.py): odom(X,Y,YawDeg), encoders(L,R), over_current(Wheel),
+// agent_alive(Name) (agents/zenoh_arch.py). Beliefs a run may give: destination(Metres).
+
+destination(1.0).
+model(turtlebot_hardware).
+test_move(0.15).            // metres driven while the helper watches
+help_timeout(3000).         // ms to wait for a helper to accept
+find_timeout(90000).        // ms a helper may take to find me
+answer_timeout(20000).      // ms for the other answers
+max_trials(2).              // test motions with one helper before giving up on it
+
+outcome([], none).
+outcome([left_encoder, right_encoder], encoders).
+outcome([left_motor, right_motor], both_actuators).
+outcome([left_wheel, right_wheel], both_actuators).    // stuck wheels: the motors push, nothing turns
+outcome([left_motor], left_actuator).
+outcome([right_motor], right_actuator).
+
+// ---- encoder arithmetic (16-bit wrapping counters) and what the robot's own sensors say
+ticks(From, To, D) :- D = ((To - From) mod 65536 + 65536) mod 65536.
+motion_obs(DL, DR, encoders_report_motion) :- DL + DR > 100.
+motion_obs(DL, DR, ~encoders_report_motion) :- DL + DR <= 100.
+straight_obs(DL, DR, encoders_report_straight) :- DL - DR <= 0.25 * (DL + DR) + 40 & DR - DL <= 0.25 * (DL + DR) + 40.
+straight_obs(DL, DR, ~encoders_report_straight) :- not straight_obs(DL, DR, encoders_report_straight).
+current_obs(left, left_over_current) :- saw_over_current(left).
+current_obs(left, ~left_over_current) :- not saw_over_current(left).
+current_obs(right, right_over_current) :- saw_over_current(right).
+current_obs(right, ~right_over_current) :- not saw_over_current(right).
+
+// ---- what the helper saw (its odometry frame: bearing and heading in degrees, depth in metres)
+{ include("geometry.asl") }
+helper_obs(seen(B1, D1, Y1), seen(B2, D2, Y2), [helper_found_robot, Motion, Straight, Left, Right]) :-
+    norm(Y2 - Y1, Turn) & abs(Turn, AT) & abs(D2 - D1, DD) & norm(B2 - B1, DB) & abs(DB, AB) &
+    (AT > 6 | DD > 0.04 | AB * 0.01745 * D1 > 0.04) & Motion = helper_saw_motion &
+    (Turn > 10 & Left = helper_saw_veer_left | Turn <= 10 & Left = ~helper_saw_veer_left) &
+    (Turn < -10 & Right = helper_saw_veer_right | Turn >= -10 & Right = ~helper_saw_veer_right) &
+    (AT <= 10 & Straight = helper_saw_straight | AT > 10 & Straight = ~helper_saw_straight).
+helper_obs(seen(B1, D1, Y1), seen(B2, D2, Y2),
+           [helper_found_robot, ~helper_saw_motion, ~helper_saw_straight, ~helper_saw_veer_left, ~helper_saw_veer_right]).
+helper_obs(_, _, []).    // the helper lost sight of me: it saw nothing that helps
+
+!goToDestination.
+
+// ---- my own task ------------------------------------------------------------------------------
++!goToDestination : destination(D) & encoders(L, R)
+   <- +on_mission;
+      .print("going to my destination, ", D, " m ahead");
+      .progress(started, D);
+      -+leg_start(L, R);
+      move(D);
+      !checkArrival(D).
+
++!checkArrival(D) : odom(X, Y, _) & (X - D) * (X - D) + Y * Y < 0.01
+   <- -on_mission;
+      .print("arrived: odometry says x=", X, " y=", Y);
+      .progress(arrived).
++!checkArrival(D) : odom(X, Y, _)
+   <- .print("I should be at x=", D, " y=0 but odometry says x=", X, " y=", Y);
+      !faultDetected(off_course).
+
+-!goToDestination[error(action_failed), reason(R)] <- !faultDetected(R).
+-!goToDestination[error(E)] <- !faultDetected(E).
+
++over_current(W) : not saw_over_current(W) <- +saw_over_current(W).
+
+// ---- fault detected: what do my own sensors say? ------------------------------------------------
++!faultDetected(Why)
+   <- -on_mission;
+      +diagnosing;
+      .print("fault detected (", Why, ")");
+      .progress(fault_detected, Why);
+      !ownObservations(Obs);
+      !diagnoseAlone(Obs).
+
++!ownObservations([commanded_forward, M, S, CL, CR]) : leg_start(L0, R0) & encoders(L1, R1)
+   <- ?ticks(L0, L1, DL); ?ticks(R0, R1, DR);
+      ?motion_obs(DL, DR, M); ?straight_obs(DL, DR, S);
+      ?current_obs(left, CL); ?current_obs(right, CR);
+      .print("my encoders counted ", DL, " and ", DR, " ticks").
+
++!diagnoseAlone(Obs) : model(Model)
+   <- .diagnose(Model, Obs, Ds);
+      .print("alone, the diagnoser explains ", Obs, " by ", Ds);
+      !decideOrAsk(Ds, Obs).
+
++!decideOrAsk([D], _) <- !decide(D).
++!decideOrAsk(Ds, _) <- -+candidates(Ds); .progress(ambiguous, Ds); !broadcastHelp(Ds).
+
++!decide(D) : outcome(D, O)
+   <- .print("diagnosis: ", O, " (faulty components: ", D, ")");
+      -diagnosing;
+      .progress(diagnosed, O).
++!decide(D)
+   <- .print("diagnosis: faulty components ", D);
+      -diagnosing;
+      .progress(diagnosed, D).
+
+// ---- asking for help: the first helper that accepts (the others are released) --------------------
++!broadcastHelp(Ds)
+   <- .my_name(Me);
+      .print("I cannot tell alone: asking for help");
+      .progress(help_requested);
+      .abolish(canHelp);
+      .broadcast(achieve, helpMe(Me));
+      !awaitHelper(Ds).
+
++!awaitHelper(Ds) : canHelp[source(H)] & not tried(H) <- !withHelper(H, Ds).
++!awaitHelper(Ds) : help_timeout(T) <- .wait({+canHelp[source(_)]}, T); !awaitHelper(Ds).
+-!awaitHelper(Ds) <- !undiagnosed(Ds, no_helper).
+
++canHelp[source(H)] : helper(Other) & Other \== H <- .send(H, tell, noThanks).
+
++!withHelper(H, Ds)
+   <- +tried(H); -+helper(H);
+      .findall(O, canHelp[source(O)] & O \== H, Others);
+      for (.member(O, Others)) { .send(O, tell, noThanks) };
+      .print(H, " will help me");
+      .progress(helper_found, H);
+      .my_name(Me);
+      ?find_timeout(FT);
+      .send(H, askOne, findRobot(Me, _), Found, FT);
+      !afterFind(H, Found, Ds).
+
++!afterFind(H, findRobot(_, found), Ds) <- .progress(found_by, H); !tryMove(H, Ds, 1).
++!afterFind(H, Answer, Ds) <- .print(H, " could not find me (", Answer, ")"); !nextHelper(H, Ds).
+
++!nextHelper(H, Ds) <- -helper(H); .send(H, tell, thanks); !broadcastHelp(Ds).
+
+// ---- the test motion, watched by the helper -----------------------------------------------------
++!tryMove(H, Ds, Trial) : test_move(M) & answer_timeout(T) & encoders(L, R)
+   <- .my_name(Me);
+      .send(H, askOne, trackMe(Me, _), Before, T);
+      !checkAnswer(H, Before);
+      .abolish(saw_over_current(_));
+      -+leg_start(L, R);
+      .print("test motion: ", M, " m while ", H, " watches");
+      !testMotion(M);
+      .send(H, askOne, giveMeFeedback(Me, _), After, T);
+      !checkAnswer(H, After);
+      !ownObservations(Own);
+      !withFeedback(H, Ds, Trial, Own, Before, After).
+
++!testMotion(M) <- move(M).
+-!testMotion(M)[reason(R)] <- .print("the test motion failed too (", R, ")").
+
++!checkAnswer(H, timeout) <- .print(H, " did not answer in time"); .fail.
++!checkAnswer(H, false) <- .print(H, " could not answer"); .fail.
++!checkAnswer(H, _).
+
++!withFeedback(H, Ds, Trial, Own, trackMe(_, B), giveMeFeedback(_, A)) : model(Model)
+   <- ?helper_obs(B, A, Seen);
+      .concat(Own, Seen, Obs);
+      .print(H, " saw me at ", B, " then ", A);
+      .diagnose(Model, Obs, Ds2);
+      .print("with ", H, "'s help, the diagnoser explains ", Obs, " by ", Ds2);
+      !conclude(H, Ds2, Trial).
+
++!conclude(H, [D], _) <- .send(H, tell, thanks); -helper(H); !decide(D).
++!conclude(H, Ds, Trial) : max_trials(N) & Trial < N
+   <- .print("still ambiguous: ", Ds, "; one more test motion"); !tryMove(H, Ds, Trial + 1).
++!conclude(H, Ds, _) <- .send(H, tell, thanks); -helper(H); !undiagnosed(Ds, ambiguous).
+
+-!tryMove(H, Ds, _) <- .print("lost ", H, "'s help"); !nextHelper(H, Ds).
+-!withHelper(H, Ds) <- !nextHelper(H, Ds).
+
+// ---- robustness: a helper that dies is replaced; nobody answering ends undiagnosed ---------------
+-agent_alive(H) : helper(H) & diagnosing
+   <- .print("my helper ", H, " is gone");
+      .drop_desire(withHelper(H, _));
+      .drop_desire(tryMove(H, _, _));
+      -helper(H);
+      ?candidates(Ds);
+      !broadcastHelp(Ds).
+
++!undiagnosed(Ds, Why)
+   <- .print("undiagnosed (", Why, "); candidates: ", Ds);
+      -diagnosing;
+      .progress(undiagnosed, Ds).

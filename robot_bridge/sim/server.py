@@ -1,0 +1,111 @@
+"""``SimServer``: the robots of one simulated ``World`` served over Zenoh to agents in other processes.
+
+Each robot is a ``SimBridge`` in this process; agents reach it through ``robot_bridge.zenoh_bridge``
+(keys and wire format are documented there). Percept snapshots go out when they change (checked every
+``interval`` seconds of wall time) and at least every ``refresh`` seconds, and always just before an
+action's status, so an agent that sees ``move`` completed also perceives where the robot ended up.
+A malformed request is answered with ``bad_args`` when it has an id, else dropped with a log line.
+"""
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from typing import Any
+
+from robot_bridge.protocol import Action, Completion
+from robot_bridge.sim.bridge import SimBridge
+from robot_bridge.zenoh_bridge import robot_key
+
+log = logging.getLogger(__name__)
+
+SNAPSHOT_TTL_S = 2.0
+"""Percepts an agent received vanish this long after the last snapshot (a dead server goes blind)."""
+
+
+class SimServer:
+    """Serves ``bridges`` (robot name -> set-up ``SimBridge``) on ``session`` under MAS ``mas``."""
+
+    def __init__(self, session: Any, mas: str, bridges: dict[str, SimBridge], interval: float = 0.02,
+                 refresh: float = 0.5) -> None:
+        self.session, self.mas, self.bridges = session, mas, dict(bridges)
+        self.interval, self.refresh = interval, refresh
+        self._declared: list = []
+        self._publishers: dict[str, tuple[Any, Any]] = {}
+        self._last: dict[str, tuple[str, float]] = {}
+        self._locks = {name: threading.Lock() for name in self.bridges}
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.requests = 0
+
+    def start(self) -> "SimServer":
+        for name in self.bridges:
+            status = self.session.declare_publisher(robot_key(self.mas, name, "status"))
+            percepts = self.session.declare_publisher(robot_key(self.mas, name, "percepts"))
+            self._publishers[name] = (status, percepts)
+            sub = self.session.declare_subscriber(robot_key(self.mas, name, "actions"),
+                                                  lambda sample, n=name: self._on_request(n, sample))
+            self._declared += [status, percepts, sub]
+            self.publish_percepts(name, force=True)
+        self._thread = threading.Thread(target=self._loop, name="sim-server", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(2.0)
+        for declared in self._declared:
+            try:
+                declared.undeclare()
+            except Exception:
+                pass
+        self._declared = []
+
+    def publish_percepts(self, name: str, force: bool = False) -> None:
+        """Send robot ``name``'s percepts if they changed (or ``force``, or the refresh is due)."""
+        from robot_bridge.ros2 import wire
+
+        text = wire.PerceptSnapshot("", "sim", tuple(self.bridges[name].percepts()), SNAPSHOT_TTL_S).to_json()
+        now = time.monotonic()
+        with self._locks[name]:
+            last_text, last_time = self._last.get(name, ("", 0.0))
+            if not force and text == last_text and now - last_time < self.refresh:
+                return
+            self._last[name] = (text, now)
+            self._publishers[name][1].put(text)
+
+    def _loop(self) -> None:
+        while not self._stop.wait(self.interval):
+            for name in self.bridges:
+                try:
+                    self.publish_percepts(name)
+                except Exception as exc:  # a closed session at shutdown
+                    if not self._stop.is_set():
+                        log.warning("sim server: cannot publish %s's percepts: %s", name, exc)
+
+    def _on_request(self, name: str, sample) -> None:
+        from robot_bridge.ros2 import wire
+
+        self.requests += 1
+        try:
+            request = wire.ActionRequest.from_json(sample.payload.to_string())
+            action = Action(request.action_name, request.values(), id=request.id)
+        except (wire.WireError, UnicodeDecodeError, ValueError) as exc:
+            log.warning("sim server: dropped a bad action request for %s: %s", name, exc)
+            return
+        future = self.bridges[name].act(action)
+        future.add_done_callback(lambda f: self._answer(name, action, f))
+
+    def _answer(self, name: str, action: Action, future) -> None:
+        from robot_bridge.ros2 import wire
+        try:
+            completion = future.result()
+        except Exception as exc:
+            completion = Completion.failure("bridge_error", str(exc))
+        try:
+            self.publish_percepts(name, force=True)
+            self._publishers[name][0].put(wire.ActionStatus(
+                name, action.id, completion.ok, completion.reason, completion.detail).to_json())
+        except Exception as exc:
+            log.warning("sim server: cannot answer %s of %s: %s", action, name, exc)

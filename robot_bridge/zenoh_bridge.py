@@ -1,0 +1,137 @@
+"""``ZenohBridge``: a robot served over Eclipse Zenoh, e.g. the embedded simulator in another process.
+
+The wire format is jason_ros's (``robot_bridge.ros2.wire``), so one format serves ROS 2 topics and Zenoh
+keys alike. Per robot, under the MAS namespace:
+
+==========================================  =================================================
+key                                         payload
+==========================================  =================================================
+``faultmas/<mas>/robot/<robot>/actions``    agent -> robot: ``ActionRequest`` (with an id)
+``faultmas/<mas>/robot/<robot>/status``     robot -> agent: ``ActionStatus`` once the motion finished
+``faultmas/<mas>/robot/<robot>/percepts``   robot -> agent: ``PerceptSnapshot`` (source, ttl)
+==========================================  =================================================
+
+The server side for the simulator is ``robot_bridge.sim.server.SimServer``. A robot that stops answering
+fails its pending actions with ``timeout``; its percepts expire after their ``ttl``.
+
+Options: ``mas`` (namespace, default ``faultmas``), ``session`` (an open ``zenoh.Session`` to share,
+e.g. the agent's own transport session) or ``connect`` (endpoints; a private loopback peer session is
+opened), ``action_timeout`` (seconds; default: from the action's own time bound).
+"""
+from __future__ import annotations
+
+import logging
+import threading
+from concurrent.futures import Future
+from typing import Any, ClassVar
+
+from robot_bridge import actions
+from robot_bridge.messaging import PendingActions, PerceptStore, answer_timeout
+from robot_bridge.protocol import Action, Completion, Percept, RobotBridge, completed
+
+log = logging.getLogger(__name__)
+
+EXPIRE_INTERVAL_S = 0.05
+
+
+def robot_key(mas: str, robot: str, channel: str) -> str:
+    """The key expression of ``channel`` (``actions``, ``status`` or ``percepts``) of one robot."""
+    return f"faultmas/{mas}/robot/{robot}/{channel}"
+
+
+class ZenohBridge(RobotBridge):
+    """Drives one robot whose server (simulator or driver) listens on Zenoh."""
+
+    name: ClassVar[str] = "zenoh"
+
+    def __init__(self, robot: str, mas: str = "faultmas", session: Any = None, connect: Any = (),
+                 action_timeout: float | None = None, **options: object) -> None:
+        super().__init__(robot, **options)
+        self.mas = mas
+        self._session, self._owns_session = session, session is None
+        self.connect = (connect,) if isinstance(connect, str) else tuple(connect)
+        self.action_timeout = action_timeout
+        self._pending = PendingActions()
+        self._store = PerceptStore(robot)
+        self._declared: list = []
+        self._stop = threading.Event()
+        self._expirer: threading.Thread | None = None
+        self._ready = False
+
+    def setup(self, timeout: float = 5.0) -> None:
+        """Subscribe and wait until the robot's server has sent its first percepts."""
+        if self._session is None:
+            import zenoh
+
+            from agents.transport.config import ZenohOptions, build_config
+            self._session = zenoh.open(build_config(ZenohOptions(connect=self.connect)))
+        session = self._session
+        self._publisher = session.declare_publisher(robot_key(self.mas, self.robot, "actions"))
+        self._declared = [
+            self._publisher,
+            session.declare_subscriber(robot_key(self.mas, self.robot, "status"), self._on_status),
+            session.declare_subscriber(robot_key(self.mas, self.robot, "percepts"), self._on_percepts),
+        ]
+        self._expirer = threading.Thread(target=self._expire_loop, name=f"zenoh-bridge-{self.robot}", daemon=True)
+        self._expirer.start()
+        self._ready = True
+        if not self._store.received.wait(timeout):
+            where = robot_key(self.mas, self.robot, "percepts")
+            self.shutdown()
+            raise TimeoutError(f"no robot server publishes on {where} after {timeout:g} s "
+                               f"(is the simulator running for MAS {self.mas!r}?)")
+
+    def act(self, action: Action) -> "Future[Completion]":
+        from robot_bridge.ros2 import wire
+
+        if not self._ready:
+            return completed(Completion.failure("shutdown", "the bridge is not set up"))
+        failure = actions.check(action)
+        if failure is not None:
+            return completed(failure)
+        limit = float(self.action_timeout) if self.action_timeout else answer_timeout(action)
+        future = self._pending.add(action, limit)
+        request = wire.ActionRequest(self.robot, action.name, tuple(wire.format_value(a) for a in action.args),
+                                     action.id)
+        self._publisher.put(request.to_json())
+        return future
+
+    def percepts(self) -> list[Percept]:
+        return self._store.percepts()
+
+    def shutdown(self) -> None:
+        self._ready = False
+        self._stop.set()
+        self._pending.fail_all("shutdown")
+        for declared in self._declared:
+            try:
+                declared.undeclare()
+            except Exception:  # the session may already be closed
+                pass
+        self._declared = []
+        if self._owns_session and self._session is not None:
+            self._session.close()
+            self._session = None
+
+    # -- network threads: never raise -----------------------------------------------------------
+    def _on_status(self, sample) -> None:
+        from robot_bridge.ros2 import wire
+        try:
+            status = wire.ActionStatus.from_json(sample.payload.to_string())
+        except (wire.WireError, UnicodeDecodeError) as exc:
+            log.warning("%s: dropped a bad status message: %s", self.robot, exc)
+            return
+        if status.agent_name in ("", self.robot):
+            self._pending.finish(status.id, Completion.success() if status.result
+                                 else Completion.failure(status.reason or "failed", status.detail))
+
+    def _on_percepts(self, sample) -> None:
+        from robot_bridge.ros2 import wire
+        try:
+            self._store.receive(sample.payload.to_string())
+        except (wire.WireError, UnicodeDecodeError) as exc:
+            log.warning("%s: dropped a bad percept message: %s", self.robot, exc)
+
+    def _expire_loop(self) -> None:
+        while not self._stop.wait(EXPIRE_INTERVAL_S):
+            self._pending.expire(f"robot {self.robot} (key {robot_key(self.mas, self.robot, 'status')})")
