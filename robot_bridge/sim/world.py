@@ -90,6 +90,8 @@ class _Robot:
     bumper: str | None = None
     camera: CameraMount | None = None
     camera_listeners: list[Callable[[CameraFrame], None]] = field(default_factory=list)
+    pixel_readers: int = 0
+    """How many of ``camera_listeners`` read every frame's pixels (their frames are rendered in parallel)."""
     last_frame: float = -math.inf
     trajectory: list[TrajectoryPoint] = field(default_factory=list)
 
@@ -210,7 +212,10 @@ class World:
             for future, completion in done:
                 if not future.done():
                     future.set_result(completion)
-            for listeners, frame in frames:
+            if any(read for _, _, read in frames):
+                from robot_bridge.sim import camera
+                camera.render_all([frame for _, frame, read in frames if read])
+            for listeners, frame, _ in frames:
                 for listener in listeners:
                     listener(frame)
 
@@ -343,18 +348,26 @@ class World:
             return found
 
     # ------------------------------------------------------------------ cameras
-    def subscribe_camera(self, name: str, listener: Callable[[CameraFrame], None]) -> Callable[[], None]:
-        """Call ``listener`` with each frame robot ``name``'s camera renders at its rate; returns unsubscribe."""
+    def subscribe_camera(self, name: str, listener: Callable[[CameraFrame], None],
+                         reads_pixels: bool = False) -> Callable[[], None]:
+        """Call ``listener`` with each frame robot ``name``'s camera takes at its rate; returns unsubscribe.
+
+        Frames render their pixels when first read. A listener that reads every frame (a detector)
+        says so with ``reads_pixels``: then the frames due at the same step are rendered side by side
+        on the cores before the listeners are called, instead of one after the other in the listeners.
+        """
         with self._lock:
             robot = self._robot(name)
             if robot.camera is None:
                 raise ValueError(f"robot {name!r} has no camera (add it with camera=True)")
             robot.camera_listeners.append(listener)
+            robot.pixel_readers += bool(reads_pixels)
 
         def unsubscribe() -> None:
             with self._lock:
                 if listener in robot.camera_listeners:
                     robot.camera_listeners.remove(listener)
+                    robot.pixel_readers -= bool(reads_pixels)
         return unsubscribe
 
     def camera_frame(self, name: str) -> CameraFrame:
@@ -365,14 +378,15 @@ class World:
                 raise ValueError(f"robot {name!r} has no camera (add it with camera=True)")
             return self._render(robot)
 
-    def _due_frames(self) -> list[tuple[list, CameraFrame]]:
-        """Frames due now: at simulated times that are multiples of the period (rounded to whole steps)."""
+    def _due_frames(self) -> list[tuple[list, CameraFrame, bool]]:
+        """Frames due now: at simulated times that are multiples of the period (rounded to whole steps),
+        each with its listeners and whether one of them reads the pixels."""
         frames = []
         for robot in self._robots.values():
             if robot.camera_listeners:
                 every = max(1, round(1.0 / (robot.camera.rate_hz * self.dt)))
                 if self._steps % every == 0:
-                    frames.append((list(robot.camera_listeners), self._render(robot)))
+                    frames.append((list(robot.camera_listeners), self._render(robot), robot.pixel_readers > 0))
         return frames
 
     def _render(self, robot: _Robot) -> CameraFrame:
