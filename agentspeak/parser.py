@@ -15,6 +15,7 @@ from lark import Lark, Token, Transformer
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from agentspeak.errors import AslSyntaxError
+from agentspeak.ground_terms import read_ground_term
 from agentspeak.program import (
     ACHIEVE, ADD, BEL, DEL, META, TEST, Achieve, AchieveNew, Action, AddBel, AddBelEnd, AddBelNew,
     AddPlan, Constraint, DelBel, DelBelNew, ExecVar, Fork, If, InternalAction, Plan, PlanTerm,
@@ -611,7 +612,12 @@ def _expected_text(expected) -> str:
 
 # -- single terms -----------------------------------------------------------------------------
 def parse_literal(text: str) -> Term:
-    """Parse one term, e.g. message content ``price(10)[a]`` (raises ``AslSyntaxError``)."""
+    """Parse one term, e.g. message content ``price(10)[a]`` (raises ``AslSyntaxError``).
+
+    Ground terms (most message contents) are read by a small hand-written reader first."""
+    term = read_ground_term(text)
+    if term is not None:
+        return term
     program = parse_program(f"term__({text}).", "<term>") if text.strip() else None
     if program is None:
         raise AslSyntaxError("empty term", "<term>", 1, 1, text)
