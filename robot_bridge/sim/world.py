@@ -62,6 +62,11 @@ class CameraFrame:
     depth: np.ndarray
 
 
+OVER_CURRENT_HOLD_S = 1.0
+"""An over-current flag stays up this long (simulated s) after the motor stopped pushing, like a latched
+diagnostic: an agent that perceives only when its motion has failed still sees why."""
+
+
 class TrajectoryPoint(NamedTuple):
     """Ground truth next to belief, logged at a fixed simulated interval."""
 
@@ -93,6 +98,8 @@ class _Robot:
     pixel_readers: int = 0
     """How many of ``camera_listeners`` read every frame's pixels (their frames are rendered in parallel)."""
     last_frame: float = -math.inf
+    over_current_at: list[float] = field(default_factory=lambda: [-math.inf, -math.inf])
+    """When each motor last drew over-current (simulated seconds)."""
     trajectory: list[TrajectoryPoint] = field(default_factory=list)
 
 
@@ -252,6 +259,9 @@ class World:
             robot.base = self._collide(robot, base, moved)
             robot.ticks = faults.inject_encoders(robot.fault, kobuki.encoder_ticks(robot.base), robot.ticks)
             robot.odom = odometry.update(robot.odom, robot.ticks, dt, self.params)
+            for side, flag in enumerate(kobuki.over_current(robot.base, self.params)):
+                if flag:
+                    robot.over_current_at[side] = now
         self._steps += 1
         if self.log_interval > 0:
             every = max(1, round(self.log_interval / dt))
@@ -340,8 +350,8 @@ class World:
                      vocabulary.motion_state(not still)]
             if robot.bumper:
                 found.append(vocabulary.bumper(robot.bumper))
-            for wheel, flag in zip(("left", "right"), kobuki.over_current(robot.base, self.params)):
-                if flag:
+            for wheel, since in zip(("left", "right"), robot.over_current_at):
+                if self.time - since <= OVER_CURRENT_HOLD_S:
                     found.append(vocabulary.over_current(wheel))
             if robot.camera is not None and self.time - robot.last_frame <= 3.0 / robot.camera.rate_hz:
                 found.append(vocabulary.camera_ok())
