@@ -224,12 +224,17 @@ def build_world(scenario: Scenario, speed: float = 0.0):
 
 def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float = 120.0,
                  out: TextIO | None = None, err: TextIO | None = None,
-                 echo: Callable[[Mark], None] | None = None) -> RunResult:
-    """Run ``scenario`` to the end (or ``timeout`` wall seconds); agents' lines go to ``out``."""
+                 echo: Callable[[Mark], None] | None = None,
+                 on_mark: Callable[[Mark, Callable[[str], None]], None] | None = None) -> RunResult:
+    """Run ``scenario`` to the end (or ``timeout`` wall seconds); agents' lines go to ``out``.
+
+    ``on_mark(mark, kill)``: called on every step; ``kill(name)`` SIGKILLs that agent's process (for
+    robustness tests: a helper or a faulty robot that dies mid-way). Only with ``processes``.
+    """
     world, bridges = build_world(scenario)
     try:
         if processes:
-            finished = _run_processes(scenario, world, bridges, timeout, out, err, echo)
+            finished = _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark)
         else:
             finished = _run_in_process(scenario, world, bridges, timeout, out, echo)
     finally:
@@ -266,7 +271,7 @@ def _run_in_process(scenario, world, bridges, timeout, out, echo) -> ProgressLog
     return log
 
 
-def _run_processes(scenario, world, bridges, timeout, out, err, echo) -> ProgressLog:
+def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=None) -> ProgressLog:
     import sys
     import tempfile
     from pathlib import Path
@@ -287,7 +292,17 @@ def _run_processes(scenario, world, bridges, timeout, out, err, echo) -> Progres
         hub = ZenohTransport(scenario.mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
         server = SimServer(hub.session, scenario.mas, bridges).start()
         launcher = Launcher(project, hub, out, err, extra_args=["--bridge", "zenoh"])
-        log = ProgressLog(scenario, world, launcher.stop_requested.set, echo)
+        def kill(name: str) -> None:
+            child = launcher.children.get(name)
+            if child is not None and child.poll() is None:
+                child.kill()
+
+        def observe(mark: Mark) -> None:
+            if echo is not None:
+                echo(mark)
+            if on_mark is not None:
+                on_mark(mark, kill)
+        log = ProgressLog(scenario, world, launcher.stop_requested.set, observe)
 
         def on_control(message: dict) -> None:
             report = ProgressReport.from_message(message)

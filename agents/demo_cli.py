@@ -1,45 +1,190 @@
-"""``faultmas run``: the main job.
+"""``faultmas run`` (the main job) and ``faultmas eval``: cooperative fault diagnosis on robots.
 
-Until the cooperative Faulty/Helper demonstration lands (issue 7), this runs one robot agent
-(``plans/go_to_destination.asl``) on the embedded simulator with an injected fault, so that
-``make run`` on a fresh machine shows the interpreter, a robot bridge and fault detection working.
+``faultmas run``: Faulty and Helper side by side 1.5 m apart, one agent process each over Zenoh, on the
+embedded simulator, with a fault injected; shows the steps as they happen, ends with the diagnosis and
+a table of step latencies (simulated and wall seconds). ``--robots N --faulty K`` runs a team instead.
+``--bridge ros2`` runs the same plans against the ROS 2 nodes (``robot_bridge/ros2``).
+
+``faultmas eval --runs R``: every fault scenario R times with random placement, lighting and noise;
+a table of success rates and step latencies (mean and standard deviation), in the spirit of the
+paper's Tables I-IV. Runs are independent, so they are spread over ``--jobs`` worker processes, each
+running the agents in-process (the same plans and simulator as ``faultmas run``, without the network).
 """
 from __future__ import annotations
 
 import argparse
+import json
 import logging
+import statistics
 import sys
-from importlib import resources
 
-FAULTS = ("none", "encoders", "both_actuators", "left_actuator", "right_actuator", "stuck_wheels")
+from agents.cooperative import EXPECTED, FAULTS, STEP_NAMES
+
+EVAL_FAULTS = ("none", "encoders", "both_actuators", "left_actuator", "right_actuator")
+STEP_LABELS = {"started": "started its task", "fault_detected": "fault detected", "ambiguous": "ambiguous alone",
+               "help_requested": "asks for help", "helper_found": "helper chosen", "searching": "searching for",
+               "robot_found": "robot detected:", "found_by": "found by", "lost_sight": "lost sight of",
+               "diagnosed": "DIAGNOSIS:", "undiagnosed": "UNDIAGNOSED, candidates:", "arrived": "arrived"}
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    run = sub.add_parser("run", help="the main job: a robot with a fault on the embedded simulator")
-    run.add_argument("--fault", choices=FAULTS, default="encoders")
+    run = sub.add_parser("run", help="the main job: two robots diagnose an injected fault together",
+                         description=__doc__.splitlines()[2])
+    run.add_argument("--fault", choices=FAULTS, default="encoders", help="fault of the faulty robot (default %(default)s)")
     run.add_argument("--seed", type=int, default=1)
-    run.add_argument("--timeout", type=float, default=60.0)
+    run.add_argument("--robots", type=int, default=None, metavar="N", help="a team of N robots (random places)")
+    run.add_argument("--faulty", type=int, default=1, metavar="K", help="with --robots: K of them faulty (random faults)")
+    run.add_argument("--bridge", choices=("sim", "ros2"), default="sim", help="robots: embedded simulator or ROS 2 nodes")
+    run.add_argument("--in-process", action="store_true", help="all agents in this process (no Zenoh)")
+    run.add_argument("--json", action="store_true", help="print one JSON object (agents' lines go to stderr)")
+    run.add_argument("--plot", metavar="PNG", help="draw ground-truth and believed trajectories to this file")
+    run.add_argument("--quiet", action="store_true", help="do not show the agents' own lines")
+    run.add_argument("--timeout", type=float, default=120.0, help="wall seconds before giving up (default %(default)s)")
     run.set_defaults(func=cmd_run)
 
+    ev = sub.add_parser("eval", help="every fault scenario R times: success rates and step latencies")
+    ev.add_argument("--runs", type=int, default=10, metavar="R")
+    ev.add_argument("--seed", type=int, default=1)
+    ev.add_argument("--faults", default=",".join(EVAL_FAULTS), help="comma-separated scenarios (default: all five)")
+    ev.add_argument("--jobs", type=int, default=2, help="worker processes (default %(default)s)")
+    ev.add_argument("--json", action="store_true")
+    ev.add_argument("--timeout", type=float, default=90.0, help="wall seconds per run")
+    ev.set_defaults(func=cmd_eval)
 
-def cmd_run(args) -> int:
-    from agentspeak.parser import parse_program
-    from agentspeak.runtime import LocalRuntime
-    from agents.robot_arch import RobotArch
-    from robot_bridge.registry import create
 
+def _setup_logging() -> None:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr)
-    source = resources.files("plans").joinpath("go_to_destination.asl")
-    program = parse_program(source.read_text(), str(source))
-    bridge = create("sim", "faulty", seed=args.seed, fault=args.fault)
-    bridge.setup(timeout=5.0)
-    print(f"faultmas: robot 'faulty' on the embedded simulator, fault injected: {args.fault}", flush=True)
-    runtime = LocalRuntime()
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from agents.cooperative import paper_scenario, run_scenario, team_scenario
+
+    _setup_logging()
     try:
-        runtime.add_agent("faulty", program=program, source_file=str(source), arch=RobotArch(runtime, bridge))
-        reason = runtime.run(timeout=args.timeout)
-    finally:
-        bridge.shutdown()
-    if reason == "timeout":
-        print(f"faultmas: stopped after {args.timeout} s", file=sys.stderr)
-    return 0
+        scenario = team_scenario(args.robots, args.faulty, args.seed) if args.robots else \
+            paper_scenario(args.fault, args.seed)
+    except ValueError as exc:
+        print(f"faultmas run: {exc}", file=sys.stderr)
+        return 2
+    show = sys.stderr if args.json else sys.stdout
+    for r in scenario.robots:
+        what = f"fault {r.fault}" + (" (a transient stall raises a false alarm)" if r.false_alarm else "")
+        print(f"faultmas: {r.name:<8} at ({r.x:5.2f}, {r.y:5.2f}) heading {r.yaw_deg:6.1f} deg, {what}", file=show)
+    agent_lines = None if args.quiet else show
+    if args.bridge == "ros2":
+        from agents.ros2_run import run_on_ros2
+        result = run_on_ros2(scenario, timeout=args.timeout, out=agent_lines, echo=lambda m: _echo(m, show))
+    else:
+        result = run_scenario(scenario, processes=not args.in_process, timeout=args.timeout,
+                              out=agent_lines, err=sys.stderr, echo=lambda m: _echo(m, show))
+    if args.plot and result.world is not None:
+        from robot_bridge.cli import plot
+        plot(result.world, args.plot)
+        print(f"faultmas: trajectories drawn to {args.plot}", file=show)
+    if args.json:
+        print(json.dumps(_as_json(result)))
+    else:
+        print(_summary(result))
+    return 0 if result.correct else 1
+
+
+def _echo(mark, stream) -> None:
+    label = STEP_LABELS.get(mark.step, mark.step)
+    stream.write(f"  >> {mark.sim:7.2f} s sim {mark.wall:7.2f} s wall  {mark.agent}: {label} {mark.detail}\n")
+    stream.flush()
+
+
+def _as_json(result) -> dict:
+    robots = [{"robot": r.name, "fault": r.fault, "diagnosis": r.diagnosis, "correct": r.correct,
+               "steps": r.steps_sim, "steps_wall": r.steps_wall} for r in result.robots]
+    tested = [r for r in robots if r["fault"] != "none" or len(result.robots) == 1] or robots
+    if len(result.scenario.robots) == 2:
+        main = robots[0]
+        return {"fault": main["fault"], "diagnosis": main["diagnosis"], "correct": result.correct,
+                "steps": main["steps"], "steps_wall": main["steps_wall"], "finished": result.finished}
+    return {"fault": [r["fault"] for r in tested], "diagnosis": [r["diagnosis"] for r in tested],
+            "correct": result.correct, "finished": result.finished, "robots": robots}
+
+
+def _fmt(value) -> str:
+    return "-" if value is None else f"{value:.2f}"
+
+
+def _summary(result) -> str:
+    lines = [""]
+    for r in result.robots:
+        verdict = "correct" if r.correct else f"WRONG (expected {r.expected})"
+        lines.append(f"{r.name}: injected {r.fault}, diagnosis {r.diagnosis or 'none reached'}: {verdict}")
+    lines += ["", f"| robot | step | simulated s | wall s |", "|---|---|---|---|"]
+    for r in result.robots:
+        for step in STEP_NAMES:
+            lines.append(f"| {r.name} | {step} | {_fmt(r.steps_sim[step])} | {_fmt(r.steps_wall[step])} |")
+    if not result.finished:
+        lines.append("\nthe run did not finish in time")
+    return "\n".join(lines)
+
+
+# ---- evaluation ------------------------------------------------------------------------------------
+def _one_run(job: tuple[str, int, float]) -> dict:
+    from agents.cooperative import random_pair_scenario, run_scenario
+
+    fault, seed, timeout = job
+    logging.disable(logging.WARNING)
+    result = run_scenario(random_pair_scenario(fault, seed), processes=False, timeout=timeout)
+    robot = result.robots[0]
+    return {"fault": fault, "seed": seed, "diagnosis": robot.diagnosis, "correct": result.correct,
+            "steps": robot.steps_sim, "steps_wall": robot.steps_wall}
+
+
+def cmd_eval(args: argparse.Namespace) -> int:
+    from concurrent.futures import ProcessPoolExecutor
+
+    faults = [f.strip() for f in args.faults.split(",") if f.strip()]
+    unknown = [f for f in faults if f not in EXPECTED]
+    if unknown or args.runs < 1 or args.jobs < 1:
+        print(f"faultmas eval: unknown scenario(s) {unknown}" if unknown else "faultmas eval: --runs and --jobs must be >= 1",
+              file=sys.stderr)
+        return 2
+    jobs = [(f, args.seed * 100_000 + i, args.timeout) for f in faults for i in range(args.runs)]
+    runs: list[dict] = []
+    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+        for done in pool.map(_one_run, jobs):
+            runs.append(done)
+            if not args.json:
+                print(f"  {done['fault']:<15} seed {done['seed']}: {done['diagnosis']} "
+                      f"({'ok' if done['correct'] else 'WRONG'})", file=sys.stderr, flush=True)
+    table = eval_table(runs, faults)
+    if args.json:
+        print(json.dumps({"runs": runs, "table": table}))
+    else:
+        print(format_eval_table(table, args.runs))
+    return 0 if all(row["success_rate"] == 1.0 for row in table) else 1
+
+
+def eval_table(runs: list[dict], faults: list[str]) -> list[dict]:
+    """Per scenario: success rate and mean/sd of every step (simulated and wall seconds)."""
+    table = []
+    for fault in faults:
+        mine = [r for r in runs if r["fault"] == fault]
+        row = {"scenario": fault, "runs": len(mine),
+               "success_rate": sum(r["correct"] for r in mine) / len(mine) if mine else 0.0}
+        for clock in ("steps", "steps_wall"):
+            for step in STEP_NAMES:
+                values = [r[clock][step] for r in mine if r[clock][step] is not None]
+                row[f"{clock}.{step}"] = (statistics.fmean(values) if values else None,
+                                          statistics.stdev(values) if len(values) > 1 else None)
+        table.append(row)
+    return table
+
+
+def format_eval_table(table: list[dict], runs: int) -> str:
+    def cell(pair) -> str:
+        mean, sd = pair
+        return "-" if mean is None else f"{mean:.2f} ± {sd:.2f}" if sd is not None else f"{mean:.2f}"
+    head = ("| scenario | runs | correct | fault detection | robot detection | diagnosis | total "
+            "| total (wall) |\n|---|---|---|---|---|---|---|---|")
+    rows = [f"| {r['scenario']} | {r['runs']} | {100 * r['success_rate']:.0f}% | {cell(r['steps.fault_detection'])} "
+            f"| {cell(r['steps.robot_detection'])} | {cell(r['steps.diagnosis'])} | {cell(r['steps.total'])} "
+            f"| {cell(r['steps_wall.total'])} |" for r in table]
+    return (f"faultmas eval: {runs} runs per scenario; latencies in simulated seconds (mean ± sd)\n"
+            + head + "\n" + "\n".join(rows))

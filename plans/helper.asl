@@ -36,6 +36,7 @@ available :- not helping(_) & not on_mission & not diagnosing.
 
 +!release(F)
    <- -helping(F);
+      .progress(released, F);
       .abolish(noThanks[source(F)]);
       .abolish(thanks[source(F)]);
       !returnToTask.

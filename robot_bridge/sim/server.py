@@ -27,7 +27,7 @@ class SimServer:
     """Serves ``bridges`` (robot name -> set-up ``SimBridge``) on ``session`` under MAS ``mas``."""
 
     def __init__(self, session: Any, mas: str, bridges: dict[str, SimBridge], interval: float = 0.02,
-                 refresh: float = 0.5) -> None:
+                 refresh: float = 0.25) -> None:
         self.session, self.mas, self.bridges = session, mas, dict(bridges)
         self.interval, self.refresh = interval, refresh
         self._declared: list = []
@@ -107,5 +107,6 @@ class SimServer:
             self.publish_percepts(name, force=True)
             self._publishers[name][0].put(wire.ActionStatus(
                 name, action.id, completion.ok, completion.reason, completion.detail).to_json())
-        except Exception as exc:
-            log.warning("sim server: cannot answer %s of %s: %s", action, name, exc)
+        except Exception as exc:  # the server is closing: the agents are gone too
+            if not self._stop.is_set():
+                log.warning("sim server: cannot answer %s of %s: %s", action, name, exc)
