@@ -225,7 +225,9 @@ class _Renderer:
         with np.errstate(divide="ignore"):
             floor = np.where(self.k_v > 0, rig.height_m / self.k_v, np.inf)
         self.floor_z = floor.astype(np.float32)[:, None]
-        self.floor_z_image = np.ascontiguousarray(np.broadcast_to(self.floor_z, (h, w)))
+        # the z-buffer holds disparity in 1/subpixel steps (fb / z, 0 = nothing), what the sensor measures
+        self.fb32 = np.float32(sensor.focal_baseline_px_m * sensor.subpixel)
+        self.floor_d_image = np.ascontiguousarray(np.broadcast_to(self.fb32 / self.floor_z, (h, w)))
         self.k_v32 = self.k_v.astype(np.float32)[:, None]
         self.rows = np.arange(h, dtype=np.int16)[:, None]
         # floor shading per row: a little darker far away
@@ -439,20 +441,17 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     # background: per column the backdrop above the wall's top, the wall, then the floor below the
     # wall-floor line; the wall is a column band, floor and backdrop depend on the row only
     wall_z, wall_idx = _wall_depths(r, camera_pose, scene.walls)
-    wall_top = np.array([wl.height_m for wl in scene.walls] + [0.0])[wall_idx]
+    wall_top = _wall_table(tuple(scene.walls))[3][wall_idx]
     with np.errstate(invalid="ignore"):
         v_top = np.ceil(cam.cy + cam.fy * (hc - wall_top) / wall_z)
         v_bottom = np.floor(cam.cy + cam.fy * hc / wall_z) + 1
     no_wall = ~np.isfinite(wall_z)
     v_top = np.clip(np.where(no_wall, h, v_top), 0, h).astype(np.int16)
     v_bottom = np.clip(np.where(no_wall, h, v_bottom), 0, h).astype(np.int16)
-    # row - top, taken as unsigned, is below the wall's height in rows only on the wall
-    not_wall = ((r.rows - v_top).view(np.uint16) >= np.maximum(v_bottom - v_top, 0).view(np.uint16)).view(np.uint8)
     wall_rgb = _rgb8(_wall_colours(r, camera_pose, scene.walls, wall_idx, wall_z).astype(np.float64) * gain)
-    cv2.repeat(wall_rgb[None], h, 1, dst=canvas)            # a row broadcast, faster than numpy's
-    cv2.copyTo(r.floor_image(scene.floor_rgb, scene.backdrop_rgb, gain), not_wall, canvas)
-    cv2.repeat(wall_z.astype(np.float32)[None], h, 1, dst=depth)
-    cv2.copyTo(r.floor_z_image, not_wall, depth)
+    wall_d = r.fb32 / wall_z.astype(np.float32)                    # disparity, see _Renderer
+    _background(r, v_top, v_bottom, (wall_rgb, wall_d),
+                (r.floor_image(scene.floor_rgb, scene.backdrop_rgb, gain), r.floor_d_image), (canvas, depth))
 
     # objects: robots (body + markers) and props, with a depth test per pixel
     prisms, n_labels = _prisms(r, camera_pose, robots, scene, count)
@@ -489,26 +488,80 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     return image, noisy, pixels
 
 
+def _background(r: _Renderer, v_top: np.ndarray, v_bottom: np.ndarray, walls: tuple, floors: tuple,
+                outs: tuple) -> None:
+    """Fill each image of ``outs`` with its wall row (per column, ``walls``) in rows ``v_top:v_bottom``
+    of each column and its floor/backdrop image (``floors``) elsewhere.
+
+    Only the rows where some column changes between wall and floor need a per-pixel mask; above and
+    below them every column agrees, and those rows are plain copies.
+    """
+    import cv2
+
+    h = r.cam.height
+    wall = v_bottom > v_top
+    if not wall.any():
+        for floor, out in zip(floors, outs):
+            np.copyto(out, floor)
+        return
+    top0, top1 = int(v_top[wall].min()), int(v_top[wall].max())       # rows where walls start
+    bot0, bot1 = int(v_bottom[wall].min()), int(v_bottom[wall].max())  # ... and end
+    if not wall.all():                  # some column sees no wall: floor/backdrop from top to bottom
+        top1, bot0 = h, 0
+    bands = [(top0, bot1)] if top1 >= bot0 else [(top0, top1), (bot0, bot1)]
+    height = np.maximum(v_bottom - v_top, 0).view(np.uint16)
+    masks = []
+    for a, b in bands:
+        # row - top, taken as unsigned, is below the wall's height in rows only on the wall
+        masks.append(((r.rows[a:b] - v_top).view(np.uint16) >= height).view(np.uint8))
+    for row, floor, out in zip(walls, floors, outs):
+        out[:top0] = floor[:top0]
+        out[bot1:] = floor[bot1:]
+        if bot1 > top0:
+            cv2.repeat(row[None], bot1 - top0, 1, dst=out[top0:bot1])   # a row broadcast, faster than numpy's
+        for (a, b), mask in zip(bands, masks):
+            if b > a:
+                cv2.copyTo(floor[a:b], mask, out[a:b])
+
+
+@lru_cache(maxsize=64)
+def _wall_table(walls: tuple[Wall, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The walls as arrays, once per scene: start points, directions (one row each) and colours and
+    heights with an extra last entry for columns that see no wall."""
+    start = np.array([(wl.x0, wl.y0) for wl in walls], np.float64).reshape(-1, 2)
+    edge = np.array([(wl.x1 - wl.x0, wl.y1 - wl.y0) for wl in walls] + [(1.0, 0.0)], np.float64)
+    rgb = np.array([wl.rgb for wl in walls] + [(0, 0, 0)], np.float32)
+    height = np.array([wl.height_m for wl in walls] + [0.0])
+    return start, edge, rgb, height
+
+
+def _ray_directions(r: _Renderer, pose: Pose) -> tuple[np.ndarray, np.ndarray]:
+    """World direction (dx, dy) per column of the ray P(z) = C + z * (f + tan_u * rgt), f = (c, s),
+    rgt = (s, -c): z is the optical-axis depth."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    return c + r.tan_u * s, s - r.tan_u * c
+
+
 def _wall_depths(r: _Renderer, pose: Pose, walls: Sequence[Wall]) -> tuple[np.ndarray, np.ndarray]:
-    """Nearest wall depth (z) per column and its index (len(walls) where none)."""
+    """Nearest wall depth (z) per column and its index (len(walls) where none): all walls at once."""
     w = r.cam.width
-    best = np.full(w, np.inf)
-    idx = np.full(w, len(walls), np.int64)
-    cx, cy, yaw = pose
-    c, s = math.cos(yaw), math.sin(yaw)
-    # ray in the world for column u: P(z) = C + z * (f + tan_u * rgt), f = (c, s), rgt = (s, -c)
-    dx = c + r.tan_u * s
-    dy = s - r.tan_u * c
-    for i, wl in enumerate(walls):
-        ex, ey = wl.x1 - wl.x0, wl.y1 - wl.y0
-        ox, oy = wl.x0 - cx, wl.y0 - cy
-        den = dx * (-ey) - dy * (-ex)          # solve z*d - t*e = o
-        with np.errstate(divide="ignore", invalid="ignore"):
-            z = (ox * (-ey) - oy * (-ex)) / den
-            t = (dx * oy - dy * ox) / den
-        ok = (np.abs(den) > 1e-12) & (z > _NEAR_M) & (t >= 0) & (t <= 1) & (z < best)
-        best = np.where(ok, z, best)
-        idx = np.where(ok, i, idx)
+    if not walls:
+        return np.full(w, np.inf), np.zeros(w, np.int64)
+    start, edge, _, _ = _wall_table(tuple(walls))
+    n = len(walls)
+    dx, dy = _ray_directions(r, pose)
+    ex, ey = edge[:n, :1], edge[:n, 1:]
+    ox, oy = start[:, :1] - pose[0], start[:, 1:] - pose[1]
+    f32 = np.float32
+    den = dx * (-ey).astype(f32) - dy * (-ex).astype(f32)            # solve z*d - t*e = o
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = (ox * (-ey) - oy * (-ex)).astype(f32) / den
+        t = (dx * oy.astype(f32) - dy * ox.astype(f32)) / den
+    ok = (np.abs(den) > 1e-12) & (z > _NEAR_M) & (t >= 0) & (t <= 1)
+    z = np.where(ok, z, np.float32(np.inf))
+    idx = np.argmin(z, axis=0)                         # the first of equally near walls, as drawn
+    best = z[idx, np.arange(w)].astype(np.float64)
+    idx[best == np.inf] = n
     return best, idx
 
 
@@ -516,21 +569,16 @@ def _wall_colours(r: _Renderer, pose: Pose, walls: Sequence[Wall], idx: np.ndarr
                   z: np.ndarray) -> np.ndarray:
     """Per-column wall colour, shaded by the angle between the wall and the viewing ray."""
     w = r.cam.width
-    cols = np.zeros((w, 3), np.float32)
     if not walls:
-        return cols.astype(np.uint8)
-    base = np.array([wl.rgb for wl in walls] + [(0, 0, 0)], np.float32)[idx]
-    cx, cy, yaw = pose
-    c, s = math.cos(yaw), math.sin(yaw)
-    dx = c + r.tan_u * s
-    dy = s - r.tan_u * c
+        return np.zeros((w, 3), np.uint8)
+    _, edge, rgb, _ = _wall_table(tuple(walls))
+    dx, dy = _ray_directions(r, pose)
     nrm = np.hypot(dx, dy)
-    ex = np.array([wl.x1 - wl.x0 for wl in walls] + [1.0])[idx]
-    ey = np.array([wl.y1 - wl.y0 for wl in walls] + [0.0])[idx]
+    ex, ey = edge[idx, 0], edge[idx, 1]
     el = np.hypot(ex, ey)
     cos_inc = np.abs((dx * ey - dy * ex) / (nrm * el))
     shade = 0.55 + 0.45 * cos_inc - 0.03 * np.minimum(np.nan_to_num(z, posinf=0), 8)
-    return np.clip(base * shade[:, None], 0, 255).astype(np.uint8)
+    return np.clip(rgb[idx] * shade[:, None], 0, 255).astype(np.uint8)
 
 
 def _prisms(r: _Renderer, pose: Pose, robots: Sequence[Pose], scene: Scene,
@@ -650,7 +698,8 @@ def _zbuffer_band(r: _Renderer, p: _Prism, depth: np.ndarray, u0: int, u1: int, 
                   t2: np.ndarray, zmin: float, zmax: float, full: np.ndarray, bands: dict):
     """The rows a prism spans in columns ``u0:u1`` (rays enter at ``t1``, leave at ``t2``), where it is
     hit and where it is nearer than what is drawn; None when it covers nothing. Shared by boxes and
-    cylinders; counts the prism's pixels for the visibility bookkeeping."""
+    cylinders; counts the prism's pixels for the visibility bookkeeping. Returns the disparity to write
+    where the mask says."""
     cam, hc = r.cam, r.rig.height_m
     a, b = hc - p.top, hc - p.bottom                     # a <= k*z <= b inside the height range
     ks = (a / zmin, a / zmax, b / zmin, b / zmax)
@@ -662,20 +711,21 @@ def _zbuffer_band(r: _Renderer, p: _Prism, depth: np.ndarray, u0: int, u1: int, 
     lo, hi = lo[v0:v1], hi[v0:v1]
     t1c = t1.astype(np.float32, copy=False)[None, :]
     if a < 0 < b:           # camera between bottom and top: no cap in sight, the side at the entry depth
-        zhit = np.broadcast_to(t1c, (v1 - v0, u1 - u0))
         hit = t1c <= hi
+        dhit = np.broadcast_to(r.fb32 / t1c, hit.shape)
     else:
         zhit = np.maximum(t1c, lo)
         hit = zhit <= np.minimum(t2.astype(np.float32, copy=False)[None, :], hi)
+        dhit = r.fb32 / zhit
     if p.label:
         full[p.label] += int(np.count_nonzero(hit))
         bands[p.label] = (v0, v1, u0, u1)
-    region = depth[v0:v1, u0:u1]
-    closer = zhit < region
+    region = depth[v0:v1, u0:u1]                         # disparity: nearer is larger
+    closer = dhit > region
     closer &= hit
     if not closer.any():
         return None
-    return v0, v1, region, zhit, closer, lo, t1c
+    return v0, v1, region, dhit, closer, lo, t1c
 
 
 def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, labels: np.ndarray | None,
@@ -698,7 +748,7 @@ def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, l
                          full, bands)
     if band is None:
         return
-    v0, v1, region, zhit, closer, lo, t1c = band
+    v0, v1, region, dhit, closer, lo, t1c = band
     # shading: vertical faces by the angle between normal and view ray, caps flat
     tau = r.tan_u64[u0:u1]
     t1f = np.where(hit_cols, t1, 0.0)
@@ -715,7 +765,7 @@ def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, l
     face_col = _face_palette(p.rgb, gain)[level]
     cap_col = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)   # lit top / dark underside
     mask = closer.view(np.uint8)
-    cv2.copyTo(zhit, mask, region)
+    cv2.copyTo(dhit, mask, region)
     colours = np.where((t1c >= lo)[..., None], face_col[None, :], cap_col)
     cv2.copyTo(colours, mask, image[v0:v1, u0:u1])
     if labels is not None:
@@ -777,10 +827,10 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], depth: np.ndarray, image: 
         band = _zbuffer_band(r, p, depth, c0, c1, t1_32[s:e], t2_32[s:e], zmin[i], zmax[i], full, bands)
         if band is None:
             continue
-        v0, v1, region, zhit, closer, lo, t1c = band
+        v0, v1, region, dhit, closer, lo, t1c = band
         face_col = _face_palette(p.rgb, gain)[level[s:e]]
         mask = closer.view(np.uint8)
-        cv2.copyTo(zhit, mask, region)
+        cv2.copyTo(dhit, mask, region)
         if p.bottom < hc < p.top:                        # camera between bottom and top: side only
             colours = np.broadcast_to(face_col[None], (v1 - v0, c1 - c0, 3))
         else:
@@ -792,18 +842,17 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], depth: np.ndarray, image: 
         shadows.append((c0, v0, v1, float(t1[s])))
 
 
-def _depth_noise(r: _Renderer, depth: np.ndarray, shadows: list, rng: np.random.Generator) -> np.ndarray:
+def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rng: np.random.Generator) -> np.ndarray:
     """Kinect-like measurement of the true depth: shadows, noise, quantisation, holes, range limits.
 
-    Works in disparity (1/z) like the sensor: noise and dropouts come from the bank at a random
+    Works in disparity (fb / z) like the sensor: noise and dropouts come from the bank at a random
     offset, rounding to 1/subpixel steps quantises, and readings outside the range become 0.
-    ``depth`` (a scratch buffer) is modified in place; the returned image is new.
+    ``disparity`` (the z-buffer, a scratch buffer) is modified in place; the returned depth image is new.
     """
     import cv2
 
     s = r.sensor
-    h, w = depth.shape
-    z = depth
+    h, w = disparity.shape
     if s.shadows and shadows:
         fb1 = s.focal_baseline_px_m
         for u_left, v0, v1, zf in shadows:
@@ -819,23 +868,22 @@ def _depth_noise(r: _Renderer, depth: np.ndarray, shadows: list, rng: np.random.
             d = np.arange(u_left - a, 0, -1, dtype=np.float64)
             room = 1.0 / zf - d / fb1
             beyond = np.where(room > 0, 1.0 / np.maximum(room, 1e-12), np.inf)
-            limit = np.maximum(beyond, zf + 0.05).astype(np.float32)
-            blk = z[v0:v1, a:u_left]
-            blk[blk >= limit[None, :]] = np.inf
+            limit = r.fb32 / np.maximum(beyond, zf + 0.05).astype(np.float32)      # as a disparity
+            blk = disparity[v0:v1, a:u_left]
+            blk[blk <= limit[None, :]] = 0
 
     k = max(0, int(s.registration_px))          # depth-to-colour registration error (columns)
     n = h * w
     off = int(rng.integers(0, r.disparity_bank.size - n + 1))
-    fb = np.float32(s.focal_baseline_px_m * s.subpixel)           # disparity in 1/subpixel steps
+    fb = r.fb32                                                   # disparity in 1/subpixel steps
     # ``flat[k:k + n]`` as an image is ``out`` moved k columns right: computing it contiguously shifts
     # depth against colour; what wraps into each row's first k columns is cleared afterwards
     flat = np.empty(n + k, np.float32)
     dst = flat[k:].reshape(h, w)
     with np.errstate(divide="ignore"):
-        np.divide(fb, z, out=dst)                                   # no surface (inf) -> 0 disparity
-        np.add(dst, r.disparity_bank[off:off + n].reshape(h, w), out=dst)
+        np.add(disparity, r.disparity_bank[off:off + n].reshape(h, w), out=dst)
         np.rint(dst, out=dst)
-        np.divide(fb, dst, out=dst)
+        np.divide(fb, dst, out=dst)                                 # no surface (0) -> inf -> no reading
     # readings outside [min, max] (also inf, and the negative ones the dropouts made) become 0
     cv2.threshold(dst, float(s.max_m), 0, cv2.THRESH_TOZERO_INV, dst=dst)
     cv2.threshold(dst, float(s.min_m) - 1e-6, 0, cv2.THRESH_TOZERO, dst=dst)
