@@ -836,10 +836,18 @@ def _exec_del_bel(ag: Agent, intention, im, frame, instr, new_focus: bool = Fals
     if not has_source(pattern):
         pattern = pattern.add_annot(SOURCE_SELF)
     frame.pc += 1
-    found = _find_belief(ag, pattern, im.b)
-    if found is None:
-        return
-    removed = ag.bb.remove(resolve(pattern, im.b))
+    if is_ground(pattern):
+        # the usual case: at most one stored belief has this plain part; it must carry every
+        # annotation of the pattern (what the unification below checks, without a search)
+        found = ag.bb.get(pattern)
+        if found is None or not all(found.annots and a in found.annots for a in pattern.annots):
+            return
+        removed = ag.bb.remove(pattern)
+    else:
+        found = _find_belief(ag, pattern, im.b)
+        if found is None:
+            return
+        removed = ag.bb.remove(resolve(pattern, im.b))
     if removed is not None:
         _post_belief_event(ag, Trigger(DEL, BEL, removed), intention, new_focus)
 

@@ -462,12 +462,30 @@ def variables(t: Term, out: list | None = None) -> list:
     return out
 
 
-def is_ground(t: Term) -> bool:
+def is_ground(t: Term, depth: int = 0) -> bool:
+    """No variable anywhere in ``t`` (stops at the first; the common shapes without a list walk;
+    deep nesting goes to the loop of ``variables``, which needs no Python stack)."""
     tt = type(t)
+    if depth > 50:
+        return not variables(t)
     if tt is int or tt is float or tt is str:
         return True
-    if tt is Literal and not t.args and t.annots is None:
-        return t.annot_tail is None
+    if tt is Literal:
+        if t.annot_tail is not None:
+            return False
+        for a in t.args:
+            ta = type(a)
+            if ta is int or ta is float or ta is str:
+                continue
+            if ta is Var or not is_ground(a, depth + 1):
+                return False
+        if t.annots is not None:
+            for a in t.annots:
+                if type(a) is Var or not is_ground(a, depth + 1):
+                    return False
+        return True
+    if tt is Var:
+        return False
     return not variables(t)
 
 

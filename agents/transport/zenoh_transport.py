@@ -20,6 +20,10 @@ from agents.transport.envelope import DEFAULT_MAX_SIZE, Envelope
 from agents.transport.status import AgentStatus
 
 
+INBOX_CAPACITY = 8192
+"""Samples an inbox holds before Zenoh stops taking more for it (reliable puts then wait: no loss)."""
+
+
 class ZenohTransport(Transport):
     """A ``Transport`` over a Zenoh session (its own, or one the process already has)."""
 
@@ -69,10 +73,34 @@ class ZenohTransport(Transport):
 
     # -- agents ----------------------------------------------------------------------------------
     def _attach(self, agent: str) -> None:
+        import zenoh
+
         key = keys.inbox_key(self.mas, agent)
-        self._inboxes[agent] = self.session.declare_subscriber(
-            key, lambda sample: self.receive_bytes(agent, sample.payload.to_bytes(), key))
+        subscriber = self.session.declare_subscriber(key, zenoh.handlers.FifoChannel(INBOX_CAPACITY))
+        self._inboxes[agent] = subscriber
+        threading.Thread(target=self._drain, args=(agent, subscriber.handler, key), daemon=True,
+                         name=f"faultmas-inbox-{agent}").start()
         self._tokens[agent] = self.session.liveliness().declare_token(keys.alive_key(self.mas, agent))
+
+    def _drain(self, agent: str, channel: Any, key: str) -> None:
+        """Take the samples of one inbox in batches, in a thread of ours. A Zenoh callback needs the
+        GIL once per sample, and waits for it while the agents' thread reasons (up to the 5 ms
+        switch interval): one sample per wait. Here the samples queue in Zenoh's channel without
+        the GIL, and each time this thread gets the GIL it handles every sample waiting."""
+        receive = self.receive_bytes
+        try:
+            sample = channel.recv()  # blocks without the GIL; ends when the subscriber goes
+            while True:
+                while sample is not None:
+                    try:
+                        receive(agent, sample.payload.to_bytes(), key)
+                    except Exception:  # never lose the inbox over one message
+                        log.exception("inbox of %s: a received message could not be handled", agent)
+                    sample = channel.try_recv()
+                sample = channel.recv()
+        except Exception as exc:  # ZError "channel is empty and closed": undeclared or session closed
+            if self._inboxes.get(agent) is not None and self._opened:
+                log.debug("inbox of %s closed: %s", agent, exc)
 
     def _detach(self, agent: str) -> None:
         for table in (self._tokens, self._inboxes):  # presence first: nobody should send any more
