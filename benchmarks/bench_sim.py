@@ -48,8 +48,10 @@ def build(robots: int, cameras: bool, seed: int = 0, mode: str = "parallel") -> 
     return world
 
 
-def measure(robots: int, cameras: bool, sim_seconds: float, mode: str = "parallel") -> tuple[float, int, int]:
-    """(simulated seconds per wall second, frames rendered, frames due) stepping flat out."""
+def measure(robots: int, cameras: bool, sim_seconds: float, mode: str = "parallel"
+            ) -> tuple[float, int, int, float]:
+    """(simulated seconds per wall second, frames rendered, frames due, CPU seconds of this process)
+    stepping flat out."""
     from robot_bridge.sim.camera import frames_rendered
 
     world = build(robots, cameras, mode=mode)
@@ -58,10 +60,10 @@ def measure(robots: int, cameras: bool, sim_seconds: float, mode: str = "paralle
     if cameras:
         for name in world.robots:
             world.subscribe_camera(name, lambda frame: due.__setitem__(0, due[0] + 1))
-    rendered0, started, t0 = frames_rendered(), time.perf_counter(), world.time
+    rendered0, started, cpu, t0 = frames_rendered(), time.perf_counter(), time.process_time(), world.time
     world.run(sim_seconds)
     wall = time.perf_counter() - started
-    return (world.time - t0) / wall, frames_rendered() - rendered0, due[0]
+    return (world.time - t0) / wall, frames_rendered() - rendered0, due[0], time.process_time() - cpu
 
 
 def run(quick: bool) -> str:
@@ -74,25 +76,29 @@ def run(quick: bool) -> str:
     threads = cv2.getNumThreads()
     cv2.setNumThreads(1)
     try:
-        lines = [f"{'robots':>6} | {'physics':>8} | {'EVERY FRAME RENDERED, side by side':>36} | "
-                 f"{'every frame, one thread':>23} | {'frames kept unread':>19} | {'target':>7} | met",
-                 "-" * 124]
+        lines = [f"{'robots':>6} | {'physics':>8} | {'EVERY FRAME RENDERED, side by side':>45} | "
+                 f"{'every frame, one thread':>23} | {'frames kept unread':>18} | {'target':>7} | met",
+                 "-" * 132]
         for n in sizes:
-            bare, _, _ = measure(n, False, duration[n] * 5)
-            fast, made, due = measure(n, True, duration[n], "parallel")
-            serial, serial_made, _ = measure(n, True, duration[n], "serial")
-            lazy, lazy_made, _ = measure(n, True, duration[n], "unread")
+            bare, _, _, _ = measure(n, False, duration[n] * 5)
+            fast, made, due, cpu = measure(n, True, duration[n], "parallel")
+            serial, serial_made, _, _ = measure(n, True, duration[n], "serial")
+            lazy, lazy_made, _, _ = measure(n, True, duration[n], "unread")
             target = TARGETS.get(n)
             verdict = "-" if target is None else "yes" if fast >= target and made == due else "NO"
             goal = f">= {target:g}x" if target else "-"
-            lines.append(f"{n:>6} | {bare:>7.1f}x | {fast:>7.2f}x {made:>5d}/{due:<5d} fr {made * fast / duration[n]:>5.0f}"
-                         f" fr/s | {serial:>7.2f}x {serial * serial_made / duration[n]:>5.0f} fr/s | "
-                         f"{lazy:>7.2f}x {lazy_made:>4d} fr | {goal:>7} | {verdict}")
+            rate = made * fast / duration[n]
+            lines.append(f"{n:>6} | {bare:>7.1f}x | {fast:>7.2f}x {made:>5d}/{due:<5d} fr {rate:>5.0f} fr/s "
+                         f"{1e3 * cpu / max(made, 1):>4.1f} ms CPU/fr | {serial:>7.2f}x "
+                         f"{serial * serial_made / duration[n]:>5.0f} fr/s | {lazy:>7.2f}x {lazy_made:>3d} fr | "
+                         f"{goal:>7} | {verdict}")
     finally:
         cv2.setNumThreads(threads)
     lines.append(f"(simulated seconds per wall second, dt = 0.02 s, 10 Hz cameras; 'fr' = 640x480 RGB-D frames "
-                 f"rendered / due in the run, 'fr/s' = frames rendered per wall second; side by side = "
-                 f"{render_threads()} render threads; one OpenCV thread each; 'met' judges the every-frame column)")
+                 f"rendered / due in the run, 'fr/s' = frames rendered per wall second, 'ms CPU/fr' = process CPU time "
+                 f"(physics included) per frame rendered, which other loads on the machine barely change; side by "
+                 f"side = {render_threads()} render threads; one OpenCV thread each; 'met' judges the every-frame "
+                 f"column)")
     return "\n".join(lines)
 
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 import os
 import threading
-from collections import deque
+from collections import OrderedDict, deque
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -248,6 +248,9 @@ class _Renderer:
         self._colour_cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         self._floor_cache: dict[tuple, np.ndarray] = {}
         self._height_cache: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+        self._static: OrderedDict[tuple, tuple] = OrderedDict()     # static layers of cameras standing still
+        self._poses_seen: OrderedDict[tuple, None] = OrderedDict()
+        self._static_lock = threading.Lock()
         self._local = threading.local()
         self.extra = extra
 
@@ -285,6 +288,38 @@ class _Renderer:
                 self._height_cache.clear()
             self._height_cache[key] = limits
         return limits
+
+    def static_layers(self, pose: Pose, scene: Scene, canvas: np.ndarray, disparity: np.ndarray
+                      ) -> list[tuple[int, int, int, float]]:
+        """Floor, walls and props seen from ``pose`` into ``canvas`` and ``disparity``; their shadows.
+
+        A pose asked for a second time is a camera standing still: its layers are kept (a few dozen
+        poses, least recently used dropped) and later frames copy them instead of drawing them.
+        A moving camera never pays for the copies.
+        """
+        key = (pose, id(scene))
+        with self._static_lock:
+            kept = self._static.get(key)
+            if kept is not None and kept[0] is scene:
+                self._static.move_to_end(key)
+            else:
+                kept = None
+                again = key in self._poses_seen
+                self._poses_seen[key] = None
+                self._poses_seen.move_to_end(key)
+                if len(self._poses_seen) > 256:
+                    self._poses_seen.popitem(last=False)
+        if kept is not None:
+            np.copyto(canvas, kept[1])
+            np.copyto(disparity, kept[2])
+            return list(kept[3])
+        shadows = _static_layers(self, pose, scene, canvas, disparity)
+        if again:
+            with self._static_lock:
+                self._static[key] = (scene, canvas.copy(), disparity.copy(), tuple(shadows))
+                if len(self._static) > 32:
+                    self._static.popitem(last=False)
+        return shadows
 
     def scratch(self) -> tuple[np.ndarray, np.ndarray]:
         """This thread's colour and depth buffers (re-used frame after frame)."""
@@ -432,38 +467,19 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
         _frames[0] += 1
     rng = rng if rng is not None else np.random.default_rng()
     r = _renderer(rig, scene.depth)
-    cam = r.cam
-    h, w = cam.height, cam.width
-    hc = rig.height_m
+    h, w = r.cam.height, r.cam.width
     gain = float(scene.gain)
     canvas, depth = r.scratch()
 
-    # background: per column the backdrop above the wall's top, the wall, then the floor below the
-    # wall-floor line; the wall is a column band, floor and backdrop depend on the row only
-    wall_z, wall_idx = _wall_depths(r, camera_pose, scene.walls)
-    wall_top = _wall_table(tuple(scene.walls))[3][wall_idx]
-    with np.errstate(invalid="ignore"):
-        v_top = np.ceil(cam.cy + cam.fy * (hc - wall_top) / wall_z)
-        v_bottom = np.floor(cam.cy + cam.fy * hc / wall_z) + 1
-    no_wall = ~np.isfinite(wall_z)
-    v_top = np.clip(np.where(no_wall, h, v_top), 0, h).astype(np.int16)
-    v_bottom = np.clip(np.where(no_wall, h, v_bottom), 0, h).astype(np.int16)
-    wall_rgb = _rgb8(_wall_colours(r, camera_pose, scene.walls, wall_idx, wall_z).astype(np.float64) * gain)
-    wall_d = r.fb32 / wall_z.astype(np.float32)                    # disparity, see _Renderer
-    _background(r, v_top, v_bottom, (wall_rgb, wall_d),
-                (r.floor_image(scene.floor_rgb, scene.backdrop_rgb, gain), r.floor_d_image), (canvas, depth))
-
-    # objects: robots (body + markers) and props, with a depth test per pixel
-    prisms, n_labels = _prisms(r, camera_pose, robots, scene, count)
+    # what does not move: floor, walls and props, kept for a camera that stands still
+    shadows = r.static_layers(camera_pose, scene, canvas, depth)
+    # the robots, with a depth test per pixel
+    n_labels = 2 * len(robots)
     labels = np.zeros((h, w), np.int16) if count and n_labels else None
     full = np.zeros(n_labels + 1, np.int64)
-    shadows: list[tuple[int, int, int, float]] = []
     bands: dict[int, tuple[int, int, int, int]] = {}
-    _draw_circles(r, [p for p in prisms if p.footprint == "circle"], depth, canvas, labels, full, shadows, gain,
-                  bands)
-    for p in prisms:
-        if p.footprint != "circle":
-            _draw_prism(r, p, depth, canvas, labels, full, shadows, gain, bands)
+    _draw(r, _prisms(r, camera_pose, robots, scene, count, props=False), depth, canvas, labels, full, shadows,
+          gain, bands)
 
     if scene.rgb_noise > 0:                 # the new image is made by the first noise pass
         pos, neg = r.colour_noise(float(scene.rgb_noise))
@@ -486,6 +502,41 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
             pixels.append(MarkerPixels(int(visible[1 + 2 * i]), int(full[1 + 2 * i]), int(visible[2 + 2 * i]),
                                        int(full[2 + 2 * i]), inside[0], inside[1]))
     return image, noisy, pixels
+
+
+def _static_layers(r: _Renderer, pose: Pose, scene: Scene, canvas: np.ndarray, disparity: np.ndarray
+                   ) -> list[tuple[int, int, int, float]]:
+    """Draw what does not move (floor, walls, props) into ``canvas`` and ``disparity``; returns the
+    props' projector shadows."""
+    cam, hc, h = r.cam, r.rig.height_m, r.cam.height
+    gain = float(scene.gain)
+    # background: per column the backdrop above the wall's top, the wall, then the floor below the
+    # wall-floor line; the wall is a column band, floor and backdrop depend on the row only
+    wall_z, wall_idx = _wall_depths(r, pose, scene.walls)
+    wall_top = _wall_table(tuple(scene.walls))[3][wall_idx]
+    with np.errstate(invalid="ignore"):
+        v_top = np.ceil(cam.cy + cam.fy * (hc - wall_top) / wall_z)
+        v_bottom = np.floor(cam.cy + cam.fy * hc / wall_z) + 1
+    no_wall = ~np.isfinite(wall_z)
+    v_top = np.clip(np.where(no_wall, h, v_top), 0, h).astype(np.int16)
+    v_bottom = np.clip(np.where(no_wall, h, v_bottom), 0, h).astype(np.int16)
+    wall_rgb = _rgb8(_wall_colours(r, pose, scene.walls, wall_idx, wall_z).astype(np.float64) * gain)
+    wall_d = r.fb32 / wall_z.astype(np.float32)                    # disparity, see _Renderer
+    _background(r, v_top, v_bottom, (wall_rgb, wall_d),
+                (r.floor_image(scene.floor_rgb, scene.backdrop_rgb, gain), r.floor_d_image), (canvas, disparity))
+    shadows: list[tuple[int, int, int, float]] = []
+    _draw(r, _prisms(r, pose, (), scene, False), disparity, canvas, None, np.zeros(1, np.int64), shadows, gain, {})
+    return shadows
+
+
+def _draw(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, canvas: np.ndarray,
+          labels: np.ndarray | None, full: np.ndarray, shadows: list, gain: float, bands: dict) -> None:
+    """Z-buffer ``prisms`` into the images: cylinders all at once, boxes one by one."""
+    _draw_circles(r, [p for p in prisms if p.footprint == "circle"], disparity, canvas, labels, full, shadows,
+                  gain, bands)
+    for p in prisms:
+        if p.footprint != "circle":
+            _draw_prism(r, p, disparity, canvas, labels, full, shadows, gain, bands)
 
 
 def _background(r: _Renderer, v_top: np.ndarray, v_bottom: np.ndarray, walls: tuple, floors: tuple,
@@ -581,9 +632,10 @@ def _wall_colours(r: _Renderer, pose: Pose, walls: Sequence[Wall], idx: np.ndarr
     return np.clip(rgb[idx] * shade[:, None], 0, 255).astype(np.uint8)
 
 
-def _prisms(r: _Renderer, pose: Pose, robots: Sequence[Pose], scene: Scene,
-            count: bool) -> tuple[list[_Prism], int]:
-    """The prisms to draw, robots outside the field of view left out (unless counting their pixels)."""
+def _prisms(r: _Renderer, pose: Pose, robots: Sequence[Pose], scene: Scene, count: bool,
+            props: bool = True) -> list[_Prism]:
+    """The prisms to draw: the robots' (those outside the field of view left out unless counting their
+    pixels), then, with ``props``, the scene's props."""
     rig = r.rig
     look = scene.robot_look
     out: list[_Prism] = []
@@ -611,14 +663,14 @@ def _prisms(r: _Renderer, pose: Pose, robots: Sequence[Pose], scene: Scene,
                                 (markers.REAR_OFFSET_M, look.rear_rgb, 2 + 2 * i)):
             add_circle(x + c * off, y + s * off, markers.CYLINDER_RADIUS_M, markers.CYLINDER_BOTTOM_M,
                        markers.CYLINDER_TOP_M, rgb, label)
-    for p in scene.props:
+    for p in scene.props if props else ():
         if isinstance(p, CylinderProp):
             add_circle(p.x, p.y, p.radius_m, p.bottom_m, p.top_m, p.rgb)
         else:
             rel = p.yaw - cyaw        # box axis in the optical frame: x = -left, z = forward
             out.append(_Prism("box", to_camera(rig, pose, p.x, p.y), 0.0, (p.length_m / 2, p.width_m / 2),
                               (-math.sin(rel), math.cos(rel)), p.bottom_m, p.top_m, p.rgb, 0))
-    return out, 2 * len(robots)
+    return out
 
 
 def _entry_exit(r: _Renderer, p: _Prism) -> tuple[int, int, np.ndarray, np.ndarray] | None:

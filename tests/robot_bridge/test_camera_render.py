@@ -141,3 +141,22 @@ def test_true_view_follows_the_detection_definitions():
     assert true_view(RIG, cam_pose, (1.5, 3.0, 0.0)).yaw_deg == pytest.approx(90.0)   # moving right
     assert RIG.pose_of((0.0, 0.0, math.pi / 2)) == pytest.approx((0.0, 0.0, math.pi / 2))
     assert CameraRig(mount_x_m=0.1).pose_of((1.0, 2.0, math.pi / 2)) == pytest.approx((1.0, 2.1, math.pi / 2))
+
+
+def test_a_camera_standing_still_reuses_its_static_layers_with_the_same_pixels():
+    from dataclasses import replace
+
+    from robot_bridge.sim.camera import _renderer
+
+    sample = random_scene(5)
+    x, y, yaw = sample.robots[0]
+    moved = ((x + 0.2, y - 0.1, yaw + 0.5),) + sample.robots[1:]
+    for robots in (sample.robots, sample.robots, moved):    # the second frame keeps the layers, the third uses them
+        rgb, depth = render(sample.rig, sample.camera_pose, robots, sample.scene, np.random.default_rng(9))
+    kept = _renderer(sample.rig, sample.scene.depth)._static
+    assert any(pose == sample.camera_pose and entry[0] is sample.scene for (pose, _), entry in kept.items())
+    # an equal scene that is another object is drawn from scratch: the pixels must not differ
+    fresh = render(sample.rig, sample.camera_pose, moved, replace(sample.scene), np.random.default_rng(9))
+    assert np.array_equal(rgb, fresh[0]) and np.array_equal(depth, fresh[1])
+    before = render(sample.rig, sample.camera_pose, sample.robots, replace(sample.scene), np.random.default_rng(9))
+    assert not np.array_equal(rgb, before[0])                    # the robot was redrawn where it moved to

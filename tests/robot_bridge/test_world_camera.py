@@ -153,3 +153,27 @@ def test_a_frame_read_from_several_threads_is_rendered_once():
     with ThreadPoolExecutor(4) as pool:
         images = list(pool.map(lambda _: frame.rgb, range(8)))
     assert frames_rendered() == before + 1 and all(img is images[0] for img in images)
+
+
+def test_frames_rendered_side_by_side_are_the_frames_rendered_one_by_one():
+    from robot_bridge.sim.camera import frames_rendered
+
+    def frames(reads_pixels):
+        world = World(seed=6)
+        got = {}
+        for i, (x, yaw) in enumerate(((0.0, 0.0), (2.0, 180.0), (1.0, 90.0))):
+            name = f"r{i}"
+            world.add_robot(name, x=x, y=0.5 * i, yaw_deg=yaw, camera=True)
+            world.command(name, "rotate", (25.0,))
+            got[name] = []
+            world.subscribe_camera(name, lambda frame, name=name: got[name].append((frame.rgb, frame.depth)),
+                                   reads_pixels=reads_pixels)
+        before = frames_rendered()
+        world.run(0.3)
+        assert frames_rendered() - before == 3 * 3          # every frame due, each rendered once
+        return got
+
+    side_by_side, one_by_one = frames(True), frames(False)
+    for name, pixels in one_by_one.items():
+        for (rgb, depth), (rgb2, depth2) in zip(pixels, side_by_side[name]):
+            assert np.array_equal(rgb, rgb2) and np.array_equal(depth, depth2)
