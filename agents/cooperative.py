@@ -184,9 +184,10 @@ class ProgressLog:
         started = self._first(robot.name, ("started",))
         detected = self._first(robot.name, ("fault_detected",))
         final = self._first(robot.name, ("diagnosed", "undiagnosed"))
-        searching = next((m for m in self.marks if m.step == "searching" and m.detail == robot.name), None)
-        found = next((m for m in self.marks if m.step == "robot_found" and m.detail == robot.name
-                      and searching is not None and m.agent == searching.agent), None)
+        found = next((m for m in self.marks if m.step == "robot_found" and m.detail == robot.name), None)
+        searches = [m for m in self.marks if m.step == "searching" and m.detail == robot.name
+                    and found is not None and m.agent == found.agent and m.wall <= found.wall]
+        searching = searches[-1] if searches else None      # the search that succeeded
         diagnosis_from = found or detected
         pairs = {"fault_detection": (started, detected), "robot_detection": (searching, found),
                  "diagnosis": (diagnosis_from, final), "total": (started, final)}
@@ -282,7 +283,10 @@ def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=No
     from agentspeak.mas2j import load_mas2j
     from robot_bridge.sim.server import SimServer
 
-    out, err = out or sys.stdout, err or sys.stderr
+    import os
+
+    out = out if out is not None else open(os.devnull, "w")     # None: the agents' lines are not shown
+    err = err or sys.stderr
     with tempfile.TemporaryDirectory(prefix="faultmas-run-") as tmp:
         project_file = Path(tmp) / f"{scenario.mas}.mas2j"
         beliefs = ", ".join(_beliefs(scenario))

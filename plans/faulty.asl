@@ -12,7 +12,8 @@
 destination(1.0).
 model(turtlebot_hardware).
 test_move(0.15).            // metres driven while the helper watches
-help_timeout(3000).         // ms to wait for a helper to accept
+help_timeout(3000).         // ms to wait for a helper to accept, per round
+help_rounds(4).             // rounds of asking (busy robots may become free) before giving up
 find_timeout(90000).        // ms a helper may take to find me
 answer_timeout(20000).      // ms for the other answers
 max_trials(2).              // test motions with one helper before giving up on it
@@ -75,6 +76,7 @@ helper_obs(_, _, []).    // the helper lost sight of me: it saw nothing that hel
 +!faultDetected(Why)
    <- -on_mission;
       +diagnosing;
+      +self_suspect;          // a robot that found a fault in itself does not offer help any more
       .print("fault detected (", Why, ")");
       .progress(fault_detected, Why);
       !ownObservations(Obs);
@@ -104,17 +106,20 @@ helper_obs(_, _, []).    // the helper lost sight of me: it saw nothing that hel
       .progress(diagnosed, D).
 
 // ---- asking for help: the first helper that accepts (the others are released) --------------------
-+!broadcastHelp(Ds)
++!broadcastHelp(Ds) <- !askForHelp(Ds, 1).
+
++!askForHelp(Ds, Round)
    <- .my_name(Me);
       .print("I cannot tell alone: asking for help");
       .progress(help_requested);
       .abolish(canHelp);
       .broadcast(achieve, helpMe(Me));
-      !awaitHelper(Ds).
+      !awaitHelper(Ds, Round).
 
-+!awaitHelper(Ds) : canHelp[source(H)] & not tried(H) <- !withHelper(H, Ds).
-+!awaitHelper(Ds) : help_timeout(T) <- .wait({+canHelp[source(_)]}, T); !awaitHelper(Ds).
--!awaitHelper(Ds) <- !undiagnosed(Ds, no_helper).
++!awaitHelper(Ds, _) : canHelp[source(H)] & not tried(H) <- !withHelper(H, Ds).
++!awaitHelper(Ds, Round) : help_timeout(T) <- .wait({+canHelp[source(_)]}, T); !awaitHelper(Ds, Round).
+-!awaitHelper(Ds, Round) : help_rounds(N) & Round < N <- !askForHelp(Ds, Round + 1).
+-!awaitHelper(Ds, _) <- !undiagnosed(Ds, no_helper).
 
 +canHelp[source(H)] : helper(Other) & Other \== H <- .send(H, tell, noThanks).
 

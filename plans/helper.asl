@@ -16,7 +16,7 @@ look_wait(300).          // ms for fresh camera frames after a turn
 centre_tolerance(4).     // degrees off the image centre that count as centred
 centre_tries(4).
 
-available :- not helping(_) & not on_mission & not diagnosing.
+available :- not helping(_) & not on_mission & not diagnosing & not self_suspect.
 
 // ---- being asked ------------------------------------------------------------------------------
 +!helpMe(F)[source(F)] : available & odom(_, _, Yaw)
@@ -46,6 +46,7 @@ available :- not helping(_) & not on_mission & not diagnosing.
       turn(T);
       .print("back to my own task").
 +!returnToTask.
+-!returnToTask.          // preempted: someone else asked for help meanwhile
 
 // ---- findRobot: asked with askOne, answered when the search ends -------------------------------
 +?findRobot(F, Result) : helping(F)

@@ -8,7 +8,8 @@ thread paces the shared clock (see ``runner.py`` for how simulated time relates 
 Options (all optional): ``world``, ``speed`` (0 = as fast as possible), ``seed``, ``x``, ``y``,
 ``yaw_deg`` (start pose, used when the robot is not in the world yet), ``fault`` (e.g.
 ``"left_actuator:0.5"``), ``camera`` (mount a camera and perceive through it), ``observed`` (the name
-to give a robot the camera sees: markers carry no name; default: the only other robot, else ``robot``),
+to give a robot the camera sees; default: the robot standing where the markers were seen, as if each
+robot wore a distinct tag; ``robot`` when none stands there),
 ``drive`` (False: nobody runs the clock, the caller steps the world itself, for deterministic tests).
 
 With a camera, frames rendered at the camera's rate go through ``perception.detect`` exactly as a real
@@ -17,6 +18,7 @@ camera's frames would, and each detection becomes a ``robot_seen`` percept that 
 from __future__ import annotations
 
 import logging
+import math
 from concurrent.futures import Future
 from typing import ClassVar
 
@@ -26,6 +28,9 @@ from robot_bridge.sim.runner import WorldRunner, shared_runner
 from robot_bridge.sim.world import CameraFrame, World
 
 log = logging.getLogger(__name__)
+
+NAME_RADIUS_M = 0.6
+"""How far from a robot's centre a detection may be and still be named after that robot."""
 
 FRAME_TTL_S = 1.0
 """Camera percepts vanish this long (simulated seconds) after the frame that produced them."""
@@ -92,14 +97,31 @@ class SimBridge(RobotBridge):
 
     def _on_frame(self, frame: CameraFrame) -> None:
         """A new camera frame: detect robots in its pixels, as a real camera's frame would be."""
-        name = self.observed or self._only_other() or "robot"
         best = self._detect(frame.rgb, frame.depth, frame.camera)
-        self._seen = (frame.time, [percepts.robot_seen(name, -best.angle_deg, best.depth_m, -best.yaw_deg)]
-                      if best is not None else [])
+        if best is None:
+            self._seen = (frame.time, [])
+            return
+        name = self.observed or self._robot_at(frame.pose, best.angle_deg, best.depth_m)
+        self._seen = (frame.time, [percepts.robot_seen(name, -best.angle_deg, best.depth_m, -best.yaw_deg)])
 
-    def _only_other(self) -> str:
-        others = [r for r in self.world.robots if r != self.robot]
-        return others[0] if len(others) == 1 else ""
+    def _robot_at(self, camera_pose: tuple[float, float, float], angle_deg: float, depth_m: float) -> str:
+        """The robot whose body is where the markers were seen (within ``NAME_RADIUS_M``), else ``robot``.
+
+        Cylinder markers carry no identity; real teams add one (tags, colours, or poses shared in a map
+        frame). The simulator plays that part from ground truth, so plans can ask for a robot by name.
+        """
+        x, y, yaw = camera_pose
+        bearing = yaw - math.radians(angle_deg)             # optical angles are positive to the right
+        reach = depth_m / max(math.cos(math.radians(angle_deg)), 0.2)
+        seen_x, seen_y = x + reach * math.cos(bearing), y + reach * math.sin(bearing)
+        best, best_distance = "robot", NAME_RADIUS_M
+        for other in self.world.robots:
+            if other != self.robot:
+                ox, oy, _ = self.world.pose(other)
+                distance = math.hypot(ox - seen_x, oy - seen_y)
+                if distance < best_distance:
+                    best, best_distance = other, distance
+        return best
 
     def shutdown(self) -> None:
         if not self._ready:
