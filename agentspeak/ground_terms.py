@@ -15,7 +15,7 @@ from agentspeak.terms import NIL, Cons, Literal, Term
 _TOKEN = re.compile(r"""[ \t\r\n]*(?:
       (?P<num>[0-9]+(?:\.[0-9]+)?(?:[eE][+-]?[0-9]+)?)
     | (?P<atom>[a-z][a-zA-Z0-9_]*)
-    | (?P<str>"(?:\\.|[^"\\\n])*")
+    | (?P<str>"[^"\\\n]*(?:\\.[^"\\\n]*)*")
     | (?P<qatom>'[^'\n]*')
     | (?P<punct>[(),\[\]~|-])
     )""", re.X)
@@ -146,9 +146,38 @@ class _Reader:
         return result
 
 
+# the commonest content, a flat structure such as pos(3,-4.5,"x",a), in two regular-expression passes
+_ARG = r"""[ \t\r\n]*(?:(-?[ \t\r\n]*[0-9]+(?:\.[0-9]+)?(?:[eE][+-]?[0-9]+)?)|("[^"\\\n]*(?:\\.[^"\\\n]*)*")|([a-z][a-zA-Z0-9_]*))[ \t\r\n]*"""
+_FLAT = re.compile(r"[ \t\r\n]*([a-z][a-zA-Z0-9_]*)[ \t\r\n]*\((" + _ARG + r"(?:," + _ARG + r")*)\)[ \t\r\n]*")
+_FLAT_ARG = re.compile(_ARG + r"(?:,|\Z)")
+
+
+def _read_flat(text: str) -> Literal | None:
+    m = _FLAT.fullmatch(text)
+    if m is None or m.group(1) in _KEYWORDS:
+        return None
+    args = []
+    for num, string, atom in _FLAT_ARG.findall(m.group(2)):
+        if num:
+            if num[0] == "-":
+                args.append(-_number(num[1:].lstrip(" \t\r\n")))
+            else:
+                args.append(_number(num))
+        elif string:  # the grammar unescapes only \n and \" (as Jason does)
+            args.append(string[1:-1].replace("\\n", "\n").replace('\\"', '"'))
+        else:
+            if atom in _KEYWORDS:
+                return None
+            args.append(Literal(atom))
+    return Literal(m.group(1), tuple(args))
+
+
 def read_ground_term(text: str) -> Term | None:
     """The ground term written in ``text``, or None when the full parser must decide."""
     try:
+        flat = _read_flat(text)
+        if flat is not None:
+            return flat
         toks = _tokens(text)
         if not toks:
             return None
