@@ -386,7 +386,7 @@ class Agent:
         return self.running.popleft()
 
     def act(self) -> None:
-        intention = self.sel_int()
+        intention = self.running.popleft() if self.atomic_intention is None else self.sel_int()
         if intention is None or intention.dropped or not intention.stack:
             return
         intention.suspended = None
@@ -435,6 +435,10 @@ class Agent:
     def clr_int(self, intention: Intention) -> None:
         """Rule ClrInt: pop finished intended means, and let the caller go on after its ``!g``."""
         stack = intention.stack
+        if stack:  # the usual case, at once: the top plan still has formulas to run
+            frames = stack[-1].frames
+            if len(frames) == 1 and frames[0].pc < len(frames[0].body):
+                return
         while stack:
             im = stack[-1]
             frames = im.frames

@@ -64,6 +64,7 @@ class LocalRuntime:
         self._timed: set[Agent] = set()      # agents that had timers at the end of their last turn
         self._ready_set: set[str] = set()
         self._cond = threading.Condition()
+        self._sleepers = 0                   # threads waiting on _cond (changed under its lock)
         self._stop_at: float | None = None
         self.stopped = False
         self.printer = printer
@@ -102,7 +103,8 @@ class LocalRuntime:
             if agent.name not in self._ready_set:
                 self._ready_set.add(agent.name)
                 self.ready.append(agent)
-            self._cond.notify()
+            if self._sleepers:  # nobody waits while the loop is busy: no notify to pay for
+                self._cond.notify()
 
     def route(self, message: Message) -> None:
         target = self.agents.get(message.receiver)
@@ -123,7 +125,11 @@ class LocalRuntime:
         """Block until an agent is ready or a stop is requested (True), or ``timeout`` passes (False).
         For loops that do something while the MAS is idle (e.g. publish status for a launcher)."""
         with self._cond:
-            return self._cond.wait_for(lambda: bool(self.ready) or self._stop_at is not None, timeout)
+            self._sleepers += 1
+            try:
+                return self._cond.wait_for(lambda: bool(self.ready) or self._stop_at is not None, timeout)
+            finally:
+                self._sleepers -= 1
 
     def print_line(self, name: str, text: str) -> None:
         if self.printer is not None:
@@ -182,7 +188,11 @@ class LocalRuntime:
             wait = max(0.0, min(waits) - time.monotonic()) if waits else 0.5
             with self._cond:
                 if not self.ready:
-                    self._cond.wait(min(wait, 0.5))
+                    self._sleepers += 1
+                    try:
+                        self._cond.wait(min(wait, 0.5))
+                    finally:
+                        self._sleepers -= 1
 
     def _external_pending(self) -> bool:
         hook = getattr(self, "external_pending", None)

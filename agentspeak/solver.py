@@ -338,6 +338,8 @@ def compiled(formula: Term):
 def _compile(f: Term):
     tf = type(f)
     if tf is And:
+        if _is_fact_literal(f.left):  # `p(X) & rest`: rest runs per matching belief, no closure made
+            return _compile_fact_literal(f.left, _compile(f.right))
         left, right = _compile(f.left), _compile(f.right)
 
         def conj(kb, b, trail, k):
@@ -390,9 +392,32 @@ def _compile(f: Term):
                 undo(b, trail, mark)
                 return False
             return internal
-        annot_vars = f.annots is not None and _annots_have_vars(f)
-        key = (f.neg, f.functor, len(f.args))
+        return _compile_fact_literal(f, None)
+    # variables and anything unusual: the general machine
+    def general(kb, b, trail, k):
+        for _ in solve(kb, f, b, trail):
+            if k():
+                return True
+        return False
+    return general
 
+
+def _is_fact_literal(f: Term) -> bool:
+    """A literal looked up in the belief base (not true/false, not an internal action)."""
+    if type(f) is not Literal:
+        return False
+    if not f.args and not f.neg and f.annots is None and f.functor in ("true", "false"):
+        return False
+    return not ("." in f.functor and not f.neg)
+
+
+def _compile_fact_literal(f: Literal, then):
+    """A belief-base literal; ``then`` (a compiled formula, or None for the continuation ``k``)
+    runs for each matching belief. Literals with rules or annotation variables use the machine."""
+    annot_vars = f.annots is not None and _annots_have_vars(f)
+    key = (f.neg, f.functor, len(f.args))
+
+    if then is None:
         def literal(kb, b, trail, k):
             bb = kb.bb
             if annot_vars or bb.has_rules(key):
@@ -407,13 +432,21 @@ def _compile(f: Term):
                 undo(b, trail, mark)
             return False
         return literal
-    # variables and anything unusual: the general machine
-    def general(kb, b, trail, k):
-        for _ in solve(kb, f, b, trail):
-            if k():
+
+    def literal_then(kb, b, trail, k):
+        bb = kb.bb
+        if annot_vars or bb.has_rules(key):
+            for _ in solve(kb, f, b, trail):
+                if then(kb, b, trail, k):
+                    return True
+            return False
+        for fact in bb.candidates_by_key(key, f, b):
+            mark = len(trail)
+            if unify(f, fact, b, trail) and then(kb, b, trail, k):
                 return True
+            undo(b, trail, mark)
         return False
-    return general
+    return literal_then
 
 
 _ORDER_OPS = {"<": operator.lt, ">": operator.gt, "<=": operator.le, ">=": operator.ge}
