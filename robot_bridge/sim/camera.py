@@ -263,13 +263,18 @@ class _Renderer:
 
     def floor_image(self, floor_rgb: RGB, backdrop_rgb: RGB, gain: float) -> np.ndarray:
         """Colours of the floor (shaded per row) below the horizon and the backdrop above it."""
+        import cv2
+
         key = (floor_rgb, backdrop_rgb, gain)
         img = self._floor_cache.get(key)
         if img is None:
             floor_row = np.where(self.k_v > 0, 1.0, 0.0)[:, None]
             row_rgb = floor_row * np.asarray(floor_rgb) * self.floor_shade + (1 - floor_row) * np.asarray(backdrop_rgb)
-            shape = (self.cam.height, self.cam.width, 3)
-            img = np.ascontiguousarray(np.broadcast_to(_rgb8(row_rgb * gain)[:, None], shape))
+            # rows of 3-byte pixels copy slowly (numpy and cv2.repeat alike): broadcast 4-byte RGBA, then drop A
+            rgba = np.ascontiguousarray(np.broadcast_to(
+                np.concatenate([_rgb8(row_rgb * gain), np.zeros((len(row_rgb), 1), np.uint8)], axis=1)
+                .view(np.uint32), (self.cam.height, self.cam.width)))
+            img = cv2.cvtColor(rgba.view(np.uint8).reshape(self.cam.height, self.cam.width, 4), cv2.COLOR_RGBA2RGB)
             if len(self._floor_cache) >= 8:           # scenes with ever new lighting must not pile up
                 self._floor_cache.clear()
             self._floor_cache[key] = img
