@@ -843,10 +843,7 @@ def _exec_del_bel(ag: Agent, intention, im, frame, instr, new_focus: bool = Fals
     if is_ground(pattern):
         # the usual case: at most one stored belief has this plain part; it must carry every
         # annotation of the pattern (what the unification below checks, without a search)
-        found = ag.bb.get(pattern)
-        if found is None or not all(found.annots and a in found.annots for a in pattern.annots):
-            return
-        removed = ag.bb.remove(pattern)
+        removed = ag.bb.remove(pattern, all_annots=True)
     else:
         found = _find_belief(ag, pattern, im.b)
         if found is None:

@@ -102,10 +102,11 @@ class BeliefBase:
         bucket.changed()
         return Literal(old.functor, old.args, tuple(new_annots), old.neg)
 
-    def remove(self, lit: Literal) -> Literal | None:
+    def remove(self, lit: Literal, all_annots: bool = False) -> Literal | None:
         """Remove ``lit``'s annotations from the stored belief (all of it if ``lit`` has none).
-        Returns the literal for the ``-b`` event (the removed annotations), or None."""
-        bucket = self._facts.get(lit.key)
+        Returns the literal for the ``-b`` event (the removed annotations), or None. With
+        ``all_annots``, nothing is removed unless the belief has every annotation of ``lit``."""
+        bucket = self._facts.get((lit.neg, lit.functor, len(lit.args)))
         if bucket is None:
             return None
         plain = lit.without_annots()
@@ -117,8 +118,9 @@ class BeliefBase:
             removed = old
             remaining: tuple = ()
         else:
-            gone = tuple(a for a in lit.annots if old.annots and a in old.annots)
-            if not gone:
+            old_annots = old.annots or ()
+            gone = tuple([a for a in lit.annots if a in old_annots])
+            if not gone or (all_annots and len(gone) != len(lit.annots)):
                 return None
             remaining = tuple(a for a in old.annots or () if a not in gone)
             removed = Literal(old.functor, old.args, gone, old.neg)

@@ -64,6 +64,17 @@ def _strip_self_source(lit: Literal) -> Literal:
 
 
 _SOURCES: dict[str, Literal] = {}
+_ATOMS: dict[str, Literal] = {}
+
+
+def _atom_of(name: str) -> Literal:
+    """The atom naming a sender, made once per name (the table stays small under hostile input)."""
+    found = _ATOMS.get(name)
+    if found is None:
+        found = Literal(name)
+        if len(_ATOMS) < 10_000:
+            _ATOMS[name] = found
+    return found
 
 
 def _source_of(who: Term) -> Literal:
@@ -91,7 +102,7 @@ _KQML_RECEIVED = Trigger(ADD, ACHIEVE, Literal("kqml_received", (Var(), Var(), V
 
 def receive_message(agent: Any, msg: Message) -> None:
     """Apply the semantics of one received message."""
-    sender = Literal(msg.sender) if msg.sender != agent.name else SELF
+    sender = _atom_of(msg.sender) if msg.sender != agent.name else SELF
     perf = msg.performative
     # replies to a pending ask resume the asking intention
     if msg.in_reply_to is not None and msg.in_reply_to in agent.pending_asks:
