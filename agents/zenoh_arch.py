@@ -28,6 +28,7 @@ from agentspeak.agent import Agent
 from agentspeak.beliefs import SOURCE_PERCEPT
 from agentspeak.communication import Message
 from agentspeak.errors import FaultmasError
+from agentspeak.ground_terms import read_ground_term
 from agentspeak.parser import parse_term
 from agentspeak.program import ADD, BEL, DEL, PlanTerm, Trigger
 from agentspeak.runtime import LocalArch, LocalRuntime
@@ -54,7 +55,11 @@ class ContentCache:
         self._lock = threading.Lock()  # network threads of several agents may parse at once
 
     def parse(self, text: str) -> Term:
-        """The term for ``text`` (``AslSyntaxError`` if it is not one)."""
+        """The term for ``text`` (``AslSyntaxError`` if it is not one). Ground contents the
+        interpreter's fast reader handles (a few µs) are not worth a cache entry."""
+        term = read_ground_term(text)
+        if term is not None:
+            return term
         term = self._terms.get(text)
         if term is not None:
             return term
