@@ -230,7 +230,8 @@ def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float =
     """Run ``scenario`` to the end (or ``timeout`` wall seconds); agents' lines go to ``out``.
 
     ``on_mark(mark, kill)``: called on every step; ``kill(name)`` SIGKILLs that agent's process (for
-    robustness tests: a helper or a faulty robot that dies mid-way). Only with ``processes``.
+    robustness tests: a helper or a faulty robot that dies mid-way); a true return ends the run.
+    Only with ``processes``.
     """
     world, bridges = build_world(scenario)
     try:
@@ -304,8 +305,8 @@ def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=No
         def observe(mark: Mark) -> None:
             if echo is not None:
                 echo(mark)
-            if on_mark is not None:
-                on_mark(mark, kill)
+            if on_mark is not None and on_mark(mark, kill):
+                launcher.stop_requested.set()
         log = ProgressLog(scenario, world, launcher.stop_requested.set, observe)
 
         def on_control(message: dict) -> None:

@@ -1,0 +1,93 @@
+"""The cooperative fault diagnosis end to end: plans, agents in processes over Zenoh, the simulator.
+
+Each run starts real agent processes (``faultmas agent run --bridge zenoh``) talking over a real Zenoh
+session on loopback to the simulator served by this process; nothing is mocked. Outcomes come from the
+plans and the diagnoser: a wrong model, plan or perception makes these tests fail.
+"""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from agents.cooperative import (EXPECTED, RobotSetup, Scenario, paper_scenario, run_scenario,
+                                team_scenario)
+
+pytestmark = pytest.mark.timeout(240)
+REPO = Path(__file__).resolve().parents[2]
+
+
+def marks_of(result, step):
+    return [m for m in result.marks if m.step == step]
+
+
+@pytest.mark.parametrize("fault", ["none", "both_actuators", "left_actuator", "right_actuator", "stuck_wheels"])
+def test_each_fault_is_diagnosed_by_two_agent_processes_over_zenoh(fault):
+    result = run_scenario(paper_scenario(fault, seed=3), processes=True, timeout=90)
+    faulty = result.robots[0]
+    assert result.finished, [(m.agent, m.step, m.detail) for m in result.marks]
+    assert faulty.diagnosis == EXPECTED[fault]
+    assert all(faulty.steps_sim[s] is not None and faulty.steps_sim[s] > 0
+               for s in ("fault_detection", "diagnosis", "total"))
+    if fault != "stuck_wheels":      # over-current on both wheels settles stuck wheels without help
+        assert marks_of(result, "robot_found"), "the helper's camera found the faulty robot"
+
+
+def test_faultmas_run_json_contract_with_the_default_encoder_fault():
+    done = subprocess.run([sys.executable, "-m", "agents", "run", "--json", "--seed", "2"], cwd=REPO,
+                          capture_output=True, text=True, timeout=200)
+    assert done.returncode == 0, done.stderr[-2000:]
+    report = json.loads(done.stdout)
+    assert report["fault"] == "encoders" and report["diagnosis"] == "encoders" and report["correct"] is True
+    assert set(report["steps"]) == {"fault_detection", "robot_detection", "diagnosis", "total"}
+    assert report["steps"]["total"] >= report["steps"]["fault_detection"] + report["steps"]["robot_detection"]
+    assert "robot detected" in done.stderr       # progress is shown as the steps happen
+
+
+def test_a_helper_killed_mid_way_is_replaced_by_another():
+    base = paper_scenario("left_actuator", seed=4)
+    scenario = Scenario(base.robots + (RobotSetup("helper2", 0.0, 1.5, 0.0),), seed=4)
+    killed: list[str] = []
+
+    def kill_first_helper(mark, kill):
+        if mark.agent == "faulty" and mark.step == "helper_found" and not killed:
+            killed.append(mark.detail)
+            kill(mark.detail)
+    result = run_scenario(scenario, processes=True, timeout=120, on_mark=kill_first_helper)
+    assert killed
+    chosen = [m.detail for m in marks_of(result, "helper_found")]
+    assert len(chosen) >= 2 and chosen[-1] != killed[0], chosen
+    assert result.robots[0].diagnosis == "left_actuator"
+
+
+def test_the_helper_returns_to_its_task_when_the_faulty_robot_dies():
+    def kill_faulty_while_searched(mark, kill):
+        if mark.agent == "helper" and mark.step == "searching":
+            kill("faulty")
+        return mark.agent == "helper" and mark.step == "released"
+    result = run_scenario(paper_scenario("encoders", seed=5), processes=True, timeout=60,
+                          on_mark=kill_faulty_while_searched)
+    assert [m.detail for m in marks_of(result, "released")] == ["faulty"]
+    assert not marks_of(result, "diagnosed")
+
+
+def test_without_any_helper_the_robot_reports_undiagnosed_with_its_candidates():
+    scenario = Scenario((RobotSetup("faulty", 0.0, 0.0, 0.0, "encoders", "faulty.asl"),), seed=6)
+    result = run_scenario(scenario, processes=False, timeout=60)
+    assert result.finished and result.robots[0].diagnosis == "undiagnosed"
+    candidates = marks_of(result, "undiagnosed")[0].detail
+    assert "[left_encoder,right_encoder]" in candidates and "[left_motor,right_motor]" in candidates
+
+
+def test_six_robots_two_of_them_faulty_diagnose_concurrently():
+    scenario = team_scenario(6, 2, seed=1)
+    result = run_scenario(scenario, processes=True, timeout=180)
+    broken = [r for r in result.robots if r.fault != "none"]
+    assert len(broken) == 2 and result.finished
+    assert [r.diagnosis for r in broken] == [r.expected for r in broken]
+    assert all(r.diagnosis == "none" for r in result.robots if r.fault == "none")   # the others arrived
+    helpers = {m.agent for m in marks_of(result, "robot_found")}
+    assert helpers and not helpers & {r.name for r in broken}        # self-suspects never help
