@@ -147,7 +147,10 @@ class _Reader:
 
 
 # the commonest content, a flat structure such as pos(3,-4.5,"x",a), in two regular-expression passes
-_ARG = r"""[ \t\r\n]*(?:(-?[ \t\r\n]*[0-9]+(?:\.[0-9]+)?(?:[eE][+-]?[0-9]+)?)|("[^"\\\n]*(?:\\.[^"\\\n]*)*")|([a-z][a-zA-Z0-9_]*))[ \t\r\n]*"""
+_BLANK = r"[ \t\r\n]*"
+_ARG = (_BLANK + r"(?:(-?" + _BLANK + r"[0-9]+(?:\.[0-9]+)?(?:[eE][+-]?[0-9]+)?)"   # a number
+        + r"""|("[^"\\\n]*(?:\\.[^"\\\n]*)*")"""                                   # a string
+        + r"|([a-z][a-zA-Z0-9_]*))" + _BLANK)                                         # an atom
 _FLAT = re.compile(r"[ \t\r\n]*([a-z][a-zA-Z0-9_]*)[ \t\r\n]*\((" + _ARG + r"(?:," + _ARG + r")*)\)[ \t\r\n]*")
 _FLAT_ARG = re.compile(_ARG + r"(?:,|\Z)")
 

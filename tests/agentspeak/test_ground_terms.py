@@ -32,7 +32,7 @@ def _same(a, b) -> bool:
 @pytest.mark.parametrize("text", [
     'm(12,"abc")', "p", "'Quoted atom'", "~p(1)[a,b]", "p[source(bob),a,a]", "[]", "[1,[2,3],x]",
     "f(-3, -2.5, 1.0, 1e3, 2.5E-3)", 'say("a\\"b\\nc\\t")', "p(a)[]", "notx(divide, modes)",
-    "  pos( 3 , 4 )  ", "42", '"text"',
+    "  pos( 3 , 4 )  ", "42", '"text"', 'm("a,b", - 3, x)', 'p( -1e2 )',
 ])
 def test_reader_builds_what_the_grammar_builds(text: str) -> None:
     term = read_ground_term(text)
