@@ -146,12 +146,13 @@ def netlist_model(netlist: Netlist) -> SystemModel:
         b.add_observable(gate.name, "output" if gate.name in outputs else "internal")
     readers: dict[str, list[str]] = {}
     for gate in netlist.gates:
-        for a in set(gate.inputs):
+        for a in dict.fromkeys(gate.inputs):
             readers.setdefault(a, []).append(gate.name)
     for gate in netlist.gates:
         b.output_of[gate.name] = gate.name
-        if len(readers.get(gate.name, ())) == 1 and gate.name not in outputs:
-            b.successor[gate.name] = readers[gate.name][0]
+        b.readers[gate.name] = tuple(readers.get(gate.name, ()))
+    b.gates = tuple((g.name, g.type, g.inputs) for g in netlist.gates)
+    b.primary_inputs = netlist.inputs
     for gate in netlist.gates:
         ab = b.ab(gate.name)
         y = b.atom(gate.name)

@@ -20,8 +20,10 @@ class ModelBuilder:
         self.observable_kinds: dict[str, str] = {}
         self.clauses: list[tuple[int, ...]] = []
         self.held: list[int] = []
-        self.successor: dict[str, str] = {}
+        self.readers: dict[str, tuple[str, ...]] = {}
         self.output_of: dict[str, str] = {}
+        self.gates: tuple[tuple[str, str, tuple[str, ...]], ...] = ()
+        self.primary_inputs: tuple[str, ...] = ()
 
     def ab(self, component: str) -> int:
         return self.pool.id(("AB", component))
@@ -56,8 +58,8 @@ class ModelBuilder:
             name=self.name, source=self.source, components=tuple(self.components),
             ab_var={c: self.ab(c) for c in self.components}, observables=dict(self.observables),
             clauses=tuple(self.clauses), num_vars=self.pool.top, held=tuple(self.held), kind=self.kind,
-            observable_kinds=dict(self.observable_kinds), successor=dict(self.successor),
-            output_of=dict(self.output_of))
+            observable_kinds=dict(self.observable_kinds), readers=dict(self.readers),
+            output_of=dict(self.output_of), gates=self.gates, primary_inputs=self.primary_inputs)
 
 
 __all__ = ["ModelBuilder", "Ab", "Atom"]

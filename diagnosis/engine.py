@@ -24,6 +24,7 @@ running) and honours ``interrupt()``, which the time limits rely on; CaDiCaL in 
 from __future__ import annotations
 
 import itertools
+import math
 import threading
 import time
 from contextlib import contextmanager
@@ -35,7 +36,10 @@ from pysat.examples.rc2 import RC2
 from pysat.formula import WCNF
 from pysat.solvers import Solver
 
+from diagnosis.dominators import post_dominator_chains, reverse_topological
+from diagnosis.known import KnownDiagnoses
 from diagnosis.hitting_sets import HittingSetSolver, next_diagnosis
+from diagnosis.simulation import BatchSimulator
 from diagnosis.model import SystemModel
 
 DEFAULT_SOLVER = "glucose4"
@@ -94,17 +98,16 @@ class Deadline:
 
 _EAGER_BOUND = 4  # hitting-set totalizers are built for up to this many faults at once, then raised
 _SWAP_LIMIT = 4  # levels up to which equivalent candidates are tried directly (subset test is 2^k)
+_SPREAD_LIMIT = 200_000  # largest product of post-dominator chains expanded from one diagnosis
+_BATCH = 1024  # variants simulated together
+_STRUCTURE_CACHE = 8  # observed-signal sets whose post-dominators are kept per model
 
 
-def _contains_known(candidate: list[int], known: set[frozenset[int]]) -> bool:
-    """Does the candidate contain (or equal) a diagnosis found before? Then it is not a new minimal one.
-
-    Small candidates look their 2^k subsets up; large ones scan the known diagnoses instead."""
-    if 2 ** len(candidate) <= len(known):
-        return any(frozenset(sub) in known for r in range(len(candidate) + 1)
-                   for sub in itertools.combinations(candidate, r))
-    whole = frozenset(candidate)
-    return any(d <= whole for d in known)
+@dataclass(frozen=True)
+class _Structure:
+    """Post-dominators of a netlist's gates for one set of observed signals, as health variables."""
+    chains: dict[int, tuple[int, ...]]   # v -> v and its post-dominators, nearest first
+    parent: dict[int, int]               # v -> its immediate post-dominator
 
 
 class TimedOut(Exception):
@@ -139,6 +142,10 @@ class Diagnoser:
         self._top = model.num_vars
         self._totalizer: ITotalizer | None = None
         self._solver_name = solver
+        self._healthy = [-v for v in self._ab]
+        self._position = {v: i for i, v in enumerate(self._ab)}
+        self._gate_order = reverse_topological(model.readers) if model.readers else []
+        self._structures: dict[frozenset[str], _Structure] = {}
         negative_ab = {-v for v in self._ab}
         self.monotone = not any(lit in negative_ab for clause in model.clauses for lit in clause)
         try:  # prefer "healthy" so the solver's first guesses are small fault sets
@@ -222,7 +229,8 @@ class Diagnoser:
             if not self._solve(base, deadline):
                 return  # nothing explains the observations, not even "everything is faulty"
             if self.monotone:
-                yield from self._conflict_levels(base, limit, deadline, self._dominators(observations))
+                yield from self._conflict_levels(base, limit, deadline, self._structure(observations),
+                                                 self._simulator(observations))
                 return
             act = self._fresh()
             try:
@@ -236,12 +244,16 @@ class Diagnoser:
 
     def _check(self, base: list[int], deadline: Deadline) -> "Callable[[list[int]], list[int] | None]":
         """check(H): None if exactly H faulty is consistent, else a conflict from the solver's core."""
+        template = base + self._healthy
+        offset, position = len(base), self._position
+
         def check(candidate: list[int]) -> list[int] | None:
-            bad = set(candidate)
-            if self._solve(base + [v if v in bad else -v for v in self._ab], deadline):
+            assumptions = template.copy()
+            for v in candidate:
+                assumptions[offset + position[v]] = v
+            if self._solve(assumptions, deadline):
                 return None
-            core = set(self._solver.get_core() or ())
-            conflict = [v for v in self._ab if -v in core]
+            conflict = [-lit for lit in self._solver.get_core() or () if lit < 0 and -lit in position]
             if not conflict:  # cannot happen once base alone is known consistent
                 raise RuntimeError("inconsistent observations reached the conflict search")
             return conflict
@@ -250,66 +262,132 @@ class Diagnoser:
     def _hitting_sets(self, levels: int) -> HittingSetSolver:
         return HittingSetSolver(self.model.num_vars + 1, self._solver_name, ubound=min(levels, _EAGER_BOUND))
 
-    def _dominators(self, observations: Mapping[str, bool]) -> dict[int, set[int]]:
-        """For each component c, the components along its fanout-free chain whose fault explains
-        whatever c's fault does: the chain goes on while the signal between them is not observed."""
-        out: dict[int, set[int]] = {}
-        succ, output_of = self.model.successor, self.model.output_of
-        for c in succ:
-            chain, cur = set(), c
-            while cur in succ and output_of.get(cur) not in observations:
-                cur = succ[cur]
-                chain.add(self.model.ab_var[cur])
-            if chain:
-                out[self.model.ab_var[c]] = chain
+    def _structure(self, observations: Mapping[str, bool]) -> _Structure | None:
+        """Post-dominators for the signals observed (netlists only; None for other models)."""
+        if not self._gate_order:
+            return None
+        key = frozenset(observations)
+        found = self._structures.get(key)
+        if found is None:
+            ab, output_of = self.model.ab_var, self.model.output_of
+            observed = {g for g, signal in output_of.items() if signal in key}
+            chains = post_dominator_chains(self._gate_order, self.model.readers, observed)
+            found = _Structure({ab[g]: tuple(ab[x] for x in chain) for g, chain in chains.items()},
+                               {ab[g]: ab[chain[1]] for g, chain in chains.items() if len(chain) > 1})
+            if len(self._structures) >= _STRUCTURE_CACHE:
+                self._structures.pop(next(iter(self._structures)))
+            self._structures[key] = found
+        return found
+
+    def _spread(self, diagnosis: list[int], chains: Mapping[int, tuple[int, ...]],
+                known: KnownDiagnoses, covered: set[frozenset[int]], deadline: Deadline) -> list[list[int]]:
+        """The new minimal diagnoses made of a minimal one by moving members up their chains.
+
+        Each such set is consistent (see ``dominators``) and has the diagnosis's size k; it is a new
+        minimal diagnosis unless it contains one known (all smaller ones are, once lower levels are
+        done). Prefixes that already contain a known diagnosis are cut off. ``covered`` holds the
+        sets spread before: every set above one of them (member by member along the chains) was
+        dealt with then, so the walk up a chain stops at the first covered completion."""
+        pools = [chains.get(v, (v,)) for v in diagnosis]
+        out: list[list[int]] = []
+        chosen: list[int] = []
+
+        def extend(i: int) -> None:
+            if i == len(pools):
+                out.append(list(chosen))
+                return
+            rest = diagnosis[i + 1:]
+            for x in pools[i]:
+                if x in chosen:
+                    continue
+                if frozenset((*chosen, x, *rest)) in covered:
+                    break
+                if known.within_adding(x, chosen):
+                    continue
+                chosen.append(x)
+                extend(i + 1)
+                chosen.pop()
+
+        extend(0)
+        covered.update(frozenset(d) for d in out)
+        covered.add(frozenset(diagnosis))
+        if deadline.expired():
+            raise TimedOut
         return out
 
+    def _simulator(self, observations: Mapping[str, bool]) -> "Callable[[], BatchSimulator | None]":
+        """A netlist's batch simulator for these observations, built on first use (None if unusable)."""
+        made: list[BatchSimulator | None] = []
+
+        def get() -> BatchSimulator | None:
+            if not made:
+                sim = None
+                if self.model.gates:
+                    sim = BatchSimulator(self.model.gates, self.model.readers, self.model.primary_inputs,
+                                         observations)
+                made.append(sim if sim is not None and sim.usable else None)
+            return made[0]
+        return get
+
     def _conflict_levels(self, base: list[int], limit: int, deadline: Deadline,
-                         dominators: Mapping[int, set[int]]) -> Iterator[list[str]]:
+                         structure: _Structure | None,
+                         simulator: "Callable[[], BatchSimulator | None]") -> Iterator[list[str]]:
         hs = self._hitting_sets(limit)
         check = self._check(base, deadline)
         try:
-            known: set[frozenset[int]] = set()
+            known = KnownDiagnoses()
+            covered: set[frozenset[int]] = set()  # diagnoses spread along their chains
             for k in range(limit + 1):
                 found: list[list[str]] = []
 
                 def record(diagnosis: list[int]) -> None:
-                    """Keep a minimal diagnosis, and every set its members' dominators make of it:
-                    those are consistent without a SAT call, and minimal unless they contain one
-                    found before (all smaller diagnoses are known once the lower levels are done)."""
-                    todo = [diagnosis]
-                    while todo:
-                        d = todo.pop()
-                        hs.block(d)
-                        known.add(frozenset(d))
+                    """Keep a new minimal diagnosis. On a netlist also every set its members'
+                    post-dominators make of it (no SAT call), and block them all in one clause."""
+                    if structure is not None and math.prod(
+                            len(structure.chains.get(v, ())) or 1 for v in diagnosis) <= _SPREAD_LIMIT:
+                        new = self._spread(diagnosis, structure.chains, known, covered, deadline)
+                        hs.block_up(diagnosis, structure.parent)
+                    else:
+                        new = [diagnosis]
+                        hs.block(diagnosis)
+                    for d in new:
+                        known.add(d)
                         found.append(self._names(d))
-                        for i, c in enumerate(d):
-                            for dom in dominators.get(c, ()):
-                                swapped = sorted({*d[:i], dom, *d[i + 1:]})
-                                if len(swapped) == len(d) and not _contains_known(swapped, known):
-                                    known.add(frozenset(swapped))
-                                    todo.append(swapped)
-                            if deadline.expired():
-                                raise TimedOut
+
+                def try_variants(variants: list[list[int]]) -> None:
+                    """Variants hit the same conflicts as a diagnosis, so most are diagnoses too:
+                    a netlist simulates them all at once; the SAT solver checks the rest (and the
+                    failures, for their conflicts)."""
+                    sim = simulator()
+                    verdicts = (sim.consistent([[self._component_of[v] for v in d] for d in variants])
+                                if sim is not None else [None] * len(variants))
+                    learned: list[set[int]] = []  # conflicts found while trying the variants
+                    for variant, verdict in zip(variants, verdicts):
+                        if deadline.expired():
+                            raise TimedOut
+                        if known.within(variant) or any(c.isdisjoint(variant) for c in learned):
+                            continue
+                        conflict = None if verdict else check(variant)
+                        if conflict is None:
+                            record(variant)
+                        else:
+                            hs.add_conflict(conflict)
+                            learned.append(set(conflict))
 
                 try:
                     while (candidate := next_diagnosis(hs, k, check)) is not None:
                         record(candidate)
                         if k > _SWAP_LIMIT:
                             continue
-                        learned: list[set[int]] = []  # conflicts found while trying the variants
+                        variants: list[list[int]] = []
                         for combo in hs.equivalents(candidate):  # no hitting-set search for these
-                            if deadline.expired():
-                                raise TimedOut
                             variant = sorted(combo)
-                            if _contains_known(variant, known) or any(c.isdisjoint(variant) for c in learned):
-                                continue
-                            conflict = check(variant)
-                            if conflict is None:
-                                record(variant)
-                            else:
-                                hs.add_conflict(conflict)
-                                learned.append(set(conflict))
+                            if not known.within(variant):
+                                variants.append(variant)
+                            if len(variants) >= _BATCH:
+                                try_variants(variants)
+                                variants = []
+                        try_variants(variants)
                 except TimedOut:
                     yield from sorted(found, key=self._order)
                     raise

@@ -16,7 +16,7 @@ check on a 3,500-gate circuit costs under a millisecond instead of about two.
 from __future__ import annotations
 
 import itertools
-from typing import Callable, Iterator, Sequence
+from typing import Callable, Iterator, Mapping, Sequence
 
 from pysat.card import ITotalizer
 from pysat.solvers import Solver
@@ -37,6 +37,7 @@ class HittingSetSolver:
         self._signature: dict[int, int] = {}            # member -> bit set of the conflicts it is in
         self._classes: dict[int, list[int]] = {}        # bit set -> members with exactly that set
         self._conflicts = 0
+        self._up: dict[int, int] = {}                   # member -> "it or an ancestor chosen" variable
 
     def close(self) -> None:
         self.solver.delete()
@@ -89,6 +90,28 @@ class HittingSetSolver:
     def block(self, ab_vars: Sequence[int]) -> None:
         """No candidate may contain all of these (a diagnosis found: its supersets are not minimal)."""
         self.solver.add_clause([-v for v in ab_vars])
+
+    def block_up(self, ab_vars: Sequence[int], parent: Mapping[int, int]) -> None:
+        """No candidate may take, for every member v, v or one of its ancestors in ``parent`` (a forest).
+
+        One clause over one "v or an ancestor is chosen" variable per member; those variables are
+        shared by all such clauses of this solver, so the tree costs two clauses per node at most."""
+        self.solver.add_clause([-self._up_var(v, parent) for v in ab_vars])
+
+    def _up_var(self, v: int, parent: Mapping[int, int]) -> int:
+        path = []
+        while v not in self._up and v is not None:
+            path.append(v)
+            v = parent.get(v)
+        above = self._up.get(v) if v is not None else None
+        for node in reversed(path):  # from the top down: y_node <- node, y_node <- y_parent
+            self.top += 1
+            y = self._up[node] = self.top
+            self.solver.add_clause([-node, y])
+            if above is not None:
+                self.solver.add_clause([-above, y])
+            above = y
+        return above
 
     def candidate(self, k: int, extra: Sequence[int] = ()) -> list[int] | None:
         """A hitting set of at most k members (plus ``extra`` assumptions), or None when there is none."""

@@ -29,10 +29,14 @@ class SystemModel:
     held: tuple[int, ...] = ()
     kind: str = "system"
     observable_kinds: Mapping[str, str] = field(default_factory=dict)
-    # weak-fault structure (netlists): the one component reading c's output, and c's output signal.
-    # When c's output is not observed, "successor faulty" explains whatever "c faulty" does.
-    successor: Mapping[str, str] = field(default_factory=dict)
+    # weak-fault structure (netlists): the components reading c's output, and c's output signal.
+    # The engine derives post-dominators from them (``dominators``): diagnoses that need no SAT check.
+    readers: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     output_of: Mapping[str, str] = field(default_factory=dict)
+    # netlists also keep their gates, (output, type, inputs) in topological order, and primary inputs,
+    # so that many candidates can be checked at once by simulation (``simulation``)
+    gates: tuple[tuple[str, str, tuple[str, ...]], ...] = ()
+    primary_inputs: tuple[str, ...] = ()
 
     def observation_literals(self, observations: Mapping[str, bool]) -> list[int]:
         """Assumption literals for an observation set; unknown names raise ``UnknownObservation``."""

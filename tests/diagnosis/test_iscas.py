@@ -24,7 +24,7 @@ def test_c432_conflict_route_with_dominance_equals_bounded_route(iscas):
     assert fast.monotone
     direct.monotone = False   # force the cardinality-bound route on the model's own solver
     order = {c: i for i, c in enumerate(model.components)}
-    assert fast.model.successor      # fanout-free chains: diagnoses reached by dominance skip the SAT check
+    assert fast.model.readers        # post-dominators: diagnoses reached by dominance skip the SAT check
     for seed, faults in enumerate([1, 1, 2, 3]):
         flipped, obs = instance(netlist, faults, seed)
         result = fast.diagnose(obs, max_card=3)
