@@ -9,9 +9,17 @@ the optical axis, 0 = no reading) with depth-dependent noise, disparity quantisa
 projector shadows and out-of-range holes. Noise comes from banks drawn once per camera, so a frame
 costs a few milliseconds instead of hundreds of thousands of fresh Gaussian draws.
 
+Where a frame's time goes, and what keeps it short: a dozen whole-image passes (background, colour
+noise, the depth measurement), each an OpenCV call or a numpy loop on uint8/float32; the z-buffer
+holds disparity, the unit the sensor measures in. Per object only its band of rows and columns is
+touched, the cylinders' silhouettes computed for all at once. Rows below every wall and object are
+bare floor, taken from noisy floor banks at a random column. A camera that stands still keeps its
+static layers (floor, walls, props) and only draws the robots.
+
 The world hands out ``DeferredFrame``s: a snapshot of the scene and a noise seed, rendered the first
-time someone reads the pixels, so a camera nobody looks at costs nothing. ``frames_rendered`` counts
-the frames actually made.
+time someone reads the pixels, so a camera nobody looks at costs nothing; ``render_all`` renders the
+frames due at one step side by side on the cores. ``frames_rendered`` counts the frames actually
+made. Pixels depend only on the scene and the seed, never on caches, threads or when they are read.
 """
 from __future__ import annotations
 
@@ -247,6 +255,12 @@ class _Renderer:
         self.colour_bank_unit = colour
         self._colour_cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         self._floor_cache: dict[tuple, np.ndarray] = {}
+        self.first_floor_row = int(np.argmax(self.k_v > 0))
+        # below the lowest wall and object a frame is bare floor: its noisy pixels come from banks
+        # (the floor is the same along a row, so a random column offset gives fresh noise)
+        self.floor_banks = w >= h               # the colour bank re-read as rows of w + extra pixels
+        self._floor_depth_bank: np.ndarray | None = None
+        self._floor_colour_cache: dict[tuple, np.ndarray] = {}
         self._height_cache: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
         self._static: OrderedDict[tuple, tuple] = OrderedDict()     # static layers of cameras standing still
         self._poses_seen: OrderedDict[tuple, None] = OrderedDict()
@@ -280,6 +294,39 @@ class _Renderer:
             self._floor_cache[key] = img
         return img
 
+    def floor_depth_bank(self) -> np.ndarray:
+        """Depth readings (h x (w + extra) float32) of the bare floor, noise, holes and range included."""
+        bank = self._floor_depth_bank
+        if bank is None:
+            h, w, e = self.cam.height, self.cam.width, self.extra
+            noise = self.disparity_bank.reshape(h + e, w + e)[:h]
+            bank = _measure(self, np.broadcast_to(self.floor_d_image[:, :1], noise.shape), noise,
+                            np.empty(noise.shape, np.float32))
+            self._floor_depth_bank = bank
+        return bank
+
+    def floor_colour_bank(self, floor_rgb: RGB, gain: float, sigma: float) -> np.ndarray:
+        """Noisy colours of the floor rows (from ``first_floor_row`` down) ``extra`` pixels wider than the image."""
+        import cv2
+
+        key = (floor_rgb, gain, sigma)
+        bank = self._floor_colour_cache.get(key)
+        if bank is None:
+            h, w, e, f = self.cam.height, self.cam.width, self.extra, self.first_floor_row
+            rgb = _rgb8(np.asarray(floor_rgb) * self.floor_shade[f:] * gain)
+            # rows of 3-byte pixels copy slowly: broadcast 4-byte RGBA, then drop A
+            rgba = np.ascontiguousarray(np.broadcast_to(
+                np.concatenate([rgb, np.zeros((h - f, 1), np.uint8)], axis=1).view(np.uint32), (h - f, w + e)))
+            bank = cv2.cvtColor(rgba.view(np.uint8).reshape(h - f, w + e, 4), cv2.COLOR_RGBA2RGB)
+            pos, neg = self.colour_noise(sigma)
+            size = h * (w + e) * 3
+            cv2.add(bank, pos.reshape(-1)[:size].reshape(h, w + e, 3)[f:], dst=bank)
+            cv2.subtract(bank, neg.reshape(-1)[:size].reshape(h, w + e, 3)[f:], dst=bank)
+            if len(self._floor_colour_cache) >= 8:     # scenes with ever new lighting must not pile up
+                self._floor_colour_cache.clear()
+            self._floor_colour_cache[key] = bank
+        return bank
+
     def height_limits(self, bottom: float, top: float) -> tuple[np.ndarray, np.ndarray]:
         """Per row (h x 1 float32), the depths between which a ray is within ``bottom..top`` in height."""
         key = (bottom, top)
@@ -295,8 +342,9 @@ class _Renderer:
         return limits
 
     def static_layers(self, pose: Pose, scene: Scene, canvas: np.ndarray, disparity: np.ndarray
-                      ) -> list[tuple[int, int, int, float]]:
-        """Floor, walls and props seen from ``pose`` into ``canvas`` and ``disparity``; their shadows.
+                      ) -> tuple[list[tuple[int, int, int, float]], int]:
+        """Floor, walls and props seen from ``pose`` into ``canvas`` and ``disparity``; the props'
+        shadows and the row below which the walls leave only floor.
 
         A pose asked for a second time is a camera standing still: its layers are kept (a few dozen
         poses, least recently used dropped) and later frames copy them instead of drawing them.
@@ -317,14 +365,14 @@ class _Renderer:
         if kept is not None:
             np.copyto(canvas, kept[1])
             np.copyto(disparity, kept[2])
-            return list(kept[3])
-        shadows = _static_layers(self, pose, scene, canvas, disparity)
+            return list(kept[3]), kept[4]
+        shadows, floor_from = _static_layers(self, pose, scene, canvas, disparity)
         if again:
             with self._static_lock:
-                self._static[key] = (scene, canvas.copy(), disparity.copy(), tuple(shadows))
+                self._static[key] = (scene, canvas.copy(), disparity.copy(), tuple(shadows), floor_from)
                 if len(self._static) > 32:
                     self._static.popitem(last=False)
-        return shadows
+        return shadows, floor_from
 
     def scratch(self) -> tuple[np.ndarray, np.ndarray]:
         """This thread's colour and depth buffers (re-used frame after frame)."""
@@ -477,7 +525,7 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     canvas, depth = r.scratch()
 
     # what does not move: floor, walls and props, kept for a camera that stands still
-    shadows = r.static_layers(camera_pose, scene, canvas, depth)
+    shadows, floor_from = r.static_layers(camera_pose, scene, canvas, depth)
     # the robots, with a depth test per pixel
     n_labels = 2 * len(robots)
     labels = np.zeros((h, w), np.int16) if count and n_labels else None
@@ -486,15 +534,23 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     _draw(r, _prisms(r, camera_pose, robots, scene, count, props=False), depth, canvas, labels, full, shadows,
           gain, bands)
 
-    if scene.rgb_noise > 0:                 # the new image is made by the first noise pass
+    # rows from ``floor`` down see only floor (every object drawn left a shadow entry with its rows)
+    floor = max([r.first_floor_row, floor_from] + [v1 for _, _, v1, _ in shadows]) if r.floor_banks else h
+    if scene.rgb_noise > 0:
         pos, neg = r.colour_noise(float(scene.rgb_noise))
         off = int(rng.integers(0, r.extra))
-        image = cv2.add(canvas, pos[off:off + h])
-        cv2.subtract(image, neg[off:off + h], dst=image)
+        image = np.empty((h, w, 3), np.uint8)
+        top = image[:floor]
+        cv2.add(canvas[:floor], pos[off:off + floor], dst=top)
+        cv2.subtract(top, neg[off:off + floor], dst=top)
+        if floor < h:
+            col = int(rng.integers(0, r.extra))
+            bank = r.floor_colour_bank(scene.floor_rgb, gain, float(scene.rgb_noise))
+            image[floor:] = bank[floor - r.first_floor_row:, col:col + w]
     else:
         image = canvas.copy()
 
-    noisy = _depth_noise(r, depth, shadows, rng)
+    noisy = _depth_noise(r, depth, shadows, rng, floor)
     pixels: list[MarkerPixels] = []
     if count:
         visible = np.zeros(n_labels + 1, np.int64)
@@ -510,9 +566,9 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
 
 
 def _static_layers(r: _Renderer, pose: Pose, scene: Scene, canvas: np.ndarray, disparity: np.ndarray
-                   ) -> list[tuple[int, int, int, float]]:
+                   ) -> tuple[list[tuple[int, int, int, float]], int]:
     """Draw what does not move (floor, walls, props) into ``canvas`` and ``disparity``; returns the
-    props' projector shadows."""
+    props' projector shadows and the row below which the walls leave only floor."""
     cam, hc, h = r.cam, r.rig.height_m, r.cam.height
     gain = float(scene.gain)
     # background: per column the backdrop above the wall's top, the wall, then the floor below the
@@ -531,7 +587,8 @@ def _static_layers(r: _Renderer, pose: Pose, scene: Scene, canvas: np.ndarray, d
                 (r.floor_image(scene.floor_rgb, scene.backdrop_rgb, gain), r.floor_d_image), (canvas, disparity))
     shadows: list[tuple[int, int, int, float]] = []
     _draw(r, _prisms(r, pose, (), scene, False), disparity, canvas, None, np.zeros(1, np.int64), shadows, gain, {})
-    return shadows
+    wall = v_bottom > v_top
+    return shadows, int(v_bottom[wall].max()) if wall.any() else 0
 
 
 def _draw(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, canvas: np.ndarray,
@@ -899,15 +956,15 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], depth: np.ndarray, image: 
         shadows.append((c0, v0, v1, float(t1[s])))
 
 
-def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rng: np.random.Generator) -> np.ndarray:
+def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rng: np.random.Generator,
+                 floor: int) -> np.ndarray:
     """Kinect-like measurement of the true depth: shadows, noise, quantisation, holes, range limits.
 
     Works in disparity (fb / z) like the sensor: noise and dropouts come from the bank at a random
-    offset, rounding to 1/subpixel steps quantises, and readings outside the range become 0.
+    offset, rounding to 1/subpixel steps quantises, and readings outside the range become 0. Rows from
+    ``floor`` down are bare floor: their readings come from ``floor_depth_bank`` at a random column.
     ``disparity`` (the z-buffer, a scratch buffer) is modified in place; the returned depth image is new.
     """
-    import cv2
-
     s = r.sensor
     h, w = disparity.shape
     if s.shadows and shadows:
@@ -930,21 +987,32 @@ def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rng: np.ran
             blk[blk <= limit[None, :]] = 0
 
     k = max(0, int(s.registration_px))          # depth-to-colour registration error (columns)
-    n = h * w
+    n = floor * w
     off = int(rng.integers(0, r.disparity_bank.size - n + 1))
-    fb = r.fb32                                                   # disparity in 1/subpixel steps
     # ``flat[k:k + n]`` as an image is ``out`` moved k columns right: computing it contiguously shifts
     # depth against colour; what wraps into each row's first k columns is cleared afterwards
-    flat = np.empty(n + k, np.float32)
-    dst = flat[k:].reshape(h, w)
-    with np.errstate(divide="ignore"):
-        np.add(disparity, r.disparity_bank[off:off + n].reshape(h, w), out=dst)
-        np.rint(dst, out=dst)
-        np.divide(fb, dst, out=dst)                                 # no surface (0) -> inf -> no reading
-    # readings outside [min, max] (also inf, and the negative ones the dropouts made) become 0
-    cv2.threshold(dst, float(s.max_m), 0, cv2.THRESH_TOZERO_INV, dst=dst)
-    cv2.threshold(dst, float(s.min_m) - 1e-6, 0, cv2.THRESH_TOZERO, dst=dst)
-    out = flat[:n].reshape(h, w)
+    flat = np.empty(h * w + k, np.float32)
+    out = flat[:h * w].reshape(h, w)
+    _measure(r, disparity[:floor], r.disparity_bank[off:off + n].reshape(floor, w), flat[k:k + n].reshape(floor, w))
+    if floor < h:
+        col = int(rng.integers(0, r.extra - k + 1))
+        out[floor:, k:] = r.floor_depth_bank()[floor:, col:col + w - k]
     if k:
         out[:, :k] = 0
+    return out
+
+
+def _measure(r: _Renderer, disparity: np.ndarray, noise: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """What the sensor reads for the true ``disparity`` plus ``noise`` (both in 1/subpixel steps):
+    rounded to a step, as a depth, 0 outside the range (also no surface and dropouts); into ``out``."""
+    import cv2
+
+    s = r.sensor
+    with np.errstate(divide="ignore"):
+        np.add(disparity, noise, out=out)
+        np.rint(out, out=out)
+        np.divide(r.fb32, out, out=out)                             # no surface (0) -> inf -> no reading
+    # readings outside [min, max] (also inf, and the negative ones the dropouts made) become 0
+    cv2.threshold(out, float(s.max_m), 0, cv2.THRESH_TOZERO_INV, dst=out)
+    cv2.threshold(out, float(s.min_m) - 1e-6, 0, cv2.THRESH_TOZERO, dst=out)
     return out

@@ -160,3 +160,24 @@ def test_a_camera_standing_still_reuses_its_static_layers_with_the_same_pixels()
     assert np.array_equal(rgb, fresh[0]) and np.array_equal(depth, fresh[1])
     before = render(sample.rig, sample.camera_pose, sample.robots, replace(sample.scene), np.random.default_rng(9))
     assert not np.array_equal(rgb, before[0])                    # the robot was redrawn where it moved to
+
+
+def test_bare_floor_rows_from_the_noise_banks_read_like_measured_ones():
+    # rows below every object come from precomputed floor banks; a near pole reaching the bottom edge
+    # makes every row measured: per row, the two must agree in depth, holes and colour
+    pole = CylinderProp(0.45, 0.2, 0.03, 0.0, 1.0, (40, 40, 44))        # near the left edge, down to the last row
+    banked, measured = [], []
+    for seed in range(3):
+        banked.append(render(RIG, CAMERA, [], Scene(), np.random.default_rng(seed)))
+        measured.append(render(RIG, CAMERA, [], Scene(props=(pole,)), np.random.default_rng(seed)))
+    u = round(RIG.camera.cx - RIG.camera.fx * 0.2 / 0.45)
+    assert measured[0][0][-1, u - 3:u + 4].mean() < 70 < banked[0][0][-1, u - 3:u + 4].mean()   # the pole is there
+    rows, cols = slice(300, 455), slice(200, 640)                      # floor from 3 m to 0.85 m
+    for (rgb_b, d_b), (rgb_m, d_m) in zip(banked, measured):
+        a, b = d_b[rows, cols], d_m[rows, cols]
+        assert abs(np.mean(a == 0) - np.mean(b == 0)) < 0.01                 # holes: dropouts and out of range
+        mean_a = np.array([r[r > 0].mean() for r in a])
+        mean_b = np.array([r[r > 0].mean() for r in b])
+        assert np.all(np.abs(mean_a - mean_b) < 0.01 * mean_b)               # same floor depth per row
+        assert abs(np.mean(rgb_b[rows, cols]) - np.mean(rgb_m[rows, cols])) < 0.5
+        assert abs(np.std(rgb_b[rows, cols]) - np.std(rgb_m[rows, cols])) < 0.5
