@@ -145,8 +145,10 @@ class ProgressLog:
     have reported a final step, and clears a false alarm's transient stall once the fault is seen."""
 
     def __init__(self, scenario: Scenario, world, on_done: Callable[[], None],
-                 echo: Callable[[Mark], None] | None = None) -> None:
+                 echo: Callable[[Mark], None] | None = None, clock: Callable[[], float] | None = None) -> None:
         self.scenario, self.world, self.on_done, self.echo = scenario, world, on_done, echo
+        self.clock = clock or (lambda: world.time)
+        """Simulated seconds now (the world's clock; real-time robots pass a wall clock)."""
         self.marks: list[Mark] = []
         self.start = time.monotonic()
         self._lock = threading.Lock()
@@ -155,8 +157,7 @@ class ProgressLog:
 
     def record(self, report) -> None:
         """Takes an ``agents.progress.ProgressReport`` (from any thread)."""
-        mark = Mark(report.agent, report.step, report.detail, self.world.time if self.world else 0.0,
-                    time.monotonic() - self.start)
+        mark = Mark(report.agent, report.step, report.detail, self.clock(), time.monotonic() - self.start)
         with self._lock:
             self.marks.append(mark)
             if report.step in FINAL_STEPS:

@@ -67,7 +67,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         print(f"faultmas run: {exc}", file=sys.stderr)
         return 2
     show = sys.stderr if args.json else sys.stdout
-    for r in scenario.robots:
+    for r in scenario.robots if args.bridge == "sim" else ():
         what = f"fault {r.fault}" + (" (a transient stall raises a false alarm)" if r.false_alarm else "")
         print(f"faultmas: {r.name:<8} at ({r.x:5.2f}, {r.y:5.2f}) heading {r.yaw_deg:6.1f} deg, {what}", file=show)
     agent_lines = None if args.quiet else show

@@ -51,6 +51,9 @@ helper_obs(_, _, []).    // the helper lost sight of me: it saw nothing that hel
 !goToDestination.
 
 // ---- my own task ------------------------------------------------------------------------------
++!goToDestination : not encoders(_, _)           // the robot has not spoken yet
+   <- .wait({+encoders(_, _)}, 10000);
+      !goToDestination.
 +!goToDestination : destination(D) & encoders(L, R)
    <- +on_mission;
       .print("going to my destination, ", D, " m ahead");

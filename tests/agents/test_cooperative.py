@@ -91,3 +91,13 @@ def test_six_robots_two_of_them_faulty_diagnose_concurrently():
     assert all(r.diagnosis == "none" for r in result.robots if r.fault == "none")   # the others arrived
     helpers = {m.agent for m in marks_of(result, "robot_found")}
     assert helpers and not helpers & {r.name for r in broken}        # self-suspects never help
+
+
+def test_the_same_plans_diagnose_through_the_ros2_bridge_with_real_rclpy_nodes():
+    pytest.importorskip("rclpy")
+    from agents.ros2_run import run_on_ros2
+
+    result = run_on_ros2(paper_scenario("encoders"), timeout=150)
+    assert result.finished, [(m.agent, m.step, m.detail) for m in result.marks]
+    assert result.robots[0].diagnosis == "encoders"
+    assert marks_of(result, "robot_found")
