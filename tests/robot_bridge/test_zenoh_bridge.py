@@ -1,0 +1,102 @@
+"""ZenohBridge <-> SimServer over a real Zenoh session on loopback: actions complete when the motion ends,
+percepts arrive, bad requests are dropped, a silent robot fails actions with ``timeout``."""
+from __future__ import annotations
+
+import pytest
+
+zenoh = pytest.importorskip("zenoh")
+
+from agents.transport.config import ZenohOptions, build_config, loopback_endpoint  # noqa: E402
+from robot_bridge import Action  # noqa: E402
+from robot_bridge.sim.bridge import SimBridge  # noqa: E402
+from robot_bridge.sim.server import SimServer  # noqa: E402
+from robot_bridge.sim.world import World  # noqa: E402
+from robot_bridge.zenoh_bridge import ZenohBridge, robot_key  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def served():
+    endpoint = loopback_endpoint()
+    session = zenoh.open(build_config(ZenohOptions(listen=(endpoint,))))
+    world = World(seed=2)
+    bridges = {"faulty": SimBridge("faulty", world=world, fault="encoders"),
+               "helper": SimBridge("helper", world=world, y=-1.5, yaw_deg=90.0, camera=True)}
+    for bridge in bridges.values():
+        bridge.setup()
+    server = SimServer(session, "zb", bridges).start()
+    yield endpoint, session, server, world
+    server.stop()
+    session.close()
+    for bridge in bridges.values():
+        bridge.shutdown()
+
+
+def test_a_remote_move_fails_as_the_simulated_one_does_and_percepts_follow(served):
+    endpoint, _, _, world = served
+    bridge = ZenohBridge("faulty", mas="zb", connect=(endpoint,))
+    bridge.setup(timeout=10)
+    try:
+        done = bridge.act(Action("move", (0.5,))).result(20)
+        assert (done.ok, done.reason) == (False, "no_progress")
+        names = {p.name for p in bridge.percepts()}
+        assert {"odom", "encoders", "stopped"} <= names
+        assert world.pose("faulty")[0] > 0.05          # it drove; its encoders said nothing
+        assert bridge.act(Action("fly")).result(5).reason == "unknown_action"
+        assert bridge.act(Action("move", ("far",))).result(5).reason == "bad_args"
+    finally:
+        bridge.shutdown()
+
+
+def test_the_camera_percepts_cross_the_network(served):
+    endpoint, *_ = served
+    bridge = ZenohBridge("helper", mas="zb", connect=(endpoint,))
+    bridge.setup(timeout=10)
+    try:
+        import time
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline and not any(p.name == "robot_seen" for p in bridge.percepts()):
+            time.sleep(0.05)
+        seen = [p for p in bridge.percepts() if p.name == "robot_seen"]
+        assert seen and seen[0].args[0] == "faulty" and 1.2 < seen[0].args[2] < 1.7
+    finally:
+        bridge.shutdown()
+
+
+def test_a_malformed_request_is_dropped_and_the_server_keeps_serving(served, caplog):
+    endpoint, session, server, _ = served
+    before = server.requests
+    session.put(robot_key("zb", "faulty", "actions"), "not json")
+    bridge = ZenohBridge("faulty", mas="zb", connect=(endpoint,))
+    bridge.setup(timeout=10)
+    try:
+        assert bridge.act(Action("stop")).result(10).ok
+        assert server.requests >= before + 2
+    finally:
+        bridge.shutdown()
+
+
+def test_no_server_means_setup_names_the_key_and_a_silent_robot_times_out():
+    endpoint = loopback_endpoint()
+    session = zenoh.open(build_config(ZenohOptions(listen=(endpoint,))))
+    try:
+        bridge = ZenohBridge("ghost", mas="zb", session=session)
+        with pytest.raises(TimeoutError, match="faultmas/zb/robot/ghost/percepts"):
+            bridge.setup(timeout=0.3)
+        # a server that publishes percepts but never answers actions
+        session.put(robot_key("zb", "mute", "percepts"), '{"source":"sim","literals":["stopped"]}')
+        mute = ZenohBridge("mute", mas="zb", session=session, action_timeout=0.3)
+        publisher = session.declare_publisher(robot_key("zb", "mute", "percepts"))
+        import threading
+        stop = threading.Event()
+        feeder = threading.Thread(target=lambda: [publisher.put('{"source":"sim","literals":["stopped"]}')
+                                                  for _ in iter(lambda: stop.wait(0.05), True)], daemon=True)
+        feeder.start()
+        try:
+            mute.setup(timeout=5)
+            done = mute.act(Action("move", (1.0,))).result(5)
+            assert (done.ok, done.reason) == (False, "timeout")
+        finally:
+            stop.set()
+            mute.shutdown()
+    finally:
+        session.close()
