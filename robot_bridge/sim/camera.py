@@ -808,7 +808,7 @@ def _cap_colour(rgb: RGB, factor: float) -> np.ndarray:
     return _rgb8(np.asarray(rgb) * factor)
 
 
-def _zbuffer_band(r: _Renderer, p: _Prism, depth: np.ndarray, u0: int, u1: int, t1: np.ndarray,
+def _zbuffer_band(r: _Renderer, p: _Prism, disparity: np.ndarray, u0: int, u1: int, t1: np.ndarray,
                   t2: np.ndarray, zmin: float, zmax: float, full: np.ndarray, bands: dict):
     """The rows a prism spans in columns ``u0:u1`` (rays enter at ``t1``, leave at ``t2``), where it is
     hit and where it is nearer than what is drawn; None when it covers nothing. Shared by boxes and
@@ -834,7 +834,7 @@ def _zbuffer_band(r: _Renderer, p: _Prism, depth: np.ndarray, u0: int, u1: int, 
     if p.label:
         full[p.label] += int(np.count_nonzero(hit))
         bands[p.label] = (v0, v1, u0, u1)
-    region = depth[v0:v1, u0:u1]                         # disparity: nearer is larger
+    region = disparity[v0:v1, u0:u1]                         # disparity: nearer is larger
     closer = dhit > region
     closer &= hit
     if not closer.any():
@@ -842,9 +842,9 @@ def _zbuffer_band(r: _Renderer, p: _Prism, depth: np.ndarray, u0: int, u1: int, 
     return v0, v1, region, dhit, closer, lo, t1c
 
 
-def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, labels: np.ndarray | None,
+def _draw_prism(r: _Renderer, p: _Prism, disparity: np.ndarray, image: np.ndarray, labels: np.ndarray | None,
                 full: np.ndarray, shadows: list, gain: float, bands: dict) -> None:
-    """Z-buffer one box into the depth and colour images (only its band of columns and rows)."""
+    """Z-buffer one box into the disparity and colour images (only its band of columns and rows)."""
     import cv2
 
     span = _entry_exit(r, p)
@@ -858,7 +858,7 @@ def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, l
         first, last = int(np.argmax(hit_cols)), len(hit_cols) - int(np.argmax(hit_cols[::-1]))
         u0, u1, t1, t2, hit_cols = u0 + first, u0 + last, t1[first:last], t2[first:last], hit_cols[first:last]
     hc = r.rig.height_m
-    band = _zbuffer_band(r, p, depth, u0, u1, t1, t2, float(t1[hit_cols].min()), float(t2[hit_cols].max()),
+    band = _zbuffer_band(r, p, disparity, u0, u1, t1, t2, float(t1[hit_cols].min()), float(t2[hit_cols].max()),
                          full, bands)
     if band is None:
         return
@@ -888,7 +888,7 @@ def _draw_prism(r: _Renderer, p: _Prism, depth: np.ndarray, image: np.ndarray, l
     shadows.append((u0 + first, v0, v1, float(t1[first])))
 
 
-def _draw_circles(r: _Renderer, prisms: list[_Prism], depth: np.ndarray, image: np.ndarray,
+def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, image: np.ndarray,
                   labels: np.ndarray | None, full: np.ndarray, shadows: list, gain: float, bands: dict) -> None:
     """``_draw_prism`` for vertical cylinders: the exact silhouette columns of all of them computed in
     one go (a frame with many robots has dozens), then each drawn near to far, so that hidden ones stop
@@ -938,7 +938,7 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], depth: np.ndarray, image: 
     hc = r.rig.height_m
     for i, (s, e, c0, c1) in enumerate(zip(starts.tolist(), ends.tolist(), u0.tolist(), u1.tolist())):
         p = prisms[order[i]]
-        band = _zbuffer_band(r, p, depth, c0, c1, t1_32[s:e], t2_32[s:e], zmin[i], zmax[i], full, bands)
+        band = _zbuffer_band(r, p, disparity, c0, c1, t1_32[s:e], t2_32[s:e], zmin[i], zmax[i], full, bands)
         if band is None:
             continue
         v0, v1, region, dhit, closer, lo, t1c = band
