@@ -39,6 +39,7 @@ from pysat.solvers import Solver
 from diagnosis.dominators import post_dominator_chains, reverse_topological
 from diagnosis.known import KnownDiagnoses
 from diagnosis.hitting_sets import HittingSetSolver, next_diagnosis
+from diagnosis.hs_tree import tree_levels
 from diagnosis.simulation import BatchSimulator
 from diagnosis.model import SystemModel
 
@@ -100,6 +101,7 @@ _EAGER_BOUND = 4  # hitting-set totalizers are built for up to this many faults 
 _SWAP_LIMIT = 4  # levels up to which equivalent candidates are tried directly (subset test is 2^k)
 _SPREAD_LIMIT = 200_000  # largest product of post-dominator chains expanded from one diagnosis
 _BATCH = 1024  # variants simulated together
+_TREE_LIMIT = 3  # size bounds up to which the hitting-set tree enumerates (``hs_tree``)
 _STRUCTURE_CACHE = 8  # observed-signal sets whose post-dominators are kept per model
 
 
@@ -228,6 +230,9 @@ class Diagnoser:
             base = self._base(observations)
             if not self._solve(base, deadline):
                 return  # nothing explains the observations, not even "everything is faulty"
+            if self.monotone and limit <= _TREE_LIMIT:
+                yield from self._tree_levels(base, limit, deadline, self._simulator(observations))
+                return
             if self.monotone:
                 yield from self._conflict_levels(base, limit, deadline, self._structure(observations),
                                                  self._simulator(observations))
@@ -328,6 +333,34 @@ class Diagnoser:
                 made.append(sim if sim is not None and sim.usable else None)
             return made[0]
         return get
+
+    def _tree_levels(self, base: list[int], limit: int, deadline: Deadline,
+                     simulator: "Callable[[], BatchSimulator | None]") -> Iterator[list[str]]:
+        """Small bounds on monotone models: the level-wise hitting-set tree (``hs_tree``)."""
+        names = self._component_of
+
+        def simulate(nodes: list[list[int]]) -> list[bool] | None:
+            sim = simulator()
+            return None if sim is None else sim.consistent([[names[v] for v in n] for n in nodes])
+
+        def tick() -> None:
+            if deadline.expired():
+                raise TimedOut
+
+        found: list[list[str]] = []
+        levels = tree_levels(limit, self._check(base, deadline), simulate, KnownDiagnoses(),
+                             lambda d: found.append(self._names(d)), tick)
+        try:
+            for _level in levels:
+                done, found[:] = sorted(found, key=self._order), []
+                yield from done
+                if done and not done[0]:
+                    return  # the empty diagnosis: nothing else is minimal
+        except TimedOut:
+            yield from sorted(found, key=self._order)
+            raise
+        finally:
+            levels.close()
 
     def _conflict_levels(self, base: list[int], limit: int, deadline: Deadline,
                          structure: _Structure | None,

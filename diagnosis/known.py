@@ -15,6 +15,7 @@ class KnownDiagnoses:
     def __init__(self) -> None:
         self.by_size: dict[int, set[frozenset[int]]] = {}
         self.count = 0
+        self._partners: dict[frozenset[int], set[int]] = {}  # D - {x} -> those x, for known D
 
     def add(self, diagnosis: Iterable[int]) -> None:
         d = frozenset(diagnosis)
@@ -22,6 +23,19 @@ class KnownDiagnoses:
         if d not in group:
             group.add(d)
             self.count += 1
+            for x in d:
+                self._partners.setdefault(d - {x}, set()).add(x)
+
+    def completing(self, node: Sequence[int]) -> set[int]:
+        """The x for which node + [x] contains a known diagnosis that node alone does not: one
+        look-up per subset of the (small) node instead of one subset test per x."""
+        out: set[int] = set()
+        for r in range(len(node) + 1):
+            for sub in itertools.combinations(node, r):
+                found = self._partners.get(frozenset(sub))
+                if found:
+                    out |= found
+        return out
 
     def within(self, candidate: Sequence[int]) -> bool:
         """Is some known diagnosis a subset of (or equal to) the candidate?"""

@@ -35,32 +35,42 @@ class BatchSimulator:
         if not candidates:
             return []
         m = len(candidates[0])
-        width = 1 << m
-        block = (1 << width) - 1
-        full = (1 << (width * len(candidates))) - 1
-        pattern = [sum(1 << a for a in range(width) if a >> j & 1) for j in range(m)]
-        mask: dict[str, int] = {}
-        forced: dict[str, int] = {}
+        size = max(1, (1 << m) // 8)    # bytes per candidate: at least 8 lanes, lane a sets member j to bit j of a
+        n = len(candidates)
+        full = (1 << (8 * size * n)) - 1
+        patterns = [sum(1 << a for a in range(8 * size) if a >> j & 1).to_bytes(size, "little") for j in range(m)]
+        ones = b"\xff" * size
+        masks: dict[str, bytearray] = {}
+        forced: dict[str, bytearray] = {}
         for i, cand in enumerate(candidates):
-            shift = i * width
+            at = i * size
             for j, g in enumerate(cand):
-                mask[g] = mask.get(g, 0) | block << shift
-                forced[g] = forced.get(g, 0) | pattern[j] << shift
+                if g not in masks:
+                    masks[g], forced[g] = bytearray(size * n), bytearray(size * n)
+                masks[g][at:at + size] = ones
+                forced[g][at:at + size] = patterns[j]
+        keep = {g: ~int.from_bytes(b, "little") for g, b in masks.items()}
+        set_to = {g: int.from_bytes(b, "little") for g, b in forced.items()}
         values: dict[str, int] = {}
         good = self._good
-        for name in self._cone(mask):
+        for name in self._cone(masks):
             _, kind, args = self._gates[name]
-            ins = [values[a] if a in values else (full if good[a] else 0) for a in args]
-            v = _gate(kind, ins, full)
-            if name in mask:
-                v = (v & ~mask[name]) | forced[name]
+            v = _gate(kind, [values[a] if a in values else (full if good[a] else 0) for a in args], full)
+            if name in keep:
+                v = (v & keep[name]) | set_to[name]
             values[name] = v
         bad = 0
         for name, observed in self._observed.items():
-            v = values.get(name, full if good[name] else 0)
+            v = values.get(name)
+            if v is None:
+                if good[name] != observed:
+                    return [False] * n   # a mismatch no candidate reaches
+                continue
             bad |= v ^ (full if observed else 0)
-        ok = full & ~bad
-        return [bool(ok >> (i * width) & block) for i in range(len(candidates))]
+        ok = (full & ~bad).to_bytes(size * n, "little")
+        if size == 1:
+            return [b != 0 for b in ok]
+        return [any(ok[i * size:(i + 1) * size]) for i in range(n)]
 
     def _cone(self, roots: Mapping[str, int]) -> list[str]:
         """The gates downstream of the roots (roots included), in topological order."""
