@@ -367,7 +367,12 @@ class Agent:
         if plan.atomic:
             intention.atomic += 1
             self.atomic_intention = intention
-        self._requeue(intention)
+        if not intention.dropped:  # _requeue, inlined
+            intention.suspended = None
+            if self.suspended:
+                self.suspended.pop(intention.id, None)
+            if intention not in self.running:
+                self.running.append(intention)
 
     # -- act
     def sel_int(self) -> Intention:
@@ -756,8 +761,11 @@ def _add_annots(lit: Literal, annots: tuple) -> Literal:
 
 # ---------------------------------------------------------------------- body formulas
 def _exec_achieve(ag: Agent, intention: Intention, im: IntendedMeans, frame: Frame, instr) -> None:
-    lit = ag._fresh_goal(instr.term, im.b)
-    ag.post_internal(Trigger(ADD, ACHIEVE, lit), intention)
+    trigger = Trigger(ADD, ACHIEVE, ag._fresh_goal(instr.term, im.b))
+    if ag.event_waiters:  # post_internal, inlined: this is the step of every subgoal
+        ag._notify_waiters(trigger)
+    ag.events.append(Event(trigger, intention))
+    intention.suspended = "event"
 
 
 def _exec_achieve_new(ag: Agent, intention, im, frame, instr) -> None:
