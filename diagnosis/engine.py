@@ -40,7 +40,7 @@ from diagnosis.dominators import post_dominator_chains, reverse_topological
 from diagnosis.known import KnownDiagnoses
 from diagnosis.hitting_sets import HittingSetSolver, next_diagnosis
 from diagnosis.hs_tree import tree_levels
-from diagnosis.simulation import BatchSimulator
+from diagnosis.simulation import BatchSimulator, Compiled, compile_netlist
 from diagnosis.model import SystemModel
 
 DEFAULT_SOLVER = "glucose4"
@@ -148,6 +148,7 @@ class Diagnoser:
         self._position = {v: i for i, v in enumerate(self._ab)}
         self._gate_order = reverse_topological(model.readers) if model.readers else []
         self._structures: dict[frozenset[str], _Structure] = {}
+        self._compiled: tuple[Compiled, dict[int, int]] | None = None  # netlist as Python, gate positions
         negative_ab = {-v for v in self._ab}
         self.monotone = not any(lit in negative_ab for clause in model.clauses for lit in clause)
         try:  # prefer "healthy" so the solver's first guesses are small fault sets
@@ -328,8 +329,11 @@ class Diagnoser:
             if not made:
                 sim = None
                 if self.model.gates:
-                    sim = BatchSimulator(self.model.gates, self.model.readers, self.model.primary_inputs,
-                                         observations)
+                    if self._compiled is None:
+                        self._compiled = (compile_netlist(self.model.gates, self.model.primary_inputs),
+                                          {self.model.ab_var[g[0]]: i for i, g in enumerate(self.model.gates)})
+                    run, index = self._compiled
+                    sim = BatchSimulator(run, self.model.gates, self.model.primary_inputs, observations, index)
                 made.append(sim if sim is not None and sim.usable else None)
             return made[0]
         return get
@@ -337,11 +341,10 @@ class Diagnoser:
     def _tree_levels(self, base: list[int], limit: int, deadline: Deadline,
                      simulator: "Callable[[], BatchSimulator | None]") -> Iterator[list[str]]:
         """Small bounds on monotone models: the level-wise hitting-set tree (``hs_tree``)."""
-        names = self._component_of
 
         def simulate(nodes: list[list[int]]) -> list[bool] | None:
             sim = simulator()
-            return None if sim is None else sim.consistent([[names[v] for v in n] for n in nodes])
+            return None if sim is None else sim.consistent(nodes)
 
         def tick() -> None:
             if deadline.expired():
@@ -392,7 +395,7 @@ class Diagnoser:
                     a netlist simulates them all at once; the SAT solver checks the rest (and the
                     failures, for their conflicts)."""
                     sim = simulator()
-                    verdicts = (sim.consistent([[self._component_of[v] for v in d] for d in variants])
+                    verdicts = (sim.consistent(variants)
                                 if sim is not None else [None] * len(variants))
                     learned: list[set[int]] = []  # conflicts found while trying the variants
                     for variant, verdict in zip(variants, verdicts):

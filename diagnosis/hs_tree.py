@@ -26,7 +26,7 @@ from diagnosis.known import KnownDiagnoses
 
 Check = Callable[[list[int]], "list[int] | None"]
 Simulate = Callable[[list[list[int]]], "list[bool] | None"]
-_BATCH = 16384  # nodes simulated together
+_BATCH = 4096   # nodes simulated together
 _LEARN = 8      # failures per batch on the last level sent to the SAT solver for their conflicts
 
 
@@ -106,6 +106,15 @@ def tree_levels(limit: int, check: Check, simulate: Simulate, known: KnownDiagno
             labelled by a conflict (learned from the SAT solver when none known tells them apart).
             On the last level a few failures still go to the SAT solver: their conflicts spare
             the simulation of later nodes."""
+            if len(conflicts.sets) > known_conflicts[0]:  # conflicts learned since these were made
+                known_conflicts[0] = len(conflicts.sets)
+                kept = []
+                for node in batch:
+                    if not conflicts.missed(node):
+                        kept.append(node)
+                    elif not last:
+                        following.append(tuple(node))
+                batch = kept
             verdicts = simulate(batch)
             learn = _LEARN
             for i, node in enumerate(batch):
@@ -133,6 +142,7 @@ def tree_levels(limit: int, check: Check, simulate: Simulate, known: KnownDiagno
 
         seen: set[frozenset[int]] = set()
         pending: list[list[int]] = []
+        known_conflicts = [len(conflicts.sets)]  # when the pending nodes were last filtered
         for parent in frontier:
             tick()
             missed = conflicts.missed(parent)
@@ -152,6 +162,7 @@ def tree_levels(limit: int, check: Check, simulate: Simulate, known: KnownDiagno
             if len(pending) >= _BATCH:
                 settle(pending)
                 pending = []
+                known_conflicts[0] = len(conflicts.sets)
         settle(pending)
         frontier = following
         yield d

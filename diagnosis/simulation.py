@@ -3,101 +3,88 @@
 In the weak fault model "exactly the gates in H are faulty" is consistent with fully observed primary
 inputs iff some choice of the faulty gates' output values makes the circuit produce every observed
 output. For |H| = m that is 2^m simulations; one Python integer carries them all as bit lanes, for a
-whole batch of candidates side by side (lane block i*2^m..(i+1)*2^m-1 belongs to candidate i). Only
-the gates downstream of some candidate's members are simulated; the rest keep their fault-free value.
-A batch of a thousand candidates costs about as much as a few SAT checks, but yields no conflicts:
-the engine uses it for candidates it expects to be consistent and asks the SAT solver otherwise.
+whole batch of candidates side by side (candidate i owns lanes i*w .. i*w+w-1, w = max(8, 2^m), and in
+lane a its j-th member outputs bit j of a). The netlist is compiled once into straight-line Python
+(one line per gate: ``g = (inputs) & K[g] | P[g]``, K and P forcing the lanes where g is faulty), so a
+batch of thousands of candidates costs about as much as a few SAT checks. Simulation yields no
+conflicts: the engine uses it for the candidates it expects to be consistent, and SAT otherwise.
+All-ones is -1 (Python integers are infinite two's complement), so ``~`` is the gate negation.
 """
 from __future__ import annotations
 
-from typing import Mapping, Sequence
+from typing import Callable, Hashable, Mapping, Sequence
 
 Gates = Sequence[tuple[str, str, tuple[str, ...]]]   # (output signal, type, input signals), topological
+Compiled = Callable[[list[int], list[int], list[int]], list[int]]
+
+_OPS = {"and": " & ", "nand": " & ", "or": " | ", "nor": " | ", "xor": " ^ ", "xnor": " ^ ",
+        "not": "", "buf": ""}
+
+
+def compile_netlist(gates: Gates, inputs: Sequence[str]) -> Compiled:
+    """run(input lanes, K, P) -> lanes of every gate output (gate order), one Python line per gate."""
+    var = {x: f"x{i}" for i, x in enumerate(inputs)}
+    lines = ["def run(inp, K, P):"]
+    if inputs:
+        lines.append(f"    {', '.join(var[x] for x in inputs)}, = inp")
+    for i, (name, kind, args) in enumerate(gates):
+        expr = _OPS[kind].join(var[a] for a in args) or var[args[0]]
+        if kind in ("nand", "nor", "xnor", "not"):
+            expr = f"~({expr})"
+        var[name] = f"g{i}"
+        lines.append(f"    g{i} = ({expr}) & K[{i}] | P[{i}]")
+    lines.append(f"    return [{', '.join(f'g{i}' for i in range(len(gates)))}]")
+    namespace: dict = {}
+    exec(compile("\n".join(lines), "<netlist>", "exec"), namespace)  # generated from parsed gate types only
+    return namespace["run"]
 
 
 class BatchSimulator:
     """One netlist under one observation set (all primary inputs observed: ``usable`` says so)."""
 
-    def __init__(self, gates: Gates, readers: Mapping[str, Sequence[str]], inputs: Sequence[str],
-                 observations: Mapping[str, bool]) -> None:
-        self._gates = {g[0]: g for g in gates}
-        self._rank = {g[0]: i for i, g in enumerate(gates)}
-        self._readers = readers
+    def __init__(self, run: Compiled, gates: Gates, inputs: Sequence[str], observations: Mapping[str, bool],
+                 index: Mapping[Hashable, int]) -> None:
+        """``index`` maps the caller's name for each gate (e.g. its health variable) to its position."""
+        self._run = run
+        self._count = len(gates)
+        self._index = index
+        position = {g[0]: i for i, g in enumerate(gates)}
         self.usable = all(x in observations for x in inputs)
-        self._observed = {name: bool(v) for name, v in observations.items() if name in self._gates}
-        self._good: dict[str, bool] = {x: bool(observations[x]) for x in inputs} if self.usable else {}
-        if self.usable:
-            for name, kind, args in gates:
-                self._good[name] = _gate(kind, [self._good[a] for a in args], True)
+        self._inputs = [-1 if observations.get(x) else 0 for x in inputs]
+        self._observed = [(position[name], -1 if value else 0) for name, value in observations.items()
+                          if name in position]
 
-    def consistent(self, candidates: Sequence[Sequence[str]]) -> list[bool]:
-        """For each candidate (gate names, all of one size m), is exactly it faulty consistent?"""
+    def consistent(self, candidates: Sequence[Sequence[Hashable]]) -> list[bool]:
+        """For each candidate (gates as keys of ``index``, all of one size m): is exactly it faulty
+        consistent with the observations?"""
         if not candidates:
             return []
         m = len(candidates[0])
-        size = max(1, (1 << m) // 8)    # bytes per candidate: at least 8 lanes, lane a sets member j to bit j of a
+        size = max(1, (1 << m) // 8)    # bytes per candidate
         n = len(candidates)
-        full = (1 << (8 * size * n)) - 1
         patterns = [sum(1 << a for a in range(8 * size) if a >> j & 1).to_bytes(size, "little") for j in range(m)]
         ones = b"\xff" * size
-        masks: dict[str, bytearray] = {}
-        forced: dict[str, bytearray] = {}
+        masks: dict[int, bytearray] = {}
+        forced: dict[int, bytearray] = {}
+        index = self._index
         for i, cand in enumerate(candidates):
             at = i * size
             for j, g in enumerate(cand):
-                if g not in masks:
-                    masks[g], forced[g] = bytearray(size * n), bytearray(size * n)
-                masks[g][at:at + size] = ones
-                forced[g][at:at + size] = patterns[j]
-        keep = {g: ~int.from_bytes(b, "little") for g, b in masks.items()}
-        set_to = {g: int.from_bytes(b, "little") for g, b in forced.items()}
-        values: dict[str, int] = {}
-        good = self._good
-        for name in self._cone(masks):
-            _, kind, args = self._gates[name]
-            v = _gate(kind, [values[a] if a in values else (full if good[a] else 0) for a in args], full)
-            if name in keep:
-                v = (v & keep[name]) | set_to[name]
-            values[name] = v
+                k = index[g]
+                if k not in masks:
+                    masks[k], forced[k] = bytearray(size * n), bytearray(size * n)
+                masks[k][at:at + size] = ones
+                forced[k][at:at + size] = patterns[j]
+        keep = [-1] * self._count
+        set_to = [0] * self._count
+        for k, b in masks.items():
+            keep[k] = ~int.from_bytes(b, "little")
+            set_to[k] = int.from_bytes(forced[k], "little")
+        values = self._run(self._inputs, keep, set_to)
         bad = 0
-        for name, observed in self._observed.items():
-            v = values.get(name)
-            if v is None:
-                if good[name] != observed:
-                    return [False] * n   # a mismatch no candidate reaches
-                continue
-            bad |= v ^ (full if observed else 0)
-        ok = (full & ~bad).to_bytes(size * n, "little")
+        for k, expected in self._observed:
+            bad |= values[k] ^ expected
+        ok = (~bad & ((1 << (8 * size * n)) - 1)).to_bytes(size * n, "little")
         if size == 1:
             return [b != 0 for b in ok]
         return [any(ok[i * size:(i + 1) * size]) for i in range(n)]
-
-    def _cone(self, roots: Mapping[str, int]) -> list[str]:
-        """The gates downstream of the roots (roots included), in topological order."""
-        seen = set(roots)
-        todo = list(roots)
-        while todo:
-            for r in self._readers.get(todo.pop(), ()):
-                if r not in seen:
-                    seen.add(r)
-                    todo.append(r)
-        return sorted(seen, key=self._rank.__getitem__)
-
-
-def _gate(kind: str, ins: list, one):
-    """Gate function on bools (one=True) or on bit lanes (one = all lanes set)."""
-    if kind in ("and", "nand"):
-        v = ins[0]
-        for x in ins[1:]:
-            v &= x
-    elif kind in ("or", "nor"):
-        v = ins[0]
-        for x in ins[1:]:
-            v |= x
-    elif kind in ("xor", "xnor"):
-        v = ins[0]
-        for x in ins[1:]:
-            v ^= x
-    else:  # not, buf
-        v = ins[0]
-    return v ^ one if kind in ("nand", "nor", "xnor", "not") else v
