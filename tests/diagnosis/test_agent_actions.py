@@ -15,9 +15,11 @@ def run(source: str, timeout: float = 30.0) -> list[str]:
 def test_diagnose_returns_every_minimal_diagnosis_and_helper_evidence_narrows_it() -> None:
     lines = run("""
         !go.
-        +!go <- .diagnose(turtlebot_hardware, [commanded_forward, ~encoders_report_motion], D); .print(D);
-                .diagnose(turtlebot_hardware, [commanded_forward, ~encoders_report_motion,
-                          helper_saw_motion, helper_saw_straight], D2); .print(D2).
+        +!go <- .diagnose(turtlebot_hardware, [commanded_forward, ~encoders_report_motion,
+                          ~left_over_current, ~right_over_current], D); .print(D);
+                .diagnose(turtlebot_hardware, [commanded_forward, ~encoders_report_motion, ~left_over_current,
+                          ~right_over_current, helper_found_robot, helper_saw_motion, helper_saw_straight], D2);
+                .print(D2).
     """)
     assert lines == [
         "[[left_motor,right_motor],[left_motor,right_encoder],[right_motor,left_encoder],[left_encoder,right_encoder]]",
@@ -40,7 +42,8 @@ def test_other_intentions_run_while_the_diagnoser_works() -> None:
     lines = run("""
         !diagnose.
         !count(0).
-        +!diagnose <- .diagnose(turtlebot_hardware, [commanded_forward, ~encoders_report_motion], D);
+        +!diagnose <- .diagnose(turtlebot_hardware, [commanded_forward, ~encoders_report_motion,
+                                ~left_over_current, ~right_over_current], D);
                       .length(D, N); .print("diagnoses ", N).
         +!count(N) : N < 3 <- .print("count ", N); !count(N + 1).
         +!count(_).

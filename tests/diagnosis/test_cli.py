@@ -26,7 +26,8 @@ def test_min_card_only_lists_just_the_smallest(data_dir, write, capsys):
 
 def test_yaml_model_text_output(repo, write, capsys):
     obs = write("obs.json", json.dumps({"commanded_forward": True, "encoders_report_motion": True,
-                                         "encoders_report_straight": False, "helper_saw_veer_left": True}))
+                                         "encoders_report_straight": False, "left_over_current": False,
+                                         "helper_found_robot": True, "helper_saw_veer_left": True}))
     assert main(["diagnose", str(repo / "plans" / "turtlebot_hardware.yaml"), "--obs", str(obs)]) == 0
     assert capsys.readouterr().out.strip() == "{left_motor}"
 
