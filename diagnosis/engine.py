@@ -36,6 +36,7 @@ from pysat.examples.rc2 import RC2
 from pysat.formula import WCNF
 from pysat.solvers import Solver
 
+from diagnosis.deadline import Deadline
 from diagnosis.dominators import post_dominator_chains, reverse_topological
 from diagnosis.known import KnownDiagnoses
 from diagnosis.hitting_sets import HittingSetSolver, next_diagnosis
@@ -64,37 +65,6 @@ class DiagnosisResult:
     def to_json(self) -> dict:
         return {"diagnoses": self.diagnoses, "min_cardinality": self.min_cardinality,
                 "complete": self.complete, "seconds": round(self.seconds, 6)}
-
-
-class Deadline:
-    """A wall-clock limit shared by the SAT calls of one query (None = no limit).
-
-    ``watch(solver)`` starts one timer for the whole query that interrupts the solver when time is up
-    (a timer per SAT call would cost more than the call itself on small circuits).
-    """
-
-    def __init__(self, seconds: float | None) -> None:
-        self.end = None if seconds is None else time.monotonic() + seconds
-        self._timer: threading.Timer | None = None
-
-    def left(self) -> float | None:
-        return None if self.end is None else self.end - time.monotonic()
-
-    def expired(self) -> bool:
-        return self.end is not None and time.monotonic() >= self.end
-
-    def watch(self, solver: Solver) -> "Deadline":
-        if self.end is not None and self._timer is None:
-            self._timer = threading.Timer(max(self.end - time.monotonic(), 0.0), solver.interrupt)
-            self._timer.daemon = True
-            self._timer.start()
-        return self
-
-    def release(self, solver: Solver) -> None:
-        if self._timer is not None:
-            self._timer.cancel()
-            self._timer = None
-            solver.clear_interrupt()
 
 
 _EAGER_BOUND = 4  # hitting-set totalizers are built for up to this many faults at once, then raised
@@ -148,7 +118,7 @@ class Diagnoser:
         self._position = {v: i for i, v in enumerate(self._ab)}
         self._gate_order = reverse_topological(model.readers) if model.readers else []
         self._structures: dict[frozenset[str], _Structure] = {}
-        self._compiled: tuple[Compiled, dict[int, int]] | None = None  # netlist as Python, gate positions
+        self._compiled: tuple[Compiled, dict[int, int], dict[str, int]] | None = None  # netlist as Python
         negative_ab = {-v for v in self._ab}
         self.monotone = not any(lit in negative_ab for clause in model.clauses for lit in clause)
         try:  # prefer "healthy" so the solver's first guesses are small fault sets
@@ -229,11 +199,11 @@ class Diagnoser:
         limit = len(self._ab) if max_card is None else min(max_card, len(self._ab))
         with self._query(deadline):
             base = self._base(observations)
-            if not self._solve(base, deadline):
-                return  # nothing explains the observations, not even "everything is faulty"
-            if self.monotone and limit <= _TREE_LIMIT:
+            if self.monotone and limit <= _TREE_LIMIT:  # its first check tells inconsistent observations
                 yield from self._tree_levels(base, limit, deadline, self._simulator(observations))
                 return
+            if not self._solve(base, deadline):
+                return  # nothing explains the observations, not even "everything is faulty"
             if self.monotone:
                 yield from self._conflict_levels(base, limit, deadline, self._structure(observations),
                                                  self._simulator(observations))
@@ -249,7 +219,8 @@ class Diagnoser:
                 self._solver.add_clause([-act])  # retire this query's blocking clauses
 
     def _check(self, base: list[int], deadline: Deadline) -> "Callable[[list[int]], list[int] | None]":
-        """check(H): None if exactly H faulty is consistent, else a conflict from the solver's core."""
+        """check(H): None if exactly H faulty is consistent, else a conflict from the solver's core
+        (empty when the observations contradict the model whatever is faulty)."""
         template = base + self._healthy
         offset, position = len(base), self._position
 
@@ -260,9 +231,7 @@ class Diagnoser:
             if self._solve(assumptions, deadline):
                 return None
             conflict = [-lit for lit in self._solver.get_core() or () if lit < 0 and -lit in position]
-            if not conflict:  # cannot happen once base alone is known consistent
-                raise RuntimeError("inconsistent observations reached the conflict search")
-            return conflict
+            return conflict  # empty: inconsistent whatever is faulty
         return check
 
     def _hitting_sets(self, levels: int) -> HittingSetSolver:
@@ -331,9 +300,10 @@ class Diagnoser:
                 if self.model.gates:
                     if self._compiled is None:
                         self._compiled = (compile_netlist(self.model.gates, self.model.primary_inputs),
-                                          {self.model.ab_var[g[0]]: i for i, g in enumerate(self.model.gates)})
-                    run, index = self._compiled
-                    sim = BatchSimulator(run, self.model.gates, self.model.primary_inputs, observations, index)
+                                          {self.model.ab_var[g[0]]: i for i, g in enumerate(self.model.gates)},
+                                          {g[0]: i for i, g in enumerate(self.model.gates)})
+                    run, index, position = self._compiled
+                    sim = BatchSimulator(run, position, self.model.primary_inputs, observations, index)
                 made.append(sim if sim is not None and sim.usable else None)
             return made[0]
         return get

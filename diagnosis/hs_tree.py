@@ -89,6 +89,8 @@ def tree_levels(limit: int, check: Check, simulate: Simulate, known: KnownDiagno
     generator yields each level's number once that level is complete. ``tick`` raises on timeout."""
     conflicts = Conflicts()
     root = check([])
+    if root == []:
+        return  # the observations contradict the model whatever is faulty: no diagnosis at all
     if root is None:
         known.add([])
         record([])

@@ -42,13 +42,13 @@ def compile_netlist(gates: Gates, inputs: Sequence[str]) -> Compiled:
 class BatchSimulator:
     """One netlist under one observation set (all primary inputs observed: ``usable`` says so)."""
 
-    def __init__(self, run: Compiled, gates: Gates, inputs: Sequence[str], observations: Mapping[str, bool],
-                 index: Mapping[Hashable, int]) -> None:
-        """``index`` maps the caller's name for each gate (e.g. its health variable) to its position."""
+    def __init__(self, run: Compiled, position: Mapping[str, int], inputs: Sequence[str],
+                 observations: Mapping[str, bool], index: Mapping[Hashable, int]) -> None:
+        """``position`` of each gate (by output signal) in the compiled netlist; ``index`` maps the
+        caller's key for each gate (e.g. its health variable) to the same positions."""
         self._run = run
-        self._count = len(gates)
+        self._count = len(position)
         self._index = index
-        position = {g[0]: i for i, g in enumerate(gates)}
         self.usable = all(x in observations for x in inputs)
         self._inputs = [-1 if observations.get(x) else 0 for x in inputs]
         self._observed = [(position[name], -1 if value else 0) for name, value in observations.items()

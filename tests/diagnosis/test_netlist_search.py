@@ -108,8 +108,9 @@ def test_batch_simulation_agrees_with_brute_force_on_every_small_fault_set(insta
     netlist, obs = instance
     model = netlist_model(netlist)
     names = [g.name for g in netlist.gates]
-    sim = BatchSimulator(compile_netlist(model.gates, model.primary_inputs), model.gates, model.primary_inputs,
-                         obs, {g: i for i, g in enumerate(names)})
+    position = {g: i for i, g in enumerate(names)}
+    sim = BatchSimulator(compile_netlist(model.gates, model.primary_inputs), position, model.primary_inputs,
+                         obs, position)
     assert sim.usable
     for m in (1, 2, 3):
         candidates = [list(c) for c in itertools.combinations(names, m)]
