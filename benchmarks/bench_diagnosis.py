@@ -5,7 +5,8 @@ differs from the fault-free circuit); observations are the primary inputs and ou
 minimal diagnoses up to size 3. Baseline: python-sat's ``Hitman`` (sorted, i.e. smallest hitting sets
 first) over conflicts, each conflict the core of a failed consistency check on the *same* CNF and
 solver type; a hitting set that is consistent is a diagnosis and gets blocked. Both run in this
-process, on the same instances, with the same per-instance time limit. Also: minimum-cardinality
+process, on the same instances, with the same per-instance time limit (60 s, the issue's target; 10 s in
+quick mode). Also: minimum-cardinality
 diagnosis for k = 10..30 injected faults on c7552 (ours only: the baseline has no such mode).
 """
 from __future__ import annotations
@@ -87,11 +88,12 @@ def run(quick: bool) -> str:
         mincard_faults, mincard_count = [10, 20, 30], 3
     else:
         circuits = ["c432", "c499", "c880", "c1355", "c1908", "c2670", "c3540", "c5315", "c6288", "c7552"]
-        per_circuit, timeout = 3, 20.0
+        per_circuit, timeout = 3, 60.0   # the issue's target: no timeout at 60 s (c6288 excepted)
         mincard_faults, mincard_count = [10, 15, 20, 25, 30], 10
     rows = [f"all minimal diagnoses up to size {MAX_CARD}; {per_circuit} instances per circuit (k = 1..3 flipped"
             f" gates), limit {timeout:.0f} s each; seconds are medians (timeouts counted at the limit)",
-            f"{'circuit':8} {'gates':>5} {'#diag':>7} {'ours s':>8} {'t/o':>4} {'base s':>8} {'t/o':>4} {'speedup':>8} agree"]
+            f"{'circuit':8} {'gates':>5} {'#diag':>7} {'ours s':>8} {'max':>7} {'t/o':>4} {'base s':>8} {'t/o':>4}"
+            f" {'speedup':>8} agree"]
     for name in circuits:
         netlist = parse_bench(ISCAS / f"{name}.bench")
         model = netlist_model(netlist)
@@ -113,7 +115,8 @@ def run(quick: bool) -> str:
         ours.close()
         speed = statistics.median(t_base) / max(statistics.median(t_ours), 1e-6)
         rows.append(f"{name:8} {len(model.components):5} {int(statistics.median(n_diag)):7} {_median(t_ours):>8}"
-                    f" {to_ours:4} {_median(t_base):>8} {to_base:4} {speed:7.1f}x {'yes' if agree else 'NO'}")
+                    f" {max(t_ours):7.3f} {to_ours:4} {_median(t_base):>8} {to_base:4} {speed:7.1f}x"
+                    f" {'yes' if agree else 'NO'}")
 
     netlist = parse_bench(ISCAS / "c7552.bench")
     ours = Diagnoser(netlist_model(netlist))
