@@ -9,21 +9,28 @@ hence subset-minimal; it is reported and its supersets blocked. Blocking clauses
 activation literal, retired when the query ends, so they never leak into the next query.
 
 Monotone models (no negative health literal in any clause: weak fault models such as netlists and
-architecture models) take the faster route of ``hitting_sets``: the model's solver only checks fixed
-candidates and the bound lives in a small per-query hitting-set solver. Two shortcuts there: members
-that lie in exactly the same conflicts are swapped into each diagnosis found and checked without a
-hitting-set search; and in netlists a gate may be swapped for the gate its output alone feeds
-(fanout-free chain, signal not observed) with no check at all, since that gate's fault explains
-whatever the first one's does. Every set so obtained is minimal when it contains no diagnosis found
-before, by the level argument above. Models with fault modes use the bound on the model's solver
-directly. The minimum cardinality comes from RC2 (core-guided MaxSAT).
+architecture models) never put the bound on the model's solver, which then only checks fixed
+candidates ("exactly H faulty": propagation) and returns a conflict from its core when H fails:
+
+* bounds up to ``_TREE_LIMIT`` (3, the usual case): a level-wise hitting-set tree over bit-set
+  conflicts (``hs_tree``). On netlists whose inputs are all observed, candidates are checked in
+  batches of thousands by bit-parallel simulation of the compiled netlist (``simulation``); the SAT
+  solver is asked only for conflicts to branch on.
+* larger bounds: a per-query hitting-set solver holds conflicts, blocking clauses and the bound
+  (``hitting_sets``). Members lying in exactly the same conflicts are swapped into each diagnosis
+  found (checked in one simulated batch on netlists), and on netlists every member may move up its
+  post-dominator chain with no check at all (``dominators``); one clause blocks all those sets.
+  Each set obtained is minimal when it contains no diagnosis found before, by the level argument.
+
+Models with fault modes use the bound on the model's solver directly. The minimum cardinality comes
+from RC2 (core-guided MaxSAT). Time limits interrupt the solver through one shared watchdog thread
+(``deadline``).
 
 The default solver is Glucose 4: it releases the GIL while solving (other threads of the agent keep
 running) and honours ``interrupt()``, which the time limits rely on; CaDiCaL in python-sat does neither.
 """
 from __future__ import annotations
 
-import itertools
 import math
 import threading
 import time

@@ -4,7 +4,7 @@ from __future__ import annotations
 import random
 
 from diagnosis.bench import parse_bench, simulate, netlist_model
-from diagnosis.engine import Diagnoser
+from diagnosis.engine import Deadline, Diagnoser
 
 
 def instance(netlist, faults: int, seed: int) -> tuple[frozenset[str], dict[str, bool]]:
@@ -17,7 +17,7 @@ def instance(netlist, faults: int, seed: int) -> tuple[frozenset[str], dict[str,
             return flipped, {x: bad[x] for x in (*netlist.inputs, *netlist.outputs)}
 
 
-def test_c432_conflict_route_with_dominance_equals_bounded_route(iscas):
+def test_c432_tree_and_hitting_set_solver_routes_equal_the_bounded_route(iscas):
     netlist = parse_bench(iscas / "c432.bench")
     model = netlist_model(netlist)
     fast, direct = Diagnoser(model), Diagnoser(model)
@@ -27,8 +27,11 @@ def test_c432_conflict_route_with_dominance_equals_bounded_route(iscas):
     assert fast.model.readers        # post-dominators: diagnoses reached by dominance skip the SAT check
     for seed, faults in enumerate([1, 1, 2, 3]):
         flipped, obs = instance(netlist, faults, seed)
-        result = fast.diagnose(obs, max_card=3)
+        result = fast.diagnose(obs, max_card=3)   # the hitting-set tree with batch simulation
         assert result.complete and result.diagnoses == direct.diagnose(obs, max_card=3).diagnoses
+        via_solver = fast._conflict_levels(fast._base(obs), 3, Deadline(None), fast._structure(obs),
+                                           fast._simulator(obs))   # post-dominator spreading, simulated variants
+        assert list(via_solver) == result.diagnoses
         if faults == 1:
             assert sorted(flipped) in result.diagnoses        # a flipped gate alone explains what it did
         for d in result.diagnoses:
