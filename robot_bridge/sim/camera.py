@@ -30,6 +30,7 @@ from collections import OrderedDict, deque
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import lru_cache
+from time import perf_counter
 from typing import Sequence
 
 import numpy as np
@@ -474,16 +475,51 @@ def render_threads() -> int:
     return max(1, min(cores, 4))
 
 
+class _Pace:
+    """Wall time per frame rendered one by one and side by side (moving averages), to use the faster.
+
+    A second thread pays only when a core is free, and other programs may keep the cores busy. So
+    both ways are timed, taking turns for the first ``TRIALS`` calls each (the first call of each,
+    which warms caches up, not counted), then the faster one is used and the other is tried again
+    every ``EXPLORE`` calls, as the load changes.
+    """
+
+    TRIALS = 4
+    EXPLORE = 16
+
+    def __init__(self) -> None:
+        self.seconds: dict[bool, float | None] = {False: None, True: None}
+        self.runs = {False: 0, True: 0}
+        self.calls = 0
+
+    def side_by_side(self) -> bool:
+        self.calls += 1
+        if min(self.runs.values()) < self.TRIALS:
+            return self.runs[True] < self.runs[False]
+        faster = self.seconds[True] < self.seconds[False]
+        return not faster if self.calls % self.EXPLORE == 0 else faster
+
+    def record(self, side_by_side: bool, seconds_per_frame: float) -> None:
+        self.runs[side_by_side] += 1
+        if self.runs[side_by_side] > 1:
+            old = self.seconds[side_by_side]
+            self.seconds[side_by_side] = seconds_per_frame if old is None else 0.7 * old + 0.3 * seconds_per_frame
+
+
+_pace = _Pace()
+
+
 def render_all(frames: Sequence[CameraFrame]) -> None:
-    """Render the pixels of the deferred ``frames`` not rendered yet, side by side on the cores.
+    """Render the pixels of the deferred ``frames`` not rendered yet, side by side on the cores when
+    that is faster (see ``_Pace``).
 
     Frames due at the same step (one per camera) are independent, and most of a frame's time is in
-    OpenCV calls and whole-image numpy loops, which release the GIL: a second thread nearly halves the
-    wall time on two cores. The calling thread renders too; pixels do not depend on which thread
-    renders them (noise comes from the frame's seed).
+    OpenCV calls and whole-image numpy loops, which release the GIL. The calling thread renders too;
+    pixels do not depend on which thread renders them (noise comes from the frame's seed).
     """
     todo = deque(f for f in frames if isinstance(f, DeferredFrame) and not f.rendered)
-    helpers = min(len(todo) - 1, render_threads() - 1)
+    count = len(todo)
+    helpers = min(count - 1, render_threads() - 1)
 
     def work() -> None:
         while True:
@@ -496,13 +532,19 @@ def render_all(frames: Sequence[CameraFrame]) -> None:
     if helpers <= 0:
         work()
         return
-    with _pool_lock:
-        if not _pool:
-            _pool.append(ThreadPoolExecutor(render_threads() - 1, thread_name_prefix="sim-camera"))
-    futures = [_pool[0].submit(work) for _ in range(helpers)]
-    work()
-    for future in futures:
-        future.result()
+    side_by_side = _pace.side_by_side()
+    started = perf_counter()
+    if side_by_side:
+        with _pool_lock:
+            if not _pool:
+                _pool.append(ThreadPoolExecutor(render_threads() - 1, thread_name_prefix="sim-camera"))
+        futures = [_pool[0].submit(work) for _ in range(helpers)]
+        work()
+        for future in futures:
+            future.result()
+    else:
+        work()
+    _pace.record(side_by_side, (perf_counter() - started) / count)
 
 
 def deferred_frame(robot: str, time: float, pose: Pose, rig: CameraRig, robots: Sequence[Pose], scene: Scene,
