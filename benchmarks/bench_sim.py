@@ -98,8 +98,8 @@ def run(quick: bool) -> str:
     lines.append(f"(simulated seconds per wall second, dt = 0.02 s, 10 Hz cameras; 'fr' = 640x480 RGB-D frames "
                  f"rendered / due in the run, 'fr/s' = frames rendered per wall second, 'ms CPU/fr' = process CPU "
                  f"time (physics included) per frame rendered, less sensitive than wall time to other loads on the "
-                 f"machine; reads_pixels: up to {render_threads()} render threads; one OpenCV thread each; 'met' judges "
-                 f"the every-frame column)")
+                 f"machine; reads_pixels: up to {render_threads()} render threads; one OpenCV thread each; "
+                 f"'met' judges the every-frame column)")
     return "\n".join(lines)
 
 
