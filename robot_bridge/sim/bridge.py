@@ -62,7 +62,7 @@ class SimBridge(RobotBridge):
             self.world.add_robot(self.robot, **self._placement)
         if self._placement["camera"]:
             self._detect = _load_detector()
-            self._unsubscribe = self.world.subscribe_camera(self.robot, self._on_frame)
+            self._unsubscribe = self.world.subscribe_camera(self.robot, self._on_frame, reads_pixels=True)
         if self.drive:
             self._runner = shared_runner(self.world, self.speed)
             self._runner.acquire()
