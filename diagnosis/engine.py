@@ -125,7 +125,11 @@ class Diagnoser:
         self._position = {v: i for i, v in enumerate(self._ab)}
         self._gate_order = reverse_topological(model.readers) if model.readers else []
         self._structures: dict[frozenset[str], _Structure] = {}
-        self._compiled: tuple[Compiled, dict[int, int], dict[str, int]] | None = None  # netlist as Python
+        self._compiled: tuple[Compiled, dict[int, int], dict[str, int]] | None = None
+        if model.gates:  # a netlist: compiled for batch simulation once, like the solver is loaded once
+            self._compiled = (compile_netlist(model.gates, model.primary_inputs),
+                              {model.ab_var[g[0]]: i for i, g in enumerate(model.gates)},
+                              {g[0]: i for i, g in enumerate(model.gates)})
         negative_ab = {-v for v in self._ab}
         self.monotone = not any(lit in negative_ab for clause in model.clauses for lit in clause)
         try:  # prefer "healthy" so the solver's first guesses are small fault sets
@@ -304,11 +308,7 @@ class Diagnoser:
         def get() -> BatchSimulator | None:
             if not made:
                 sim = None
-                if self.model.gates:
-                    if self._compiled is None:
-                        self._compiled = (compile_netlist(self.model.gates, self.model.primary_inputs),
-                                          {self.model.ab_var[g[0]]: i for i, g in enumerate(self.model.gates)},
-                                          {g[0]: i for i, g in enumerate(self.model.gates)})
+                if self._compiled is not None:
                     run, index, position = self._compiled
                     sim = BatchSimulator(run, position, self.model.primary_inputs, observations, index)
                 made.append(sim if sim is not None and sim.usable else None)
