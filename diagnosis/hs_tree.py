@@ -20,6 +20,7 @@ to ``engine._TREE_LIMIT``); larger bounds take the hitting-set solver route.
 """
 from __future__ import annotations
 
+import bisect
 from typing import Callable, Iterator, Sequence
 
 from diagnosis.known import KnownDiagnoses
@@ -37,7 +38,7 @@ class Conflicts:
         self.sets: list[list[int]] = []
         self.hits: dict[int, int] = {}
         self.all = 0
-        self._order: list[tuple[int, list[int]]] | None = None   # (bit, members), smallest first
+        self._order: list[tuple[int, int, list[int]]] = []   # (size, bit, members), smallest first
         self._groups: dict[int, list[tuple[int, list[int]]]] = {}
 
     def add(self, conflict: Sequence[int]) -> None:
@@ -46,7 +47,7 @@ class Conflicts:
         for v in conflict:
             self.hits[v] = self.hits.get(v, 0) | bit
         self.all |= bit
-        self._order = None
+        bisect.insort(self._order, (len(conflict), bit, self.sets[-1]), key=lambda e: e[0])
         self._groups.clear()
 
     def missed(self, node: Sequence[int]) -> int:
@@ -59,9 +60,7 @@ class Conflicts:
 
     def label(self, missed: int) -> list[int]:
         """The smallest conflict among the missed ones."""
-        if self._order is None:
-            self._order = sorted(((1 << i, s) for i, s in enumerate(self.sets)), key=lambda e: len(e[1]))
-        for bit, members in self._order:
+        for _size, bit, members in self._order:
             if missed & bit:
                 return members
         raise ValueError("no conflict is missed")
