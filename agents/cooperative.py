@@ -17,7 +17,7 @@ import math
 import random
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from importlib import resources
 from typing import Callable, TextIO
 
@@ -275,6 +275,23 @@ def _run_in_process(scenario, world, bridges, timeout, out, echo) -> ProgressLog
 
 
 def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=None) -> ProgressLog:
+    from robot_bridge.sim.server import SimServer
+
+    def serve(hub) -> Callable[[], None]:
+        return SimServer(hub.session, scenario.mas, bridges).start().stop
+    return run_agent_processes(scenario, ["--bridge", "zenoh"], timeout, world=world, out=out, err=err,
+                               echo=echo, on_mark=on_mark, serve=serve)
+
+
+def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: float, *, world=None,
+                        clock: Callable[[], float] | None = None, out: TextIO | None = None,
+                        err: TextIO | None = None, echo: Callable[[Mark], None] | None = None,
+                        on_mark: Callable[[Mark, Callable[[str], None]], bool | None] | None = None,
+                        serve: Callable[[object], Callable[[], None]] | None = None) -> ProgressLog:
+    """One ``faultmas agent run ... EXTRA_ARGS`` process per robot of ``scenario`` over a Zenoh hub on
+    loopback; ``serve(hub)`` starts what the robots need on the hub (returns its stop). The progress
+    reports the agents publish are recorded until every robot is done, ``on_mark`` says stop, or ``timeout``."""
+    import os
     import sys
     import tempfile
     from pathlib import Path
@@ -283,9 +300,6 @@ def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=No
     from agents.progress import ProgressReport
     from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
     from agentspeak.mas2j import load_mas2j
-    from robot_bridge.sim.server import SimServer
-
-    import os
 
     out = out if out is not None else open(os.devnull, "w")     # None: the agents' lines are not shown
     err = err or sys.stderr
@@ -294,10 +308,10 @@ def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=No
         beliefs = ", ".join(_beliefs(scenario))
         lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{beliefs}"];' for r in scenario.robots]
         project_file.write_text(f"MAS {scenario.mas} {{\n  agents:\n" + "\n".join(lines) + "\n}\n")
-        project = load_mas2j(str(project_file))
         hub = ZenohTransport(scenario.mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
-        server = SimServer(hub.session, scenario.mas, bridges).start()
-        launcher = Launcher(project, hub, out, err, extra_args=["--bridge", "zenoh"])
+        stop_serving = serve(hub) if serve is not None else None
+        launcher = Launcher(load_mas2j(str(project_file)), hub, out, err, extra_args=extra_args)
+
         def kill(name: str) -> None:
             child = launcher.children.get(name)
             if child is not None and child.poll() is None:
@@ -308,7 +322,7 @@ def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=No
                 echo(mark)
             if on_mark is not None and on_mark(mark, kill):
                 launcher.stop_requested.set()
-        log = ProgressLog(scenario, world, launcher.stop_requested.set, observe)
+        log = ProgressLog(scenario, world, launcher.stop_requested.set, observe, clock)
 
         def on_control(message: dict) -> None:
             report = ProgressReport.from_message(message)
@@ -320,6 +334,7 @@ def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=No
             launcher.wait(timeout, stop_when_idle=False)
         finally:
             launcher.stop_all()
-            server.stop()
+            if stop_serving is not None:
+                stop_serving()
             hub.close()
     return log

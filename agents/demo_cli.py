@@ -115,7 +115,7 @@ def _summary(result) -> str:
     for r in result.robots:
         verdict = "correct" if r.correct else f"WRONG (expected {r.expected})"
         lines.append(f"{r.name}: injected {r.fault}, diagnosis {r.diagnosis or 'none reached'}: {verdict}")
-    lines += ["", f"| robot | step | simulated s | wall s |", "|---|---|---|---|"]
+    lines += ["", "| robot | step | simulated s | wall s |", "|---|---|---|---|"]
     for r in result.robots:
         for step in STEP_NAMES:
             lines.append(f"| {r.name} | {step} | {_fmt(r.steps_sim[step])} | {_fmt(r.steps_wall[step])} |")

@@ -12,12 +12,9 @@ from __future__ import annotations
 
 import os
 import random
-import sys
-import tempfile
-from pathlib import Path
 from typing import Callable, TextIO
 
-from agents.cooperative import Mark, ProgressLog, RunResult, Scenario, _beliefs, plans_dir
+from agents.cooperative import Mark, RunResult, Scenario, run_agent_processes
 
 
 def free_domain_id() -> int:
@@ -27,53 +24,26 @@ def free_domain_id() -> int:
 
 def run_on_ros2(scenario: Scenario, timeout: float = 180.0, out: TextIO | None = None,
                 echo: Callable[[Mark], None] | None = None, domain_id: int | None = None) -> RunResult:
-    from agents.distributed import Launcher
-    from agents.progress import ProgressReport
-    from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
-    from agentspeak.mas2j import load_mas2j
     from robot_bridge.ros2.launch import Supervisor, plan
     from robot_bridge.ros2.runtime import loopback_env
 
     names = [r.name for r in scenario.robots]
     if names != ["faulty", "helper"]:
         raise ValueError("--bridge ros2 runs the paper's two robots (faulty and helper) only")
-    fault = scenario.robots[0].fault
     domain = domain_id if domain_id is not None else free_domain_id()
     os.environ.update(loopback_env())                  # the agent processes inherit it
-    supervisor = Supervisor(plan(names, fault), domain)
+    supervisor = Supervisor(plan(names, scenario.robots[0].fault), domain)
     supervisor.start()
-    out = out if out is not None else open(os.devnull, "w")
-    log = None
     try:
         missing = supervisor.wait_ready(90.0)
         if missing or supervisor.dead():
             raise RuntimeError(f"ROS 2 nodes did not come up: missing {sorted(missing)}, "
                                f"dead {[(s.node, c) for s, c in supervisor.dead()]}")
-        with tempfile.TemporaryDirectory(prefix="faultmas-ros-") as tmp:
-            project_file = Path(tmp) / f"{scenario.mas}.mas2j"
-            beliefs = ", ".join(_beliefs(scenario))
-            lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{beliefs}"];' for r in scenario.robots]
-            project_file.write_text(f"MAS {scenario.mas} {{\n  agents:\n" + "\n".join(lines) + "\n}\n")
-            hub = ZenohTransport(scenario.mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
-            launcher = Launcher(load_mas2j(str(project_file)), hub, out, sys.stderr,
-                                extra_args=["--bridge", "ros2", "--bridge-option", f"domain_id={domain}"])
-            log = ProgressLog(scenario, None, launcher.stop_requested.set, echo, clock=log_clock())
-
-            def on_control(message: dict) -> None:
-                report = ProgressReport.from_message(message)
-                if report is not None:
-                    log.record(report)
-            hub.on_control(on_control)
-            try:
-                launcher.start()
-                launcher.wait(timeout, stop_when_idle=False)
-            finally:
-                launcher.stop_all()
-                hub.close()
+        log = run_agent_processes(scenario, ["--bridge", "ros2", "--bridge-option", f"domain_id={domain}"],
+                                  timeout, clock=log_clock(), out=out, echo=echo)
     finally:
         supervisor.stop()
-    return RunResult(scenario, log.results() if log else [], log.marks if log else [],
-                     bool(log and log.done.is_set()), None)
+    return RunResult(scenario, log.results(), log.marks, log.done.is_set(), None)
 
 
 def log_clock() -> Callable[[], float]:
