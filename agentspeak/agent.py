@@ -592,7 +592,10 @@ class Agent:
                 self._requeue(intention)
                 self.clr_int(intention)
             else:
-                self._requeue(intention)
+                # Not back in the run queue: _fail either suspends the intention on its -!g event
+                # or drops it. Requeued, it would run the failed formula again before the event.
+                intention.suspended = None
+                self.suspended.pop(intention.id, None)
                 self._fail(intention, error, message or f"{instr} failed", instr, extra=extra)
 
         susp.finish = finish  # type: ignore[attr-defined]

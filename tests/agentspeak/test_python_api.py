@@ -89,3 +89,36 @@ def test_suspends_only_its_intention_until_the_future_resolves():
     t.join()
     assert lines[0] == "b1"  # the suspended intention did not block the other one
     assert sorted(lines) == sorted(["b1", "b2", "b3", "resolving", "got7"])
+
+
+calls: list[str] = []
+
+
+@lib.internal_action("mylib.fail_after_events", args=0)
+def fail_after_events(ctx):
+    """Queues three percept-like events, then fails through a future that is already resolved,
+    so the failure reaches the intention while other events wait ahead of its -!g event."""
+    from agentspeak.program import ADD, BEL, Trigger
+    from agentspeak.terms import Literal
+    calls.append("called")
+    for i in range(3):
+        ctx.agent.post_external(Trigger(ADD, BEL, Literal("seen", (i,))))
+    fut: Future = Future()
+    fut.set_exception(RuntimeError("motor stalled"))
+    return Suspend(future=fut)
+
+
+def test_a_failed_suspended_action_is_not_run_again_while_its_failure_event_waits():
+    # Regression: the failure of a suspended formula put its intention back in the run queue while
+    # the -!g event was still queued, so the same formula ran a second time and its late failure
+    # then hit whatever the intention was doing by then.
+    calls.clear()
+    src = """!g.
++seen(I) <- .print(seen, I).
++!g <- mylib.fail_after_events; .print(never).
+-!g[error_msg(M)] <- .print(recovered); .wait(50); .print(done).
+"""
+    lines = run(src)
+    assert calls == ["called"]
+    assert lines.count("recovered") == 1 and lines[-1] == "done"
+    assert "never" not in lines
