@@ -19,7 +19,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     mas_sub = mas.add_subparsers(dest="mas_command", metavar="ACTION")
     run = mas_sub.add_parser("run", help="run every agent of PROJECT.mas2j")
     run.add_argument("project")
-    run.add_argument("--timeout", type=float, default=None, help="stop after S seconds (always wins)")
+    run.add_argument("--timeout", type=float, default=None, help="stop after S seconds (always wins; exit code 124)")
     run.add_argument("--processes", action="store_true", help="one OS process per agent, over Zenoh")
     run.add_argument("--listen", action="append", default=None, metavar="ENDPOINT",
                      help="in one process: also be reachable over Zenoh here (agents elsewhere may join)")
@@ -95,8 +95,10 @@ def cmd_mas_run(args) -> int:
         return 2
     if args.listen or args.connect:
         return _run_networked(runtime, project, args)
-    runtime.run(timeout=args.timeout)
-    return 0
+    why = runtime.run(timeout=args.timeout)
+    # The same exit codes as --processes (agents.distributed.EXIT_CODES): a run cut by --timeout
+    # did not finish, and scripts must be able to tell.
+    return 124 if why == "timeout" else 0
 
 
 def _run_networked(runtime, project, args) -> int:

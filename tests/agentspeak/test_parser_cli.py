@@ -81,3 +81,10 @@ def test_mas_run_instances_and_beliefs_option(files):
     r = _run("mas", "run", files / "t.mas2j", "--timeout", "10")
     assert r.returncode == 0
     assert sorted(r.stdout.splitlines()) == ["[b1] b1", "[b2] b2", "[b3] b3", "[c] v7"]
+
+
+def test_mas_run_cut_by_its_timeout_exits_124_as_with_processes(tmp_path):
+    (tmp_path / "w.asl").write_text("!w.\n+!w <- .print(waiting); .wait(60000).\n")
+    (tmp_path / "w.mas2j").write_text("MAS w { agents: w w.asl; }\n")
+    r = _run("mas", "run", tmp_path / "w.mas2j", "--timeout", "1")
+    assert (r.returncode, r.stdout.splitlines()) == (124, ["[w] waiting"])
