@@ -297,9 +297,9 @@ class Agent:
                     fn = entry[1] if entry is not None and entry[0] is context else compiled(context)
                     if not fn(self, b, [], _true_k):
                         continue
-                except SolveError as exc:
+                except (SolveError, ArithmeticError_) as exc:
                     log.warning("[%s] error in the context of the plan at %s:%s: %s", self.name,
-                                plan.source_file, plan.line, exc.message)
+                                plan.source_file, plan.line, getattr(exc, "message", exc))
                     continue
             self.push_im(ev, plan, b)
             return True

@@ -598,9 +598,24 @@ def _to_syntax_error(exc: Exception, full_text: str, text: str, source_file: str
     found = f"'{tok}'"
     if "DOT" in expected and tok.column == 1 or ("DOT" in expected and tok.type in ("PLUS", "MINUS", "AT", "BANG")):
         message = f"unexpected {found}: missing '.' at the end of the previous clause?"
+    elif _unterminated_before(lines, line):
+        # `... .print(a)` then `+!h <- ...` on the next line reads as `.print(a) + ...` up to the `!`
+        return AslSyntaxError("missing '.' at the end of the previous clause?", source_file, line, 1, src)
     else:
         message = f"unexpected {found}; expected {_expected_text(expected)}"
     return AslSyntaxError(message, source_file, line, column, src)
+
+
+def _unterminated_before(lines: list[str], line: int) -> bool:
+    """The error's line starts a clause at column 1 (``+``, ``-``, ``@``, ``^``) and the previous
+    non-blank line does not end one: the ``.`` is missing there, whatever token the parser stopped at."""
+    if not (0 < line <= len(lines)) or not lines[line - 1][:1] in ("+", "-", "@", "^"):
+        return False
+    for prev in reversed(lines[:line - 1]):
+        text = prev.split("//")[0].rstrip()
+        if text:
+            return not text.endswith((".", ";", "{", "(", "[", ",", "&", "|", "<-", ":", ":-"))
+    return False
 
 
 def _expected_text(expected) -> str:

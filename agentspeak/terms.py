@@ -404,7 +404,10 @@ def resolve(t: Term, b: Bindings) -> Term:
                 if op == "*":
                     return normalise_number(left * right)
         value = try_eval_arith(t.op, left, right)
-        return value if value is not None else Arith(t.op, left, right)
+        if value is not None:
+            return value
+        check_operands(t.op, left, right)
+        return Arith(t.op, left, right)
     if tt is Rel:
         return Rel(t.op, resolve(t.left, b), resolve(t.right, b))
     if tt is And:
@@ -595,6 +598,16 @@ def eval_arith(op: str, left: Term, right: Term) -> float | int:
     else:
         raise ArithmeticError_(f"unknown arithmetic operator {op!r}")
     return normalise_number(r)
+
+
+def check_operands(op: str, left: Term, right: Term) -> None:
+    """Raise if an operand can never become a number (an atom, a string, a list), so ``X = a + 1``
+    fails the formula instead of leaving an expression nobody can evaluate. Operands that may still
+    become numbers (unbound variables, expressions over them) keep the expression symbolic."""
+    for x in (left, right):
+        if isinstance(x, (Literal, str, Cons, _Nil)):
+            expr = to_str(Arith(op, left, right))
+            raise ArithmeticError_(f"arithmetic on a non-number: {to_str(x)} in {expr}")
 
 
 def try_eval_arith(op: str, left: Term, right: Term) -> float | int | None:

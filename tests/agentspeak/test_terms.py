@@ -77,7 +77,20 @@ def test_relational_and_standard_order():
     assert body("if (1 < a & a < b & \"s\" < a & b < f(x) & a < b(1)) { .print(ordered) }") == ["ordered"]
 
 
-@pytest.mark.xfail(reason="a bound non-number operand stays a symbolic expression instead of failing", strict=True)
 def test_arithmetic_on_non_number_fails_the_plan():
     src = "!t.\n+!t <- Y = a; X = Y + 1; .print(X).\n-!t <- .print(failed).\n"
     assert run_asl(src) == ["failed"]
+
+
+def test_atom_operand_parses_and_fails_with_a_clear_message():
+    src = ("!t.\n+!t <- X = a + 1; .print(X).\n"
+           "-!t[error(E), error_msg(M)] <- .print(E, \" \", M).\n")
+    assert run_asl(src) == ["wrong_arguments arithmetic on a non-number: a in (a+1)"]
+
+
+def test_plus_and_minus_after_an_atom_are_operators():
+    assert body("X = 1; .print(b(X - 1), [X + 1]); if (X - 1 < 1) { .print(small) }") == ["b(0)[2]", "small"]
+
+
+def test_unbound_operand_keeps_the_expression():
+    assert body("X = Y + 1; .print(X)") == ["(Y+1)"]
