@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Callable
 
-from agentspeak.terms import NIL, And, Arith, Cons, Literal, Not, Or, Rel, Term, Var, rename, variables
+from agentspeak.terms import NIL, And, Arith, Cons, Func, Literal, Not, Or, Rel, Term, Var, rename, variables
 
 Copier = Callable[[], tuple]
 
@@ -71,6 +71,9 @@ class _Builder:
             return f"O({self.expr(t.left)},{self.expr(t.right)})"
         if tt is Not:
             return f"N({self.expr(t.arg)})"
+        if tt is Func:
+            args = "(" + "".join(self.expr(a) + "," for a in t.args) + ")"
+            return f"F({self.const(t.name)},{args},{self.const(t.spec)})"
         raise _Unknown
 
 
@@ -89,7 +92,7 @@ def compile_copier(terms: tuple) -> Copier:
             return tuple(rename(t, mapping) for t in terms)
         return generic
     names = {f"c{i}": c for i, c in enumerate(builder.consts)}
-    names.update(V=Var, L=_new_literal, C=Cons, A=Arith, R=Rel, An=And, O=Or, N=Not)
+    names.update(V=Var, L=_new_literal, C=Cons, A=Arith, R=Rel, An=And, O=Or, N=Not, F=Func)
     names.update({f"n{i}": v.name for i, v in enumerate(vs)})
     fresh = "".join(f"    v{i} = V(n{i})\n" for i in range(len(vs)))
     source = f"def copy():\n{fresh}    return ({''.join(e + ',' for e in exprs)})\n"

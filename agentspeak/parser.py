@@ -21,8 +21,9 @@ from agentspeak.program import (
     AddPlan, Constraint, DelBel, DelBelNew, ExecVar, Fork, If, InternalAction, Plan, PlanTerm,
     Program, RemovePlan, Rule, Test, Trigger, TriggerInstr, UpdBel, While, For,
 )
+from agentspeak.stdlib.functions import FUNCTIONS, check_function_name, rule_function
 from agentspeak.terms import (
-    And, Arith, Literal, Not, Or, Rel, Term, Var, is_ground, make_list, resolve,
+    And, Arith, Func, Literal, Not, Or, Rel, Term, Var, is_ground, make_list, resolve,
 )
 
 _GRAMMAR = Path(__file__).with_name("agentspeak.lark")
@@ -65,6 +66,7 @@ class _ToProgram(Transformer):
         self.line = 0
         self.warnings: list[str] = []
         self.prefix_nots: set[int] = set()
+        self.user_functions: dict = {}   # name -> FunctionSpec, from register_function directives
 
     # -- helpers -----------------------------------------------------------------------------
     def _var(self, name: str) -> Var:
@@ -98,7 +100,27 @@ class _ToProgram(Transformer):
 
     def directive(self, c):
         self._end_clause()
-        return ("directive", c[0], self.line)
+        lit = c[0]
+        if type(lit) is Literal and lit.functor == "register_function":
+            # registered now: the clauses after it are parsed with the function known (as in Jason)
+            return ("register_function", self._register_function(lit), self.line)
+        return ("directive", lit, self.line)
+
+    def _register_function(self, lit: Literal) -> str | None:
+        """``{ register_function("ns.f", Arity, "rule") }``; returns a warning, or None."""
+        args = lit.args
+        if len(args) == 1:
+            return (f"register_function({args[0]}) names a Java class; write the function in "
+                    f"Python with @arith_function instead (ignored)")
+        if (len(args) != 3 or type(args[0]) is not str or type(args[1]) is not int
+                or type(args[2]) is not str):
+            return f"expected register_function(\"ns.name\", Arity, \"rule\"), got {lit} (ignored)"
+        name, arity, predicate = args
+        problem = check_function_name(name) if name not in self.user_functions else None
+        if problem is not None:
+            return problem
+        self.user_functions[name] = rule_function(name, arity, predicate)
+        return None
 
     def directive_begin(self, c):
         self._end_clause()
@@ -114,7 +136,7 @@ class _ToProgram(Transformer):
         return ("plan", plan, plan.line)
 
     def label_named(self, c):
-        return c[0]
+        return _not_function(c[0])
 
     def label_anon(self, c):
         annots = c[0]
@@ -124,7 +146,7 @@ class _ToProgram(Transformer):
     def _trig(op, kind):  # noqa: N805 - a factory used in the class body
         def build(self, c):
             self.trigger_line = self.line
-            return Trigger(op, kind, c[0])
+            return Trigger(op, kind, _not_function(c[0]))
         return build
 
     trig_add_bel = _trig(ADD, BEL)
@@ -187,6 +209,8 @@ class _ToProgram(Transformer):
 
     def formula(self, c):
         t = c[0]
+        if type(t) is Func:  # `math.max(1,2)` alone is not a formula: an internal action (that fails)
+            t = _not_function(t)
         if isinstance(t, Literal):
             if t.functor == "true" and not t.args and not t.neg:
                 return None
@@ -309,7 +333,7 @@ class _ToProgram(Transformer):
         return c[0]
 
     def neg_literal(self, c):
-        lit = c[0]
+        lit = _not_function(c[0])
         return Literal(lit.functor, lit.args, lit.annots, True, lit.annot_tail)
 
     def var_literal(self, c):
@@ -325,6 +349,12 @@ class _ToProgram(Transformer):
         args = tuple(a for a in c[1:-1] if a is not None) if len(c) > 2 else ()
         if annots is not None:
             return Literal(functor, args, annots[0] or None, False, annots[1])
+        if "." in functor:  # a registered function with this arity is a function call (Jason's parser)
+            spec = self.user_functions.get(functor)
+            if spec is None or not spec.accepts(len(args)):
+                spec = FUNCTIONS.get(functor, len(args))
+            if spec is not None:
+                return Func(functor, args, spec)
         return Literal(functor, args)
 
     def functor(self, c):
@@ -358,6 +388,11 @@ class _ToProgram(Transformer):
             if x is not None:
                 items.append(x)
         return items, tail
+
+
+def _not_function(t: Term) -> Term:
+    """A function call where a literal is needed (a trigger, a label, a formula) is that literal."""
+    return Literal(t.name, t.args) if type(t) is Func else t
 
 
 def _is_token(x) -> bool:
@@ -491,6 +526,7 @@ def _parse_items(text: str, source_file: str) -> list:
         t = _TRANSFORMER
         t.source_file, t.vars, t.line, t.trigger_line = source_file, {}, 0, 0
         t.prefix_nots = set()
+        t.user_functions = {}
         try:
             return _INLINE_PARSER.parse(text)
         except _BadInput as exc:
@@ -517,6 +553,9 @@ def _collect(items, program: Program, offset_line: int) -> None:
             program.plans.append(value)
         elif kind == "directive":
             program_directive(program, value, line + offset_line)
+        elif kind == "register_function":
+            if value is not None:
+                program.warnings.append(f"{program.source_file}:{line + offset_line}: {value}")
         elif kind in ("begin", "end"):
             program.warnings.append(
                 f"{program.source_file}:{line + offset_line}: directive '{{ {kind} ... }}' is not supported; its content is loaded as usual")

@@ -16,6 +16,7 @@ from agentspeak.agent import Agent
 from agentspeak.arch import AgentArch
 from agentspeak.communication import Message
 from agentspeak.parser import parse_program
+from agentspeak.stdlib.registry import CURRENT
 from agentspeak.terms import Literal
 
 log = logging.getLogger("faultmas.agentspeak")
@@ -167,6 +168,7 @@ class LocalRuntime:
                     agent = ready.popleft()
                     self._ready_set.discard(agent.name)
                 cycle = agent.cycle
+                CURRENT.agent = agent  # whose beliefs functions such as .count(Q) read
                 for _ in range(CYCLES_PER_TURN):
                     cycle()
                     if not (agent.events or agent.running or agent.mailbox or agent.feedback) \

@@ -15,7 +15,7 @@ import operator
 from typing import TYPE_CHECKING, Iterator, Protocol
 
 from agentspeak.terms import (
-    And, Arith, ArithmeticError_, Cons, Literal, Not, Or, Rel, Term, Var, compare, deref,
+    And, Arith, ArithmeticError_, Cons, Func, Literal, Not, Or, Rel, Term, Var, compare, deref,
     is_list, list_items, make_list, resolve, to_str,
 )
 from agentspeak.copier import rule_copier
@@ -242,6 +242,8 @@ def _rel(kb: KnowledgeBase, rel: Rel, b: dict, trail: list) -> bool:
             return left <= right
         return left >= right
     if op == "=":
+        if type(right) is Func or type(left) is Func:
+            raise ArithmeticError_(f"{to_str(rel, b)}: a function argument is unbound")
         return unify(left, right, b, trail)
     if op == "==":
         return compare_equal(left, right)
@@ -249,7 +251,7 @@ def _rel(kb: KnowledgeBase, rel: Rel, b: dict, trail: list) -> bool:
         return not compare_equal(left, right)
     if op == "=..":
         return _univ(left, right, b, trail)
-    if type(left) is Arith or type(right) is Arith or type(left) is Var or type(right) is Var:
+    if type(left) in _UNEVALUATED or type(right) in _UNEVALUATED:
         raise ArithmeticError_(f"cannot compare {to_str(left)} {op} {to_str(right)}: unbound variable")
     c = compare(left, right)
     if op == "<":
@@ -271,6 +273,7 @@ def compare_equal(a: Term, c: Term) -> bool:
 
 DEFAULT_NS = Literal("default")
 _NUMS = (int, float)
+_UNEVALUATED = (Arith, Func, Var)
 
 
 def _univ(left: Term, right: Term, b: dict, trail: list) -> bool:
@@ -510,6 +513,8 @@ def _compile_unify(f: Rel):
                 y = resolve(y, b)
             except ArithmeticError_ as exc:
                 raise SolveError("wrong_arguments", str(exc)) from None
+            if type(y) is Func or type(x) is Func:
+                raise SolveError("wrong_arguments", f"{to_str(f, b)}: a function argument is unbound")
         if unify(x, y, b, trail) and k():
             return True
         undo(b, trail, mark)

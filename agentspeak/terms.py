@@ -301,7 +301,44 @@ class Not:
         return to_str(self)
 
 
-EXPRESSION_TYPES = (Arith, Rel, And, Or, Not)
+class Func:
+    """An arithmetic function call ``math.max(X, 3)`` (Jason's ArithFunctionTerm).
+
+    The parser makes one when a literal's name and arity are a registered function; ``spec`` is
+    that function (``agentspeak.stdlib.registry.FunctionSpec``: ``evaluate(args)`` and
+    ``unground_ok``). Resolving evaluates it once its arguments are ground, like ``Arith``.
+    """
+
+    __slots__ = ("name", "args", "spec")
+
+    def __init__(self, name: str, args: tuple, spec: Any) -> None:
+        self.name, self.args, self.spec = name, args, spec
+
+    def resolve(self, b: Bindings) -> Term:
+        args = tuple([resolve(a, b) for a in self.args])
+        if self.spec.unground_ok or all(is_ground(a) for a in args):
+            return self.spec.evaluate(args)
+        return Func(self.name, args, self.spec)
+
+    def rename(self, mapping: dict) -> "Func":
+        return Func(self.name, tuple([rename(a, mapping) for a in self.args]), self.spec)
+
+    def subterms(self) -> list:
+        return list(self.args)
+
+    def __eq__(self, other: object) -> bool:
+        return (isinstance(other, Func) and self.name == other.name and self.args == other.args)
+
+    def __hash__(self) -> int:
+        return hash(("func", self.name, self.args))
+
+    def __repr__(self) -> str:
+        return to_str(self)
+
+    __str__ = __repr__
+
+
+EXPRESSION_TYPES = (Arith, Rel, And, Or, Not, Func)
 
 
 # -- binding access -------------------------------------------------------------------------
@@ -727,6 +764,8 @@ def java_double_str(x: float) -> str:
             if r.endswith("."):
                 r += "0"
         return r
+    if ax == 5e-324:  # Double.MIN_VALUE: Java writes two digits where one reads back
+        return "4.9E-324" if x > 0 else "-4.9E-324"
     m, exponent = f"{x:.16e}".split("e")
     for prec in range(1, 18):  # the shortest mantissa that reads back as the same double
         cand = f"{x:.{prec - 1}e}"
@@ -790,6 +829,8 @@ def to_str(t: Term, b: Bindings | None = None) -> str:
         return f"({to_str(t.left)} | {to_str(t.right)})"
     if tt is Not:
         return f"not ({to_str(t.arg)})"
+    if tt is Func:
+        return t.name + ("(" + ",".join(to_str(a) for a in t.args) + ")" if t.args else "")
     return str(t)
 
 

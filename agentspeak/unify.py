@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import Iterator
 
 from agentspeak.terms import (
-    NIL, And, Arith, Bindings, Cons, Literal, Not, Or, Rel, Term, Var, list_items, make_list,
+    NIL, And, Arith, Bindings, Cons, Func, Literal, Not, Or, Rel, Term, Var, list_items, make_list,
 )
 
 
@@ -113,6 +113,18 @@ def _unify_general(a: Term, c: Term, b: Bindings, trail: list) -> bool:
         if tx is str or ty is str:
             if tx is not ty or x != y:
                 return False
+            continue
+        if tx is Func or ty is Func:
+            from agentspeak.terms import resolve  # a function in a pattern: evaluate when ground
+            rx, ry = resolve(x, b), resolve(y, b)
+            if type(rx) is Func or type(ry) is Func:
+                if not (type(rx) is Func and type(ry) is Func and rx.name == ry.name
+                        and len(rx.args) == len(ry.args)):
+                    return False
+                for pair in zip(rx.args, ry.args):
+                    push(pair)
+                continue
+            push((rx, ry))
             continue
         if tx is Arith or ty is Arith:
             from agentspeak.terms import resolve  # arithmetic in a pattern: evaluate when ground

@@ -1,4 +1,5 @@
-"""The one registry of internal actions: ``.name`` -> function, with arity and a manual line.
+"""The registries of internal actions (``.name`` -> function, with arity and a manual line) and of
+arithmetic functions (``math.max`` -> function usable inside expressions, see the end of this module).
 
 An internal action is a plain function ``f(ctx, *args)`` decorated with ``@internal_action``.
 ``args`` are the call's arguments with the intention's bindings applied (variables that are still
@@ -17,11 +18,13 @@ through the ``faultmas.internal_actions`` entry-point group (a module imported o
 """
 from __future__ import annotations
 
+import threading
 from concurrent.futures import Future
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from agentspeak.errors import FaultmasError
+from agentspeak.terms import ArithmeticError_, normalise_number, to_str
 
 
 class IAError(FaultmasError):
@@ -118,3 +121,95 @@ class Registry:
 
 STDLIB = Registry()
 internal_action = STDLIB.internal_action
+
+
+# ---------------------------------------------------------------------- arithmetic functions
+class FunctionError(ArithmeticError_):
+    """A function got arguments it cannot compute with: the formula using it fails."""
+
+
+class _CurrentAgent(threading.local):
+    """The agent whose reasoning cycle runs in this thread (set by the runtime at each turn):
+    functions such as ``.count`` read its belief base; the others never look."""
+
+    agent: Any = None
+
+
+CURRENT = _CurrentAgent()
+
+
+@dataclass(frozen=True)
+class FunctionSpec:
+    """One arithmetic function: ``function(*args)`` (or ``function(agent, *args)`` when
+    ``needs_agent``) returns a number or raises ``FunctionError``. ``arities`` are the argument
+    counts it accepts (None: any); a literal with another count is not this function (Jason's
+    ``checkArity``). ``unground_ok``: evaluated even with unbound variables (``.count(p(_))``)."""
+
+    name: str
+    function: Callable
+    arities: tuple[int, ...] | None
+    unground_ok: bool = False
+    needs_agent: bool = False
+    doc: str = ""
+
+    def accepts(self, arity: int) -> bool:
+        return self.arities is None or arity in self.arities
+
+    def evaluate(self, args: tuple) -> int | float:
+        """The value for resolved ``args``; a failure names the call and why."""
+        try:
+            if self.needs_agent:
+                agent = CURRENT.agent
+                if agent is None:
+                    raise FunctionError("no agent is running in this thread")
+                value = self.function(agent, *args)
+            else:
+                value = self.function(*args)
+        except FunctionError as exc:
+            raise FunctionError(f"{_call_text(self.name, args)}: {exc}") from None
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise FunctionError(f"{_call_text(self.name, args)}: {exc}") from None
+        if type(value) is not int and type(value) is not float:
+            raise FunctionError(f"{_call_text(self.name, args)} gave {to_str(value)}, not a number")
+        return normalise_number(value)
+
+
+def _call_text(name: str, args: tuple) -> str:
+    return name + ("(" + ",".join(to_str(a) for a in args) + ")" if args else "")
+
+
+@dataclass
+class FunctionRegistry:
+    """Arithmetic functions by AgentSpeak name (``math.max``, ``.count``). The parser turns a
+    literal into a function call when its name and arity are registered here (Jason decides at
+    parse time too), so register before parsing."""
+
+    functions: dict[str, FunctionSpec] = field(default_factory=dict)
+
+    def register(self, spec: FunctionSpec) -> None:
+        if "." not in spec.name:
+            raise ValueError(f"a function name has a dot: {spec.name!r}")
+        self.functions[spec.name] = spec
+
+    def get(self, name: str, arity: int) -> FunctionSpec | None:
+        spec = self.functions.get(name)
+        return spec if spec is not None and spec.accepts(arity) else None
+
+    def arith_function(self, name: str, args: int | tuple[int, ...] | None = 1, unground: bool = False,
+                       agent: bool = False):
+        """Decorator: ``@arith_function("math.max", args=(1, 2))``; ``agent=True`` passes the
+        running agent first; ``unground=True`` evaluates with unbound variables in the arguments."""
+        arities = (args,) if isinstance(args, int) else args
+
+        def decorate(function: Callable) -> Callable:
+            doc = (function.__doc__ or "").strip().split("\n")[0]
+            self.register(FunctionSpec(name, function, arities, unground, agent, doc))
+            return function
+        return decorate
+
+    def names(self) -> list[str]:
+        return sorted(self.functions)
+
+
+FUNCTIONS = FunctionRegistry()
+arith_function = FUNCTIONS.arith_function
