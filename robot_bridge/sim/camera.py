@@ -252,6 +252,15 @@ class _Renderer:
         # dropouts ride in the same bank: a hugely negative disparity is an invalid reading
         bank[rng.random((h + extra, w + extra)) < sensor.dropout] = np.float32(-1e9)
         self.disparity_bank = bank.ravel()          # a frame takes h * w values from a random offset
+        # only true disparities within the largest noise of the bank (plus a step) of the range can read
+        # anything; elsewhere the reading is 0 whatever the noise, and is not computed (``_depth_noise``)
+        reach = float(np.abs(bank[bank > -1e8]).max()) + 1.0
+        d_lo = float(self.fb32) / sensor.max_m - reach
+        d_hi = float(self.fb32) / (sensor.min_m - 1e-6) + reach
+        self.z_readable = (float(self.fb32) / d_hi, float(self.fb32) / d_lo if d_lo > 0 else math.inf)
+        floor_d = self.floor_d_image[:, 0]
+        readable = np.flatnonzero((floor_d >= d_lo) & (floor_d <= d_hi))
+        self.floor_readable = (int(readable[0]), int(readable[-1]) + 1) if readable.size else (0, 0)
         colour = rng.normal(0.0, 1.0, (h + extra, w, 3)).astype(np.float32)
         self.colour_bank_unit = colour
         self._colour_cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
@@ -343,9 +352,9 @@ class _Renderer:
         return limits
 
     def static_layers(self, pose: Pose, scene: Scene, canvas: np.ndarray, disparity: np.ndarray
-                      ) -> tuple[list[tuple[int, int, int, float]], int]:
-        """Floor, walls and props seen from ``pose`` into ``canvas`` and ``disparity``; the props'
-        shadows and the row below which the walls leave only floor.
+                      ) -> tuple[list[tuple], int, list[tuple[int, int, int, int]]]:
+        """Floor, walls and props seen from ``pose`` into ``canvas`` and ``disparity``; what
+        ``_static_layers`` returns.
 
         A pose asked for a second time is a camera standing still: its layers are kept (a few dozen
         poses, least recently used dropped) and later frames copy them instead of drawing them.
@@ -366,14 +375,14 @@ class _Renderer:
         if kept is not None:
             np.copyto(canvas, kept[1])
             np.copyto(disparity, kept[2])
-            return list(kept[3]), kept[4]
-        shadows, floor_from = _static_layers(self, pose, scene, canvas, disparity)
+            return list(kept[3]), kept[4], list(kept[5])
+        shadows, floor_from, rects = _static_layers(self, pose, scene, canvas, disparity)
         if again:
             with self._static_lock:
-                self._static[key] = (scene, canvas.copy(), disparity.copy(), tuple(shadows), floor_from)
+                self._static[key] = (scene, canvas.copy(), disparity.copy(), tuple(shadows), floor_from, tuple(rects))
                 if len(self._static) > 32:
                     self._static.popitem(last=False)
-        return shadows, floor_from
+        return shadows, floor_from, rects
 
     def scratch(self) -> tuple[np.ndarray, np.ndarray]:
         """This thread's colour and depth buffers (re-used frame after frame)."""
@@ -567,7 +576,7 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     canvas, depth = r.scratch()
 
     # what does not move: floor, walls and props, kept for a camera that stands still
-    shadows, floor_from = r.static_layers(camera_pose, scene, canvas, depth)
+    shadows, floor_from, rects = r.static_layers(camera_pose, scene, canvas, depth)
     # the robots, with a depth test per pixel
     n_labels = 2 * len(robots)
     labels = np.zeros((h, w), np.int16) if count and n_labels else None
@@ -577,7 +586,7 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
           gain, bands)
 
     # rows from ``floor`` down see only floor (every object drawn left a shadow entry with its rows)
-    floor = max([r.first_floor_row, floor_from] + [v1 for _, _, v1, _ in shadows]) if r.floor_banks else h
+    floor = max([r.first_floor_row, floor_from] + [sh[2] for sh in shadows]) if r.floor_banks else h
     if scene.rgb_noise > 0:
         pos, neg = r.colour_noise(float(scene.rgb_noise))
         off = int(rng.integers(0, r.extra))
@@ -592,7 +601,7 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     else:
         image = canvas.copy()
 
-    noisy = _depth_noise(r, depth, shadows, rng, floor)
+    noisy = _depth_noise(r, depth, shadows, rects, rng, floor)
     pixels: list[MarkerPixels] = []
     if count:
         visible = np.zeros(n_labels + 1, np.int64)
@@ -608,9 +617,10 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
 
 
 def _static_layers(r: _Renderer, pose: Pose, scene: Scene, canvas: np.ndarray, disparity: np.ndarray
-                   ) -> tuple[list[tuple[int, int, int, float]], int]:
+                   ) -> tuple[list[tuple], int, list[tuple[int, int, int, int]]]:
     """Draw what does not move (floor, walls, props) into ``canvas`` and ``disparity``; returns the
-    props' projector shadows and the row below which the walls leave only floor."""
+    props' projector shadows, the row below which the walls leave only floor and the rectangle
+    (rows, columns) of the walls that are near enough for the depth sensor to read."""
     cam, hc, h = r.cam, r.rig.height_m, r.cam.height
     gain = float(scene.gain)
     # background: per column the backdrop above the wall's top, the wall, then the floor below the
@@ -627,10 +637,16 @@ def _static_layers(r: _Renderer, pose: Pose, scene: Scene, canvas: np.ndarray, d
     wall_d = r.fb32 / wall_z.astype(np.float32)                    # disparity, see _Renderer
     _background(r, v_top, v_bottom, (wall_rgb, wall_d),
                 (r.floor_image(scene.floor_rgb, scene.backdrop_rgb, gain), r.floor_d_image), (canvas, disparity))
-    shadows: list[tuple[int, int, int, float]] = []
+    shadows: list[tuple] = []
     _draw(r, _prisms(r, pose, (), scene, False), disparity, canvas, None, np.zeros(1, np.int64), shadows, gain, {})
     wall = v_bottom > v_top
-    return shadows, int(v_bottom[wall].max()) if wall.any() else 0
+    near, far = r.z_readable
+    readable = wall & (wall_z >= near) & (wall_z <= far)
+    rects = []
+    if readable.any():
+        cols = np.flatnonzero(readable)
+        rects.append((int(v_top[readable].min()), int(v_bottom[readable].max()), int(cols[0]), int(cols[-1]) + 1))
+    return shadows, int(v_bottom[wall].max()) if wall.any() else 0, rects
 
 
 def _draw(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, canvas: np.ndarray,
@@ -851,11 +867,13 @@ def _cap_colour(rgb: RGB, factor: float) -> np.ndarray:
 
 
 def _zbuffer_band(r: _Renderer, p: _Prism, disparity: np.ndarray, u0: int, u1: int, t1: np.ndarray,
-                  t2: np.ndarray, zmin: float, zmax: float, full: np.ndarray, bands: dict):
+                  t2: np.ndarray, zmin: float, zmax: float, full: np.ndarray, bands: dict,
+                  d1: np.ndarray | None = None):
     """The rows a prism spans in columns ``u0:u1`` (rays enter at ``t1``, leave at ``t2``), where it is
     hit and where it is nearer than what is drawn; None when it covers nothing. Shared by boxes and
     cylinders; counts the prism's pixels for the visibility bookkeeping. Returns the disparity to write
-    where the mask says."""
+    where the mask says: one row (the same in every row) for a side seen from within its height range.
+    ``d1``: the disparity at ``t1``, if already known."""
     cam, hc = r.cam, r.rig.height_m
     a, b = hc - p.top, hc - p.bottom                     # a <= k*z <= b inside the height range
     ks = (a / zmin, a / zmax, b / zmin, b / zmax)
@@ -866,20 +884,20 @@ def _zbuffer_band(r: _Renderer, p: _Prism, disparity: np.ndarray, u0: int, u1: i
     lo, hi = r.height_limits(p.bottom, p.top)
     lo, hi = lo[v0:v1], hi[v0:v1]
     t1c = t1.astype(np.float32, copy=False)[None, :]
+    region = disparity[v0:v1, u0:u1]                         # disparity: nearer is larger
     if a < 0 < b:           # camera between bottom and top: no cap in sight, the side at the entry depth
         hit = t1c <= hi
-        dhit = np.broadcast_to(r.fb32 / t1c, hit.shape)
+        dhit = r.fb32 / t1c if d1 is None else d1[None, :]   # one row: the same in every row
     else:
         zhit = np.maximum(t1c, lo)
         hit = zhit <= np.minimum(t2.astype(np.float32, copy=False)[None, :], hi)
         dhit = r.fb32 / zhit
+    closer = dhit > region
     if p.label:
         full[p.label] += int(np.count_nonzero(hit))
         bands[p.label] = (v0, v1, u0, u1)
-    region = disparity[v0:v1, u0:u1]                         # disparity: nearer is larger
-    closer = dhit > region
     closer &= hit
-    if not closer.any():
+    if not np.count_nonzero(closer):
         return None
     return v0, v1, region, dhit, closer, lo, t1c
 
@@ -900,8 +918,8 @@ def _draw_prism(r: _Renderer, p: _Prism, disparity: np.ndarray, image: np.ndarra
         first, last = int(np.argmax(hit_cols)), len(hit_cols) - int(np.argmax(hit_cols[::-1]))
         u0, u1, t1, t2, hit_cols = u0 + first, u0 + last, t1[first:last], t2[first:last], hit_cols[first:last]
     hc = r.rig.height_m
-    band = _zbuffer_band(r, p, disparity, u0, u1, t1, t2, float(t1[hit_cols].min()), float(t2[hit_cols].max()),
-                         full, bands)
+    zmin, zmax = float(t1[hit_cols].min()), float(t2[hit_cols].max())
+    band = _zbuffer_band(r, p, disparity, u0, u1, t1, t2, zmin, zmax, full, bands)
     if band is None:
         return
     v0, v1, region, dhit, closer, lo, t1c = band
@@ -921,13 +939,13 @@ def _draw_prism(r: _Renderer, p: _Prism, disparity: np.ndarray, image: np.ndarra
     face_col = _face_palette(p.rgb, gain)[level]
     cap_col = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)   # lit top / dark underside
     mask = closer.view(np.uint8)
-    cv2.copyTo(dhit, mask, region)
+    cv2.copyTo(cv2.repeat(dhit, v1 - v0, 1) if len(dhit) == 1 else dhit, mask, region)
     colours = np.where((t1c >= lo)[..., None], face_col[None, :], cap_col)
     cv2.copyTo(colours, mask, image[v0:v1, u0:u1])
     if labels is not None:
         cv2.copyTo(np.full(mask.shape, p.label, np.int16), mask, labels[v0:v1, u0:u1])
     first = int(np.argmax(hit_cols))
-    shadows.append((u0 + first, v0, v1, float(t1[first])))
+    shadows.append((u0 + first, v0, v1, float(t1[first]), u1, zmin, zmax))
 
 
 def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, image: np.ndarray,
@@ -976,42 +994,48 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, ima
     np.clip(view, 0.0, _SHADE_LEVELS - 1, out=view)
     level = (view + 0.5).astype(np.intp)
     t1_32, t2_32 = t1.astype(np.float32), t2.astype(np.float32)
+    d1_32 = r.fb32 / t1_32                                   # disparity of the side
     zmin, zmax = np.minimum.reduceat(t1, starts).tolist(), np.maximum.reduceat(t2, starts).tolist()
     hc = r.rig.height_m
     for i, (s, e, c0, c1) in enumerate(zip(starts.tolist(), ends.tolist(), u0.tolist(), u1.tolist())):
         p = prisms[order[i]]
-        band = _zbuffer_band(r, p, disparity, c0, c1, t1_32[s:e], t2_32[s:e], zmin[i], zmax[i], full, bands)
+        band = _zbuffer_band(r, p, disparity, c0, c1, t1_32[s:e], t2_32[s:e], zmin[i], zmax[i], full, bands,
+                             d1_32[s:e])
         if band is None:
             continue
         v0, v1, region, dhit, closer, lo, t1c = band
         face_col = _face_palette(p.rgb, gain)[level[s:e]]
         mask = closer.view(np.uint8)
-        cv2.copyTo(dhit, mask, region)
-        if p.bottom < hc < p.top:                        # camera between bottom and top: side only
-            colours = np.broadcast_to(face_col[None], (v1 - v0, c1 - c0, 3))
+        if len(dhit) == 1:                               # camera between bottom and top: side only
+            cv2.copyTo(cv2.repeat(dhit, v1 - v0, 1), mask, region)
+            colours = cv2.repeat(face_col[None], v1 - v0, 1)
         else:
+            cv2.copyTo(dhit, mask, region)
             cap_col = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)   # lit top / dark underside
             colours = np.where((t1c >= lo)[..., None], face_col[None], cap_col)
         cv2.copyTo(colours, mask, image[v0:v1, c0:c1])
         if labels is not None:
             cv2.copyTo(np.full(mask.shape, p.label, np.int16), mask, labels[v0:v1, c0:c1])
-        shadows.append((c0, v0, v1, float(t1[s])))
+        shadows.append((c0, v0, v1, float(t1[s]), c1, zmin[i], zmax[i]))
 
 
-def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rng: np.random.Generator,
+def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rects: list, rng: np.random.Generator,
                  floor: int) -> np.ndarray:
     """Kinect-like measurement of the true depth: shadows, noise, quantisation, holes, range limits.
 
     Works in disparity (fb / z) like the sensor: noise and dropouts come from the bank at a random
     offset, rounding to 1/subpixel steps quantises, and readings outside the range become 0. Rows from
     ``floor`` down are bare floor: their readings come from ``floor_depth_bank`` at a random column.
+    Above, only what can read anything is measured (see ``_Renderer.z_readable``): the floor rows in
+    range, ``rects`` (walls in range) and the objects drawn in range (``shadows`` entries: left column,
+    rows, entry depth, right column, depth range); the rest reads 0 whatever its noise.
     ``disparity`` (the z-buffer, a scratch buffer) is modified in place; the returned depth image is new.
     """
     s = r.sensor
     h, w = disparity.shape
     if s.shadows and shadows:
         fb1 = s.focal_baseline_px_m
-        for u_left, v0, v1, zf in shadows:
+        for u_left, v0, v1, zf, *_ in shadows:
             if zf >= s.max_m:
                 continue            # nothing behind it is in range anyway
             # the projector sits beside the IR camera: the background d columns left of a nearer object
@@ -1033,14 +1057,56 @@ def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rng: np.ran
     off = int(rng.integers(0, r.disparity_bank.size - n + 1))
     # ``flat[k:k + n]`` as an image is ``out`` moved k columns right: computing it contiguously shifts
     # depth against colour; what wraps into each row's first k columns is cleared afterwards
+    noise = r.disparity_bank[off:off + n].reshape(floor, w)
+    # ``flat[k:k + n]`` as an image is ``out`` moved k columns right: computing it contiguously shifts
+    # depth against colour; what wraps into each row's first k columns is cleared afterwards
     flat = np.empty(h * w + k, np.float32)
     out = flat[:h * w].reshape(h, w)
-    _measure(r, disparity[:floor], r.disparity_bank[off:off + n].reshape(floor, w), flat[k:k + n].reshape(floor, w))
+    near, far = r.z_readable
+    f0, f1 = r.floor_readable
+    f1 = min(f1, floor)
+    band = f1 > f0
+    pieces = []
+    for v0, v1, u0, u1 in _merged(rects + [(sh[1], sh[2], sh[0], sh[4]) for sh in shadows
+                                           if sh[5] <= far and sh[6] >= near]):
+        v1, u1 = min(v1, floor), min(u1, w - k)     # the last k columns move out of the image
+        # rows the floor band measures are left out (what is left is one or two pieces)
+        for a, b in ((v0, min(v1, f0)), (max(v0, f1), v1)) if band else ((v0, v1),):
+            if b > a and u1 > u0:
+                pieces.append((a, b, u0, u1))
+    if (f1 - f0) * w + sum((b - a) * (u1 - u0) for a, b, u0, u1 in pieces) > n // 2:
+        # most of it can read: all in one go (contiguous arrays are faster than the pieces)
+        _measure(r, disparity[:floor], noise, flat[k:k + n].reshape(floor, w))
+    else:
+        out[:floor] = 0
+        if band:
+            _measure(r, disparity[f0:f1], noise[f0:f1], flat[f0 * w + k:f1 * w + k].reshape(f1 - f0, w))
+        for a, b, u0, u1 in pieces:
+            out[a:b, u0 + k:u1 + k] = _measure(r, disparity[a:b, u0:u1], noise[a:b, u0:u1],
+                                               np.empty((b - a, u1 - u0), np.float32))
     if floor < h:
         col = int(rng.integers(0, r.extra - k + 1))
         out[floor:, k:] = r.floor_depth_bank()[floor:, col:col + w - k]
     if k:
         out[:, :k] = 0
+    return out
+
+
+def _merged(rects: list[tuple[int, int, int, int]]) -> list[tuple[int, int, int, int]]:
+    """Rectangles (v0, v1, u0, u1) with the overlapping ones replaced by their bounding rectangle."""
+    out: list[tuple[int, int, int, int]] = []
+    for rect in rects:
+        v0, v1, u0, u1 = rect
+        i = 0
+        while i < len(out):
+            a0, a1, b0, b1 = out[i]
+            if a0 < v1 and v0 < a1 and b0 < u1 and u0 < b1:
+                v0, v1, u0, u1 = min(v0, a0), max(v1, a1), min(u0, b0), max(u1, b1)
+                out.pop(i)
+                i = 0
+            else:
+                i += 1
+        out.append((v0, v1, u0, u1))
     return out
 
 
@@ -1051,7 +1117,10 @@ def _measure(r: _Renderer, disparity: np.ndarray, noise: np.ndarray, out: np.nda
 
     s = r.sensor
     with np.errstate(divide="ignore"):
-        np.add(disparity, noise, out=out)
+        if disparity.flags.c_contiguous:
+            np.add(disparity, noise, out=out)
+        else:
+            cv2.add(disparity, noise, dst=out)                      # as np.add, faster on views
         np.rint(out, out=out)
         np.divide(r.fb32, out, out=out)                             # no surface (0) -> inf -> no reading
     # readings outside [min, max] (also inf, and the negative ones the dropouts made) become 0
