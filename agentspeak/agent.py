@@ -1009,12 +1009,18 @@ def _exec_add_plan(ag: Agent, intention, im, frame, instr) -> None:
 
 
 def _exec_remove_plan(ag: Agent, intention, im, frame, instr) -> None:
+    """``-{@l ...}`` is Jason's ``.remove_plan`` of the plan term: by its label. Without a label Jason
+    fails the goal (a NullPointerException inside ``.remove_plan``); here with a message saying why."""
     term = resolve(instr.term, im.b)
-    plan = term.as_plan() if isinstance(term, PlanTerm) else None
-    if plan is not None and plan.label is not None:
-        ag.plans.remove(plan.label)
-    elif isinstance(term, PlanTerm) and term.rule is not None:
+    if isinstance(term, PlanTerm) and term.rule is not None:
         ag.bb.remove_rule(term.rule)
+        frame.pc += 1
+        return
+    plan = term.as_plan() if isinstance(term, PlanTerm) else None
+    if plan is None or plan.label is None:
+        raise IAError("ia_failed", f"-{to_str(term) if not isinstance(term, PlanTerm) else term}: a plan is "
+                                   f"removed by its label, and this plan term has none (write -{{@label ...}})")
+    ag.plans.remove(plan.label)
     frame.pc += 1
 
 

@@ -85,14 +85,14 @@ class _Reader:
             if value in _KEYWORDS:
                 raise _NotGround
             return self._after_operand(self.literal(value, False, depth))
-        if kind == "qatom":
-            return self._after_operand(self.literal(value[1:-1], False, depth))
+        if kind == "qatom":  # the quotes stay in the name, as the grammar keeps them
+            return self._after_operand(self.literal(value, False, depth))
         if value == "~":
             tok = self.peek()
             if tok is None or tok[0] not in ("atom", "qatom") or tok[1] in _KEYWORDS:
                 raise _NotGround
             self.i += 1
-            name = tok[1] if tok[0] == "atom" else tok[1][1:-1]
+            name = tok[1]
             return self._after_operand(self.literal(name, True, depth))
         if value == "-":
             tok = self.peek()

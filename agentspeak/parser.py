@@ -53,7 +53,7 @@ _PREFIX_TYPES = {"NOT", "NEG", "PLUS"}
 
 
 def _is_ia_name(name: str) -> bool:
-    return "." in name
+    return "." in name and name[0] != "'"
 
 
 class _ToProgram(Transformer):
@@ -361,8 +361,7 @@ class _ToProgram(Transformer):
         tok = c[0]
         self.line = tok.line
         text = tok.value
-        if tok.type == "QATOM":
-            return text[1:-1]
+        # a quoted atom keeps its quotes, as in Jason: 'a b' prints quoted and 'abc' is not abc
         return text
 
     def annotations(self, c):

@@ -797,7 +797,7 @@ def to_str(t: Term, b: Bindings | None = None) -> str:
         return t.name
     if tt is Literal:
         out = "~" + t.functor if t.neg else t.functor
-        if t.functor and not _plain_atom(t.functor):
+        if t.functor and not _plain_atom(t.functor) and t.functor[0] != "'":
             out = ("~" if t.neg else "") + "'" + t.functor + "'"
         if t.args:
             out += "(" + ",".join(to_str(a) for a in t.args) + ")"

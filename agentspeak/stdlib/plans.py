@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from agentspeak.program import PlanTerm
-from agentspeak.stdlib.registry import internal_action, wrong_arguments
+from agentspeak.stdlib.registry import IAError, internal_action, wrong_arguments
 from agentspeak.terms import Literal, Term, list_items, make_list, to_str
 
 
@@ -49,8 +49,14 @@ def remove_plan(ctx, labels, source=None):
     except TypeError:
         items = [labels]
     for label in items:
+        if isinstance(label, PlanTerm):  # a plan term stands for its label (Jason)
+            plan = label.as_plan()
+            if plan is None or plan.label is None:
+                raise IAError("ia_failed", f".remove_plan({label}): a plan is removed by its label, "
+                                           f"and this plan term has none")
+            label = plan.label
         if isinstance(label, str):
-            label = Literal(label)
+            label = Literal(label[1:] if label.startswith("@") else label)
         if isinstance(label, Literal):
             ctx.agent.plans.remove(label)
 

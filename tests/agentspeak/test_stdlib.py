@@ -80,3 +80,18 @@ def test_include_at_run_time(tmp_path):
     lib = tmp_path / "lib.asl"
     lib.write_text("+!hi <- .print(hi_from_lib).\n")
     assert body(f'.include("{lib}"); !hi') == ["hi_from_lib"]
+
+
+def test_remove_plan_term_by_label_and_unlabelled_fails_as_in_jason():
+    # `-{...}` is Jason's .remove_plan(plan term): it removes by label; without a label Jason's
+    # .remove_plan fails the goal (ia_failed)
+    src = ("!t.\n"
+           "+!t <- +{ @p1 +!g <- .print(one) }; !g; -{ @p1 +!g <- .print(one) }; "
+           ".relevant_plans({+!g}, L); .print(L); +{ +!h <- .print(h) }; -{ +!h <- .print(h) }; .print(after).\n"
+           "-!t[error(E)] <- .print(failed, E); .relevant_plans({+!h}, L); .length(L, N); .print(N).\n")
+    assert run_asl(src) == ["one", "[]", "failedia_failed", "1"]
+
+
+def test_remove_plan_action_takes_a_plan_term_or_a_label_string():
+    assert body('+{ @q1 +!k <- true }; +{ @q2 +!k <- true }; .remove_plan({ @q1 +!k <- true }); '
+                '.remove_plan("@q2"); .relevant_plans({+!k}, L); .print(L)') == ["[]"]

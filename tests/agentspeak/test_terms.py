@@ -94,3 +94,10 @@ def test_plus_and_minus_after_an_atom_are_operators():
 
 def test_unbound_operand_keeps_the_expression():
     assert body("X = Y + 1; .print(X)") == ["(Y+1)"]
+
+
+def test_quoted_atoms_keep_their_quotes_as_in_jason():
+    # Jason keeps the quotes in the functor: 'abc' prints quoted and is not the atom abc
+    assert body(".print('quoted atom', \" \", f('A b'), \" \", 'abc', \" \", ~'x y'); "
+                "if ('abc' \\== abc) { .print(distinct) }; .term2string('a b', S); .print(S)") == [
+        "'quoted atom' f('A b') 'abc' ~'x y'", "distinct", "'a b'"]
