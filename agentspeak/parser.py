@@ -23,7 +23,7 @@ from agentspeak.program import (
 )
 from agentspeak.stdlib.functions import FUNCTIONS, check_function_name, rule_function
 from agentspeak.terms import (
-    And, Arith, Func, Literal, Not, Or, Rel, Term, Var, is_ground, make_list, resolve,
+    And, Arith, ArithmeticError_, Func, Literal, Not, Or, Rel, Term, Var, is_ground, make_list, resolve,
 )
 
 _GRAMMAR = Path(__file__).with_name("agentspeak.lark")
@@ -539,7 +539,10 @@ def _collect(items, program: Program, offset_line: int) -> None:
             if not isinstance(lit, Literal):
                 raise _BadInputAt(f"a belief must be a literal, not '{lit}'", line)
             if is_ground(lit):
-                program.beliefs.append(resolve(lit, {}))
+                try:
+                    program.beliefs.append(resolve(lit, {}))
+                except ArithmeticError_ as exc:  # p(math.abs(a)).
+                    raise _BadInputAt(f"in the belief {lit}: {exc}", line) from None
             else:
                 program.rules.append(Rule(lit, Literal("true"), program.source_file, line + offset_line))
         elif kind == "rule":

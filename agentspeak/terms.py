@@ -317,7 +317,9 @@ class Func:
     def resolve(self, b: Bindings) -> Term:
         args = tuple([resolve(a, b) for a in self.args])
         if self.spec.unground_ok or all(is_ground(a) for a in args):
-            return self.spec.evaluate(args)
+            value = self.spec.evaluate(args)
+            if value is not None:  # None: not now (it needs an agent and none is running)
+                return value
         return Func(self.name, args, self.spec)
 
     def rename(self, mapping: dict) -> "Func":

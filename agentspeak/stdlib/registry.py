@@ -155,13 +155,14 @@ class FunctionSpec:
     def accepts(self, arity: int) -> bool:
         return self.arities is None or arity in self.arities
 
-    def evaluate(self, args: tuple) -> int | float:
-        """The value for resolved ``args``; a failure names the call and why."""
+    def evaluate(self, args: tuple) -> int | float | None:
+        """The value for resolved ``args``; a failure names the call and why. None when the
+        function needs an agent and none runs in this thread (a belief being parsed)."""
         try:
             if self.needs_agent:
                 agent = CURRENT.agent
                 if agent is None:
-                    raise FunctionError("no agent is running in this thread")
+                    return None
                 value = self.function(agent, *args)
             else:
                 value = self.function(*args)
