@@ -2,6 +2,10 @@
 printed lines exactly. Expected values follow Jason 3.3.2's documentation and Java's Math semantics."""
 from __future__ import annotations
 
+import pytest
+
+from agentspeak.errors import AslSyntaxError
+from agentspeak.parser import parse_program
 from tests.agentspeak.harness import run_asl, run_asl_logged
 
 FAIL_PLAN = "-!t[error(E), error_msg(M)] <- .print(E, \": \", M).\n"
@@ -113,3 +117,10 @@ def test_bad_register_function_directive_is_a_warning(caplog):
     assert out == ["ok"]
     assert any("nodot" in w and ":1:" in w for w in warnings)
     assert any("Java class" in w and ":2:" in w for w in warnings)
+
+
+def test_bad_function_argument_in_a_belief_is_a_load_error_with_file_and_line():
+    with pytest.raises(AslSyntaxError) as info:
+        parse_program("b(1).\np(math.abs(a)).\n", "f.asl")
+    assert (info.value.file, info.value.line) == ("f.asl", 2)
+    assert "math.abs(a): the argument 'a' is not a number" in str(info.value)
