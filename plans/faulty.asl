@@ -17,6 +17,8 @@ help_rounds(4).             // rounds of asking (busy robots may become free) be
 find_timeout(90000).        // ms a helper may take to find me
 answer_timeout(20000).      // ms for the other answers
 max_trials(2).              // test motions with one helper before giving up on it
+max_finds(3).               // times one helper may look for me; I turn between them to show another side
+find_turn(70).              // degrees I turn for that
 
 outcome([], none).
 outcome([left_encoder, right_encoder], encoders).
@@ -47,6 +49,13 @@ helper_obs(seen(B1, D1, Y1), seen(B2, D2, Y2), [helper_found_robot, Motion, Stra
 helper_obs(seen(B1, D1, Y1), seen(B2, D2, Y2),
            [helper_found_robot, ~helper_saw_motion, ~helper_saw_straight, ~helper_saw_veer_left, ~helper_saw_veer_right]).
 helper_obs(_, _, []).    // the helper lost sight of me: it saw nothing that helps
+
+// Degrees to turn in place so that a helper looking along bearing B sees my side (my heading Y in its
+// frame): end-on, my two cylinders hide each other, and a test motion along its line of sight hardly
+// moves me in its image. Side-on enough already: no turn.
+side_turn(B, Y, 0) :- norm(Y - B, A) & abs(A, AA) & AA >= 65 & AA <= 115.
+side_turn(B, Y, T) :- norm(Y - B, A) & A >= 0 & T = 90 - A.
+side_turn(B, Y, T) :- norm(Y - B, A) & A < 0 & T = -90 - A.
 
 !goToDestination.
 
@@ -132,21 +141,51 @@ helper_obs(_, _, []).    // the helper lost sight of me: it saw nothing that hel
       for (.member(O, Others)) { .send(O, tell, noThanks) };
       .print(H, " will help me");
       .progress(helper_found, H);
+      -+finds(H, 0);
+      !findMe(H, Ds).
+
+// ---- being found: the helper searches; if it cannot see me, I turn to show another side ---------
++!findMe(H, Ds) : finds(H, N) & max_finds(Max) & N >= Max
+   <- .print(H, " could not find me (", N, " tries)"); !nextHelper(H, Ds).
++!findMe(H, Ds) : finds(H, N) & find_timeout(FT)
+   <- -+finds(H, N + 1);
+      !showAnotherSide(N);
       .my_name(Me);
-      ?find_timeout(FT);
       .send(H, askOne, findRobot(Me, _), Found, FT);
       !afterFind(H, Found, Ds).
 
++!showAnotherSide(0).
++!showAnotherSide(_) : find_turn(T) <- .print("I turn ", T, " degrees to show another side"); !turnInPlace(T).
+
++!turnInPlace(T) <- turn(T).
+-!turnInPlace(T)[reason(R)] <- .print("I could not turn (", R, ")").
+
 +!afterFind(H, findRobot(_, found), Ds) <- .progress(found_by, H); !tryMove(H, Ds, 1).
++!afterFind(H, findRobot(_, not_found), Ds) <- .print(H, " could not find me"); !findMe(H, Ds).
 +!afterFind(H, Answer, Ds) <- .print(H, " could not find me (", Answer, ")"); !nextHelper(H, Ds).
 
 +!nextHelper(H, Ds) <- -helper(H); .send(H, tell, thanks); !broadcastHelp(Ds).
 
 // ---- the test motion, watched by the helper -----------------------------------------------------
-+!tryMove(H, Ds, Trial) : test_move(M) & answer_timeout(T) & encoders(L, R)
++!tryMove(H, Ds, Trial) : answer_timeout(T)
    <- .my_name(Me);
-      .send(H, askOne, trackMe(Me, _), Before, T);
+      .send(H, askOne, trackMe(Me, _), Seen, T);
+      !checkAnswer(H, Seen);
+      !showSide(H, Ds, Trial, Seen).
+
+// where the helper sees me from decides whether I turn first: my test motion must cross its view
++!showSide(H, Ds, Trial, trackMe(_, seen(B, _, Y))) : side_turn(B, Y, T) & T \== 0 & answer_timeout(TO)
+   <- .print("I turn ", T, " degrees to show ", H, " my side");
+      !turnInPlace(T);
+      .my_name(Me);
+      .send(H, askOne, trackMe(Me, _), Before, TO);
       !checkAnswer(H, Before);
+      !afterTrack(H, Ds, Trial, Before).
++!showSide(H, Ds, Trial, Seen) <- !afterTrack(H, Ds, Trial, Seen).
+
++!afterTrack(H, Ds, _, trackMe(_, lost)) <- .print(H, " lost sight of me"); !findMe(H, Ds).
++!afterTrack(H, Ds, Trial, Before) : test_move(M) & answer_timeout(T) & encoders(L, R)
+   <- .my_name(Me);
       .abolish(saw_over_current(_));
       -+leg_start(L, R);
       .print("test motion: ", M, " m while ", H, " watches");
@@ -177,6 +216,7 @@ helper_obs(_, _, []).    // the helper lost sight of me: it saw nothing that hel
 +!conclude(H, Ds, _) <- .send(H, tell, thanks); -helper(H); !undiagnosed(Ds, ambiguous).
 
 -!tryMove(H, Ds, _) <- .print("lost ", H, "'s help"); !nextHelper(H, Ds).
+-!afterTrack(H, Ds, _, _) <- .print("lost ", H, "'s help"); !nextHelper(H, Ds).
 -!withHelper(H, Ds) <- !nextHelper(H, Ds).
 
 // ---- robustness: a helper that dies is replaced; nobody answering ends undiagnosed ---------------

@@ -1,9 +1,10 @@
 // Cooperative fault diagnosis: the side of a robot that helps another one find out what is wrong.
 //
 // helpMe -> canHelp (the first to answer is chosen; see faulty.asl) -> findRobot: turn in steps until
-// the robot's two cylinders are seen, then centre them; give up after a full turn -> trackMe: where it
-// is now -> giveMeFeedback: where it is after its test motion (re-finding it when sight was lost) ->
-// thanks (or noThanks): turn back and return to my own task.
+// the robot's two cylinders are seen, then centre them; after a full turn without them, step back and
+// look again from there (it may be too close for the depth camera); once found, keep a distance the
+// camera measures well -> trackMe: where it is now -> giveMeFeedback: where it is after its test
+// motion (re-finding it when sight was lost) -> thanks (or noThanks): turn back to my own task.
 // Positions are reported in my odometry frame: seen(BearingDeg, DepthM, HeadingDeg).
 //
 // Percepts (robot_bridge/percepts.py): robot_seen(Name, AngleDeg, DepthM, YawDeg), odom(X,Y,YawDeg),
@@ -15,6 +16,10 @@ search_step(40).         // degrees per look: the camera sees 57 degrees, so vie
 look_wait(300).          // ms for fresh camera frames after a turn
 centre_tolerance(4).     // degrees off the image centre that count as centred
 centre_tries(4).
+step_back(0.7).          // metres to move before a second search (closer than 0.8 m the depth camera is blind)
+near_limit(1.0, 1.4).    // metres: a robot found closer than the first may drive out of the depth
+                         // range during its test motion: I back off to the second
+far_limit(3.2, 2.6).     // metres: farther than the first, its cylinders are small: I come to the second
 
 available :- not helping(_) & not on_mission & not diagnosing & not self_suspect.
 
@@ -53,6 +58,8 @@ available :- not helping(_) & not on_mission & not diagnosing & not self_suspect
    <- .print("looking for ", F);
       .progress(searching, F);
       !search(F, 0);
+      !lookFromElsewhere(F);
+      !keepDistance(F);
       !searchResult(F, Result).
 +?findRobot(F, not_helping).
 
@@ -70,13 +77,38 @@ available :- not helping(_) & not on_mission & not diagnosing & not self_suspect
       !centre(F, N + 1).
 +!centre(F, _).          // lost it again, or close enough after the tries
 
++!lookFromElsewhere(F) : robot_seen(F, _, _, _).
++!lookFromElsewhere(F) : step_back(M)
+   <- .print("no sign of ", F, " from here: I step away and look again");
+      !stepAway(M);
+      !search(F, 0).
+
++!stepAway(M) <- move(-M).
+-!stepAway(M) <- !stepForward(M).      // something behind me: the other way
++!stepForward(M) <- move(M).
+-!stepForward(M).
+
+// the robot in front of me (centred): back off or come closer so that its test motion stays in range
++!keepDistance(F) : robot_seen(F, _, D, _) & near_limit(L, G) & D < L & look_wait(W)
+   <- .print(F, " is only ", D, " m away: I back off");
+      move(D - G);
+      .wait(W);
+      !centre(F, 0).
++!keepDistance(F) : robot_seen(F, _, D, _) & far_limit(L, G) & D > L & look_wait(W)
+   <- .print(F, " is ", D, " m away: I come closer");
+      move(D - G);
+      .wait(W);
+      !centre(F, 0).
++!keepDistance(F).
+-!keepDistance(F) : look_wait(W) <- .wait(W); !centre(F, 0).    // blocked: stay where I am
+
 +!searchResult(F, found) : robot_seen(F, A, D, _)
    <- .print("found ", F, " at ", D, " m, ", A, " degrees off centre");
       .progress(robot_found, F).
-+!searchResult(F, not_found) <- .print("could not find ", F, " after a full turn").
++!searchResult(F, not_found) <- .print("could not find ", F, " from two places").
 
 // ---- tracking the test motion ------------------------------------------------------------------
-+?trackMe(F, Seen) : helping(F) <- !observe(F, Seen, 1).
++?trackMe(F, Seen) : helping(F) <- !keepDistance(F); !observe(F, Seen, 1).
 
 +?giveMeFeedback(F, Seen) : helping(F) & look_wait(W)
    <- .wait(W);              // frames taken after the robot stopped
