@@ -253,14 +253,13 @@ class _Renderer:
         bank[rng.random((h + extra, w + extra)) < sensor.dropout] = np.float32(-1e9)
         self.disparity_bank = bank.ravel()          # a frame takes h * w values from a random offset
         # only true disparities within the largest noise of the bank (plus a step) of the range can read
-        # anything; elsewhere the reading is 0 whatever the noise, and is not computed (``_depth_noise``)
+        # anything; nearer or farther the reading is 0 whatever the noise (``_depth_noise`` skips them)
         reach = float(np.abs(bank[bank > -1e8]).max()) + 1.0
         d_lo = float(self.fb32) / sensor.max_m - reach
         d_hi = float(self.fb32) / (sensor.min_m - 1e-6) + reach
         self.z_readable = (float(self.fb32) / d_hi, float(self.fb32) / d_lo if d_lo > 0 else math.inf)
         floor_d = self.floor_d_image[:, 0]
-        readable = np.flatnonzero((floor_d >= d_lo) & (floor_d <= d_hi))
-        self.floor_readable = (int(readable[0]), int(readable[-1]) + 1) if readable.size else (0, 0)
+        self.first_readable_floor_row = int(np.argmax(floor_d >= d_lo)) if (floor_d >= d_lo).any() else h
         colour = rng.normal(0.0, 1.0, (h + extra, w, 3)).astype(np.float32)
         self.colour_bank_unit = colour
         self._colour_cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
@@ -352,7 +351,7 @@ class _Renderer:
         return limits
 
     def static_layers(self, pose: Pose, scene: Scene, canvas: np.ndarray, disparity: np.ndarray
-                      ) -> tuple[list[tuple], int, list[tuple[int, int, int, int]]]:
+                      ) -> tuple[list[tuple], int, int]:
         """Floor, walls and props seen from ``pose`` into ``canvas`` and ``disparity``; what
         ``_static_layers`` returns.
 
@@ -375,14 +374,15 @@ class _Renderer:
         if kept is not None:
             np.copyto(canvas, kept[1])
             np.copyto(disparity, kept[2])
-            return list(kept[3]), kept[4], list(kept[5])
-        shadows, floor_from, rects = _static_layers(self, pose, scene, canvas, disparity)
+            return list(kept[3]), kept[4], kept[5]
+        shadows, floor_from, wall_readable = _static_layers(self, pose, scene, canvas, disparity)
         if again:
             with self._static_lock:
-                self._static[key] = (scene, canvas.copy(), disparity.copy(), tuple(shadows), floor_from, tuple(rects))
+                self._static[key] = (scene, canvas.copy(), disparity.copy(), tuple(shadows), floor_from,
+                                     wall_readable)
                 if len(self._static) > 32:
                     self._static.popitem(last=False)
-        return shadows, floor_from, rects
+        return shadows, floor_from, wall_readable
 
     def scratch(self) -> tuple[np.ndarray, np.ndarray]:
         """This thread's colour and depth buffers (re-used frame after frame)."""
@@ -576,17 +576,21 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     canvas, depth = r.scratch()
 
     # what does not move: floor, walls and props, kept for a camera that stands still
-    shadows, floor_from, rects = r.static_layers(camera_pose, scene, canvas, depth)
+    shadows, floor_from, wall_readable = r.static_layers(camera_pose, scene, canvas, depth)
     # the robots, with a depth test per pixel
     n_labels = 2 * len(robots)
     labels = np.zeros((h, w), np.int16) if count and n_labels else None
     full = np.zeros(n_labels + 1, np.int64)
     bands: dict[int, tuple[int, int, int, int]] = {}
-    _draw(r, _prisms(r, camera_pose, robots, scene, count, props=False), depth, canvas, labels, full, shadows,
+    _draw(r, _prisms(r, camera_pose, robots, scene, count, props=False), depth, canvas, labels,
+          full if labels is not None else None, shadows,
           gain, bands)
 
     # rows from ``floor`` down see only floor (every object drawn left a shadow entry with its rows)
     floor = max([r.first_floor_row, floor_from] + [sh[2] for sh in shadows]) if r.floor_banks else h
+    # rows above the first that can read anything (floor, walls or objects in range) read 0 whatever the noise
+    far = r.z_readable[1]
+    readable = min([r.first_readable_floor_row, wall_readable] + [sh[1] for sh in shadows if sh[4] <= far])
     if scene.rgb_noise > 0:
         pos, neg = r.colour_noise(float(scene.rgb_noise))
         off = int(rng.integers(0, r.extra))
@@ -601,7 +605,7 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     else:
         image = canvas.copy()
 
-    noisy = _depth_noise(r, depth, shadows, rects, rng, floor)
+    noisy = _depth_noise(r, depth, shadows, rng, min(readable, floor), floor)
     pixels: list[MarkerPixels] = []
     if count:
         visible = np.zeros(n_labels + 1, np.int64)
@@ -617,10 +621,10 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
 
 
 def _static_layers(r: _Renderer, pose: Pose, scene: Scene, canvas: np.ndarray, disparity: np.ndarray
-                   ) -> tuple[list[tuple], int, list[tuple[int, int, int, int]]]:
+                   ) -> tuple[list[tuple], int, int]:
     """Draw what does not move (floor, walls, props) into ``canvas`` and ``disparity``; returns the
-    props' projector shadows, the row below which the walls leave only floor and the rectangle
-    (rows, columns) of the walls that are near enough for the depth sensor to read."""
+    props' projector shadows, the row below which the walls leave only floor and the first row where
+    a wall is near enough for the depth sensor to read it."""
     cam, hc, h = r.cam, r.rig.height_m, r.cam.height
     gain = float(scene.gain)
     # background: per column the backdrop above the wall's top, the wall, then the floor below the
@@ -638,19 +642,15 @@ def _static_layers(r: _Renderer, pose: Pose, scene: Scene, canvas: np.ndarray, d
     _background(r, v_top, v_bottom, (wall_rgb, wall_d),
                 (r.floor_image(scene.floor_rgb, scene.backdrop_rgb, gain), r.floor_d_image), (canvas, disparity))
     shadows: list[tuple] = []
-    _draw(r, _prisms(r, pose, (), scene, False), disparity, canvas, None, np.zeros(1, np.int64), shadows, gain, {})
+    _draw(r, _prisms(r, pose, (), scene, False), disparity, canvas, None, None, shadows, gain, {})
     wall = v_bottom > v_top
-    near, far = r.z_readable
-    readable = wall & (wall_z >= near) & (wall_z <= far)
-    rects = []
-    if readable.any():
-        cols = np.flatnonzero(readable)
-        rects.append((int(v_top[readable].min()), int(v_bottom[readable].max()), int(cols[0]), int(cols[-1]) + 1))
-    return shadows, int(v_bottom[wall].max()) if wall.any() else 0, rects
+    readable = wall & (wall_z <= r.z_readable[1])
+    first_readable = int(v_top[readable].min()) if readable.any() else h
+    return shadows, int(v_bottom[wall].max()) if wall.any() else 0, first_readable
 
 
 def _draw(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, canvas: np.ndarray,
-          labels: np.ndarray | None, full: np.ndarray, shadows: list, gain: float, bands: dict) -> None:
+          labels: np.ndarray | None, full: np.ndarray | None, shadows: list, gain: float, bands: dict) -> None:
     """Z-buffer ``prisms`` into the images: cylinders all at once, boxes one by one."""
     _draw_circles(r, [p for p in prisms if p.footprint == "circle"], disparity, canvas, labels, full, shadows,
                   gain, bands)
@@ -866,6 +866,12 @@ def _cap_colour(rgb: RGB, factor: float) -> np.ndarray:
     return _rgb8(np.asarray(rgb) * factor)
 
 
+@lru_cache(maxsize=64)
+def _face_palettes(rgbs: tuple[RGB, ...], gain: float) -> np.ndarray:
+    """``_face_palette`` of each colour, one after the other (index: colour * 256 + level)."""
+    return np.concatenate([_face_palette(rgb, gain) for rgb in rgbs])
+
+
 def _zbuffer_band(r: _Renderer, p: _Prism, disparity: np.ndarray, u0: int, u1: int, t1: np.ndarray,
                   t2: np.ndarray, zmin: float, zmax: float, full: np.ndarray, bands: dict,
                   d1: np.ndarray | None = None):
@@ -893,7 +899,7 @@ def _zbuffer_band(r: _Renderer, p: _Prism, disparity: np.ndarray, u0: int, u1: i
         hit = zhit <= np.minimum(t2.astype(np.float32, copy=False)[None, :], hi)
         dhit = r.fb32 / zhit
     closer = dhit > region
-    if p.label:
+    if p.label and full is not None:
         full[p.label] += int(np.count_nonzero(hit))
         bands[p.label] = (v0, v1, u0, u1)
     closer &= hit
@@ -918,8 +924,8 @@ def _draw_prism(r: _Renderer, p: _Prism, disparity: np.ndarray, image: np.ndarra
         first, last = int(np.argmax(hit_cols)), len(hit_cols) - int(np.argmax(hit_cols[::-1]))
         u0, u1, t1, t2, hit_cols = u0 + first, u0 + last, t1[first:last], t2[first:last], hit_cols[first:last]
     hc = r.rig.height_m
-    zmin, zmax = float(t1[hit_cols].min()), float(t2[hit_cols].max())
-    band = _zbuffer_band(r, p, disparity, u0, u1, t1, t2, zmin, zmax, full, bands)
+    zmin = float(t1[hit_cols].min())
+    band = _zbuffer_band(r, p, disparity, u0, u1, t1, t2, zmin, float(t2[hit_cols].max()), full, bands)
     if band is None:
         return
     v0, v1, region, dhit, closer, lo, t1c = band
@@ -945,7 +951,7 @@ def _draw_prism(r: _Renderer, p: _Prism, disparity: np.ndarray, image: np.ndarra
     if labels is not None:
         cv2.copyTo(np.full(mask.shape, p.label, np.int16), mask, labels[v0:v1, u0:u1])
     first = int(np.argmax(hit_cols))
-    shadows.append((u0 + first, v0, v1, float(t1[first]), u1, zmin, zmax))
+    shadows.append((u0 + first, v0, v1, float(t1[first]), zmin))
 
 
 def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, image: np.ndarray,
@@ -993,49 +999,114 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, ima
     view = ((z - t1) + (x - t1 * tau) * tau) * (_SHADE_LEVELS - 1) / rr / np.sqrt(a2)
     np.clip(view, 0.0, _SHADE_LEVELS - 1, out=view)
     level = (view + 0.5).astype(np.intp)
+    # face colours of every column at once: palettes stacked, one per colour
+    rgbs = [prisms[i].rgb for i in order]
+    colours = tuple(dict.fromkeys(rgbs))
+    which = np.array([colours.index(rgb) for rgb in rgbs]) * _SHADE_LEVELS
+    face = _face_palettes(colours, gain)[np.repeat(which, lens) + level]
     t1_32, t2_32 = t1.astype(np.float32), t2.astype(np.float32)
     d1_32 = r.fb32 / t1_32                                   # disparity of the side
     zmin, zmax = np.minimum.reduceat(t1, starts).tolist(), np.maximum.reduceat(t2, starts).tolist()
     hc = r.rig.height_m
+    hiders = _Hiders(r, [prisms[i] for i in order], lens, t1, t2) if labels is None and len(order) > 1 else None
     for i, (s, e, c0, c1) in enumerate(zip(starts.tolist(), ends.tolist(), u0.tolist(), u1.tolist())):
         p = prisms[order[i]]
+        shadow = (c0, float(t1[s]))
+        if hiders is not None:
+            seen = hiders.visible(i, s, e, c0, c1)
+            if seen is None:
+                continue
+            s, e, c0, c1 = s + seen[0], s + seen[1], c0 + seen[0], c0 + seen[1]
         band = _zbuffer_band(r, p, disparity, c0, c1, t1_32[s:e], t2_32[s:e], zmin[i], zmax[i], full, bands,
                              d1_32[s:e])
         if band is None:
             continue
         v0, v1, region, dhit, closer, lo, t1c = band
-        face_col = _face_palette(p.rgb, gain)[level[s:e]]
+        face_col = face[s:e]
         mask = closer.view(np.uint8)
         if len(dhit) == 1:                               # camera between bottom and top: side only
             cv2.copyTo(cv2.repeat(dhit, v1 - v0, 1), mask, region)
             colours = cv2.repeat(face_col[None], v1 - v0, 1)
         else:
             cv2.copyTo(dhit, mask, region)
-            cap_col = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)   # lit top / dark underside
-            colours = np.where((t1c >= lo)[..., None], face_col[None], cap_col)
+            colours = cv2.repeat(face_col[None], v1 - v0, 1)
+            cap = np.empty_like(colours)
+            cap[:] = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)     # lit top / dark underside
+            cv2.copyTo(cap, (t1c < lo).view(np.uint8), colours)
         cv2.copyTo(colours, mask, image[v0:v1, c0:c1])
         if labels is not None:
             cv2.copyTo(np.full(mask.shape, p.label, np.int16), mask, labels[v0:v1, c0:c1])
-        shadows.append((c0, v0, v1, float(t1[s]), c1, zmin[i], zmax[i]))
+        shadows.append((shadow[0], v0, v1, shadow[1], zmin[i]))
 
 
-def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rects: list, rng: np.random.Generator,
-                 floor: int) -> np.ndarray:
+class _Hiders:
+    """Columns of a cylinder that cylinders already drawn hide for sure, so that the depth test skips them.
+
+    An object standing on the floor and taller than the camera (a robot's body) covers, in each of its
+    columns, every row from its top edge down to the floor line: a span that contains the horizon. Any
+    object farther in that column whose span lies inside it is hidden there (the z-buffer holds that
+    object, or something nearer). Kept per column: the nearest such depth drawn so far (in drawing
+    order, so the pixels and the shadows are exactly those of the plain depth test), with margins far
+    above rounding; the few cylinders hidden in every column cost nothing more.
+    """
+
+    MARGIN = 1e-5
+
+    def __init__(self, r: _Renderer, prisms: list[_Prism], lens: np.ndarray, t1: np.ndarray,
+                 t2: np.ndarray) -> None:
+        hc = r.rig.height_m
+        bottom = np.array([p.bottom for p in prisms])
+        top = np.array([p.top for p in prisms])
+        self.occluder = ((bottom <= 0.0) & (top > hc)).tolist()
+        self.nearest = np.full(r.cam.width, np.inf)
+        if not any(self.occluder):
+            self.t_hidden = None
+            return
+        m = self.MARGIN
+        above = float(top[np.array(self.occluder)].min()) - hc     # the lowest occluder's height over the camera
+        up, down = np.repeat(top - hc, lens), np.repeat(hc - bottom, lens)
+        # how far above and below the horizon (height over depth) each column of a cylinder reaches
+        reach_up = np.where(up > 0, up / t1, up / t2)
+        reach_down = np.where(down > 0, down / t1, down / t2)
+        with np.errstate(divide="ignore"):
+            # an occluder nearer than this in the column hides it: nearer, and reaching as far up and down
+            t_hidden = np.minimum(t1 / (1 + m), np.where(reach_up > 0, above / reach_up, np.inf))
+            np.minimum(t_hidden, np.where(reach_down > 0, hc / reach_down, np.inf), out=t_hidden)
+        self.t_hidden = t_hidden * (1 - m)
+        self.t1 = t1
+
+    def visible(self, i: int, s: int, e: int, c0: int, c1: int) -> tuple[int, int] | None:
+        """Entries ``s:e`` (columns ``c0:c1``) of cylinder ``i`` in drawing order: the range of them, as
+        offsets from ``s``, that may show; None when none does. Records cylinder ``i`` as drawn."""
+        if self.t_hidden is None:
+            return 0, e - s
+        nearest = self.nearest[c0:c1]
+        hidden = nearest < self.t_hidden[s:e]
+        if self.occluder[i]:
+            np.minimum(nearest, self.t1[s:e], out=nearest)
+        if not np.count_nonzero(hidden):
+            return 0, e - s
+        shown = np.flatnonzero(~hidden)
+        if not shown.size:
+            return None
+        return int(shown[0]), int(shown[-1]) + 1
+
+
+def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rng: np.random.Generator,
+                 top: int, floor: int) -> np.ndarray:
     """Kinect-like measurement of the true depth: shadows, noise, quantisation, holes, range limits.
 
     Works in disparity (fb / z) like the sensor: noise and dropouts come from the bank at a random
     offset, rounding to 1/subpixel steps quantises, and readings outside the range become 0. Rows from
     ``floor`` down are bare floor: their readings come from ``floor_depth_bank`` at a random column.
-    Above, only what can read anything is measured (see ``_Renderer.z_readable``): the floor rows in
-    range, ``rects`` (walls in range) and the objects drawn in range (``shadows`` entries: left column,
-    rows, entry depth, right column, depth range); the rest reads 0 whatever its noise.
+    Rows above ``top`` hold nothing in range (not even within the noise of it) and read 0.
     ``disparity`` (the z-buffer, a scratch buffer) is modified in place; the returned depth image is new.
     """
     s = r.sensor
     h, w = disparity.shape
     if s.shadows and shadows:
         fb1 = s.focal_baseline_px_m
-        for u_left, v0, v1, zf, *_ in shadows:
+        for u_left, v0, v1, zf, _ in shadows:
             if zf >= s.max_m:
                 continue            # nothing behind it is in range anyway
             # the projector sits beside the IR camera: the background d columns left of a nearer object
@@ -1057,56 +1128,16 @@ def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rects: list
     off = int(rng.integers(0, r.disparity_bank.size - n + 1))
     # ``flat[k:k + n]`` as an image is ``out`` moved k columns right: computing it contiguously shifts
     # depth against colour; what wraps into each row's first k columns is cleared afterwards
-    noise = r.disparity_bank[off:off + n].reshape(floor, w)
-    # ``flat[k:k + n]`` as an image is ``out`` moved k columns right: computing it contiguously shifts
-    # depth against colour; what wraps into each row's first k columns is cleared afterwards
     flat = np.empty(h * w + k, np.float32)
     out = flat[:h * w].reshape(h, w)
-    near, far = r.z_readable
-    f0, f1 = r.floor_readable
-    f1 = min(f1, floor)
-    band = f1 > f0
-    pieces = []
-    for v0, v1, u0, u1 in _merged(rects + [(sh[1], sh[2], sh[0], sh[4]) for sh in shadows
-                                           if sh[5] <= far and sh[6] >= near]):
-        v1, u1 = min(v1, floor), min(u1, w - k)     # the last k columns move out of the image
-        # rows the floor band measures are left out (what is left is one or two pieces)
-        for a, b in ((v0, min(v1, f0)), (max(v0, f1), v1)) if band else ((v0, v1),):
-            if b > a and u1 > u0:
-                pieces.append((a, b, u0, u1))
-    if (f1 - f0) * w + sum((b - a) * (u1 - u0) for a, b, u0, u1 in pieces) > n // 2:
-        # most of it can read: all in one go (contiguous arrays are faster than the pieces)
-        _measure(r, disparity[:floor], noise, flat[k:k + n].reshape(floor, w))
-    else:
-        out[:floor] = 0
-        if band:
-            _measure(r, disparity[f0:f1], noise[f0:f1], flat[f0 * w + k:f1 * w + k].reshape(f1 - f0, w))
-        for a, b, u0, u1 in pieces:
-            out[a:b, u0 + k:u1 + k] = _measure(r, disparity[a:b, u0:u1], noise[a:b, u0:u1],
-                                               np.empty((b - a, u1 - u0), np.float32))
+    flat[:top * w + k] = 0
+    _measure(r, disparity[top:floor], r.disparity_bank[off + top * w:off + n].reshape(floor - top, w),
+             flat[top * w + k:k + n].reshape(floor - top, w))
     if floor < h:
         col = int(rng.integers(0, r.extra - k + 1))
         out[floor:, k:] = r.floor_depth_bank()[floor:, col:col + w - k]
     if k:
         out[:, :k] = 0
-    return out
-
-
-def _merged(rects: list[tuple[int, int, int, int]]) -> list[tuple[int, int, int, int]]:
-    """Rectangles (v0, v1, u0, u1) with the overlapping ones replaced by their bounding rectangle."""
-    out: list[tuple[int, int, int, int]] = []
-    for rect in rects:
-        v0, v1, u0, u1 = rect
-        i = 0
-        while i < len(out):
-            a0, a1, b0, b1 = out[i]
-            if a0 < v1 and v0 < a1 and b0 < u1 and u0 < b1:
-                v0, v1, u0, u1 = min(v0, a0), max(v1, a1), min(u0, b0), max(u1, b1)
-                out.pop(i)
-                i = 0
-            else:
-                i += 1
-        out.append((v0, v1, u0, u1))
     return out
 
 
@@ -1117,10 +1148,7 @@ def _measure(r: _Renderer, disparity: np.ndarray, noise: np.ndarray, out: np.nda
 
     s = r.sensor
     with np.errstate(divide="ignore"):
-        if disparity.flags.c_contiguous:
-            np.add(disparity, noise, out=out)
-        else:
-            cv2.add(disparity, noise, dst=out)                      # as np.add, faster on views
+        np.add(disparity, noise, out=out)
         np.rint(out, out=out)
         np.divide(r.fb32, out, out=out)                             # no surface (0) -> inf -> no reading
     # readings outside [min, max] (also inf, and the negative ones the dropouts made) become 0
