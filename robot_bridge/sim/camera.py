@@ -637,7 +637,9 @@ def _static_layers(r: _Renderer, pose: Pose, scene: Scene, canvas: np.ndarray, d
     no_wall = ~np.isfinite(wall_z)
     v_top = np.clip(np.where(no_wall, h, v_top), 0, h).astype(np.int16)
     v_bottom = np.clip(np.where(no_wall, h, v_bottom), 0, h).astype(np.int16)
-    wall_rgb = _rgb8(_wall_colours(r, pose, scene.walls, wall_idx, wall_z).astype(np.float64) * gain)
+    wall_rgb = _wall_colours(r, pose, scene.walls, wall_idx, wall_z)
+    if gain != 1.0:
+        wall_rgb = _rgb8(wall_rgb.astype(np.float64) * gain)
     wall_d = r.fb32 / wall_z.astype(np.float32)                    # disparity, see _Renderer
     _background(r, v_top, v_bottom, (wall_rgb, wall_d),
                 (r.floor_image(scene.floor_rgb, scene.backdrop_rgb, gain), r.floor_d_image), (canvas, disparity))
@@ -748,7 +750,7 @@ def _wall_colours(r: _Renderer, pose: Pose, walls: Sequence[Wall], idx: np.ndarr
     ex, ey = edge[idx, 0], edge[idx, 1]
     el = np.hypot(ex, ey)
     cos_inc = np.abs((dx * ey - dy * ex) / (nrm * el))
-    shade = 0.55 + 0.45 * cos_inc - 0.03 * np.minimum(np.nan_to_num(z, posinf=0), 8)
+    shade = 0.55 + 0.45 * cos_inc - 0.03 * np.minimum(np.where(z == np.inf, 0.0, z), 8)
     return np.clip(rgb[idx] * shade[:, None], 0, 255).astype(np.uint8)
 
 
@@ -1006,37 +1008,62 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, ima
     face = _face_palettes(colours, gain)[np.repeat(which, lens) + level]
     t1_32, t2_32 = t1.astype(np.float32), t2.astype(np.float32)
     d1_32 = r.fb32 / t1_32                                   # disparity of the side
-    zmin, zmax = np.minimum.reduceat(t1, starts).tolist(), np.maximum.reduceat(t2, starts).tolist()
+    zmin, zmax = np.minimum.reduceat(t1, starts), np.maximum.reduceat(t2, starts)
     hc = r.rig.height_m
-    hiders = _Hiders(r, [prisms[i] for i in order], lens, t1, t2) if labels is None and len(order) > 1 else None
-    for i, (s, e, c0, c1) in enumerate(zip(starts.tolist(), ends.tolist(), u0.tolist(), u1.tolist())):
-        p = prisms[order[i]]
+    drawn = [prisms[i] for i in order]
+    bottom = np.array([p.bottom for p in drawn])
+    top = np.array([p.top for p in drawn])
+    # the rows each can cover (a <= k z <= b inside its height range), as ``_zbuffer_band`` finds them
+    a, b = hc - top, hc - bottom
+    ks = np.stack((a / zmin, a / zmax, b / zmin, b / zmax))
+    v0s = np.maximum(0, np.floor(ks.min(axis=0) * cam.fy + cam.cy)).astype(np.intp).tolist()
+    v1s = np.minimum(cam.height, np.ceil(ks.max(axis=0) * cam.fy + cam.cy) + 1).astype(np.intp).tolist()
+    side_only = ((a < 0) & (b > 0)).tolist()       # camera between bottom and top: no cap in sight
+    limits = {(p.bottom, p.top): r.height_limits(p.bottom, p.top) for p in drawn}
+    hiders = _Hiders(r, drawn, lens, t1, t2) if labels is None and len(order) > 4 else None
+    fb32 = r.fb32
+    for i, (s, e, c0, c1, v0, v1) in enumerate(zip(starts.tolist(), ends.tolist(), u0.tolist(), u1.tolist(),
+                                                    v0s, v1s)):
+        if v1 <= v0:
+            continue
+        p = drawn[i]
         shadow = (c0, float(t1[s]))
         if hiders is not None:
             seen = hiders.visible(i, s, e, c0, c1)
             if seen is None:
                 continue
             s, e, c0, c1 = s + seen[0], s + seen[1], c0 + seen[0], c0 + seen[1]
-        band = _zbuffer_band(r, p, disparity, c0, c1, t1_32[s:e], t2_32[s:e], zmin[i], zmax[i], full, bands,
-                             d1_32[s:e])
-        if band is None:
+        lo, hi = limits[(p.bottom, p.top)]
+        lo, hi = lo[v0:v1], hi[v0:v1]
+        t1c = t1_32[None, s:e]
+        region = disparity[v0:v1, c0:c1]                     # disparity: nearer is larger
+        if side_only[i]:
+            hit = t1c <= hi
+            dhit = d1_32[None, s:e]                          # one row: the same in every row
+        else:
+            zhit = np.maximum(t1c, lo)
+            hit = zhit <= np.minimum(t2_32[None, s:e], hi)
+            dhit = fb32 / zhit
+        closer = dhit > region
+        if full is not None and p.label:
+            full[p.label] += int(np.count_nonzero(hit))
+            bands[p.label] = (v0, v1, c0, c1)
+        closer &= hit
+        if not np.count_nonzero(closer):
             continue
-        v0, v1, region, dhit, closer, lo, t1c = band
-        face_col = face[s:e]
         mask = closer.view(np.uint8)
-        if len(dhit) == 1:                               # camera between bottom and top: side only
+        colours = cv2.repeat(face[None, s:e], v1 - v0, 1)
+        if side_only[i]:
             cv2.copyTo(cv2.repeat(dhit, v1 - v0, 1), mask, region)
-            colours = cv2.repeat(face_col[None], v1 - v0, 1)
         else:
             cv2.copyTo(dhit, mask, region)
-            colours = cv2.repeat(face_col[None], v1 - v0, 1)
             cap = np.empty_like(colours)
             cap[:] = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)     # lit top / dark underside
             cv2.copyTo(cap, (t1c < lo).view(np.uint8), colours)
         cv2.copyTo(colours, mask, image[v0:v1, c0:c1])
         if labels is not None:
             cv2.copyTo(np.full(mask.shape, p.label, np.int16), mask, labels[v0:v1, c0:c1])
-        shadows.append((shadow[0], v0, v1, shadow[1], zmin[i]))
+        shadows.append((shadow[0], v0, v1, shadow[1], float(zmin[i])))
 
 
 class _Hiders:
