@@ -12,9 +12,13 @@ costs a few milliseconds instead of hundreds of thousands of fresh Gaussian draw
 Where a frame's time goes, and what keeps it short: a dozen whole-image passes (background, colour
 noise, the depth measurement), each an OpenCV call or a numpy loop on uint8/float32; the z-buffer
 holds disparity, the unit the sensor measures in. Per object only its band of rows and columns is
-touched, the cylinders' silhouettes computed for all at once. Rows below every wall and object are
-bare floor, taken from noisy floor banks at a random column. A camera that stands still keeps its
-static layers (floor, walls, props) and only draws the robots.
+touched, the cylinders' silhouettes computed for all at once; a cylinder that a nearer robot body
+already hides in some columns (the body's rows span the horizon) is not depth-tested there, and not
+at all when hidden in every column. Rows below every wall and object are bare floor, taken from noisy
+floor banks at a random column; rows above everything within the depth range (plus the largest noise
+in the bank) read 0 whatever the noise, and are not measured. A camera that stands still keeps its
+static layers (floor, walls, props) and only draws the robots. None of this changes a pixel: the
+frames are those of the plain per-pixel depth test and measurement.
 
 The world hands out ``DeferredFrame``s: a snapshot of the scene and a noise seed, rendered the first
 time someone reads the pixels, so a camera nobody looks at costs nothing; ``render_all`` renders the

@@ -181,3 +181,50 @@ def test_bare_floor_rows_from_the_noise_banks_read_like_measured_ones():
         assert np.all(np.abs(mean_a - mean_b) < 0.01 * mean_b)               # same floor depth per row
         assert abs(np.mean(rgb_b[rows, cols]) - np.mean(rgb_m[rows, cols])) < 0.5
         assert abs(np.std(rgb_b[rows, cols]) - np.std(rgb_m[rows, cols])) < 0.5
+
+
+def test_cylinders_hidden_behind_nearer_bodies_are_skipped_with_the_same_pixels(monkeypatch):
+    # robots one behind the other and a crowd beside them: ``render`` skips the cylinders that a nearer
+    # body hides for sure (and the hidden columns of the others); ``render_with_pixels`` depth-tests them all
+    from robot_bridge.sim import camera
+
+    robots = ([(1.0 + 0.6 * i, 0.05 * i, math.radians(30 * i)) for i in range(8)]
+              + [(1.5 + 0.7 * j, 0.7 if j % 2 else -0.7, math.radians(-50 * j)) for j in range(6)])
+    scene = Scene(walls=(Wall(7.0, -6.0, 7.0, 6.0),))
+    skipped = []
+    visible = camera._Hiders.visible
+
+    def spy(self, *args):
+        seen = visible(self, *args)
+        skipped.append(seen is None)
+        return seen
+
+    monkeypatch.setattr(camera._Hiders, "visible", spy)
+    for seed in range(3):
+        rgb, depth = render(RIG, CAMERA, robots, scene, np.random.default_rng(seed))
+        rgb_all, depth_all, _ = render_with_pixels(RIG, CAMERA, robots, scene, np.random.default_rng(seed))
+        assert np.array_equal(rgb, rgb_all) and np.array_equal(depth, depth_all)
+    assert any(skipped) and not all(skipped)
+
+
+def test_rows_with_nothing_in_depth_range_read_zero_as_if_measured(monkeypatch):
+    # a room far beyond the 4.5 m range, robots beyond it too, and a pole just inside it: the rows above
+    # the first that can read anything are not measured; measuring every row gives the same depth image
+    from robot_bridge.sim.camera import _renderer
+
+    room = (Wall(8.0, -8.0, 8.0, 8.0), Wall(8.0, 8.0, -8.0, 8.0), Wall(-8.0, 8.0, -8.0, -8.0), Wall(-8.0, -8.0, 8.0, -8.0))
+    pole = CylinderProp(4.4, 1.0, 0.05, 0.0, 1.0, (90, 90, 92))
+    robots = [(6.0, 0.3, 0.4), (7.0, -0.5, 1.0)]
+    r = _renderer(RIG, Scene().depth)
+    assert 240 < r.first_readable_floor_row < 300          # the floor is in range from about 4.7 m on
+    for scene in (Scene(walls=room), Scene(walls=room, props=(pole,))):
+        skipping = [render(RIG, CAMERA, robots, scene, np.random.default_rng(seed))[1] for seed in range(3)]
+        with monkeypatch.context() as patch:
+            patch.setattr(r, "z_readable", (0.0, math.inf))
+            patch.setattr(r, "first_readable_floor_row", 0)
+            measured = [render(RIG, CAMERA, robots, scene, np.random.default_rng(seed))[1] for seed in range(3)]
+        for a, b in zip(skipping, measured):
+            assert np.array_equal(a, b)
+            assert not a[:100].any() and a[300:].any()    # nothing reads high up; the floor in range does
+    u = round(RIG.camera.cx - RIG.camera.fx * 1.0 / 4.4)
+    assert np.count_nonzero(skipping[0][150:250, u - 2:u + 3]) > 100      # the pole reads
