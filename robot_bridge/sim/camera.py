@@ -12,13 +12,11 @@ costs a few milliseconds instead of hundreds of thousands of fresh Gaussian draw
 Where a frame's time goes, and what keeps it short: a dozen whole-image passes (background, colour
 noise, the depth measurement), each an OpenCV call or a numpy loop on uint8/float32; the z-buffer
 holds disparity, the unit the sensor measures in. Per object only its band of rows and columns is
-touched, the cylinders' silhouettes computed for all at once; a cylinder that a nearer robot body
-already hides in some columns (the body's rows span the horizon) is not depth-tested there, and not
-at all when hidden in every column. Rows below every wall and object are bare floor, taken from noisy
-floor banks at a random column; rows above everything within the depth range (plus the largest noise
-in the bank) read 0 whatever the noise, and are not measured. A camera that stands still keeps its
-static layers (floor, walls, props) and only draws the robots. None of this changes a pixel: the
-frames are those of the plain per-pixel depth test and measurement.
+touched, the cylinders' silhouettes and rows computed for all at once. Rows below every wall and
+object are bare floor, taken from noisy floor banks at a random column; rows above everything within
+the depth range (widened by the largest noise in the bank) read 0 whatever the noise, and are not
+measured. A camera that stands still keeps its static layers (floor, walls, props) and only draws the
+robots.
 
 The world hands out ``DeferredFrame``s: a snapshot of the scene and a noise seed, rendered the first
 time someone reads the pixels, so a camera nobody looks at costs nothing; ``render_all`` renders the
@@ -1024,19 +1022,12 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, ima
     v1s = np.minimum(cam.height, np.ceil(ks.max(axis=0) * cam.fy + cam.cy) + 1).astype(np.intp).tolist()
     side_only = ((a < 0) & (b > 0)).tolist()       # camera between bottom and top: no cap in sight
     limits = {(p.bottom, p.top): r.height_limits(p.bottom, p.top) for p in drawn}
-    hiders = _Hiders(r, drawn, lens, t1, t2) if labels is None and len(order) > 4 else None
     fb32 = r.fb32
     for i, (s, e, c0, c1, v0, v1) in enumerate(zip(starts.tolist(), ends.tolist(), u0.tolist(), u1.tolist(),
                                                     v0s, v1s)):
         if v1 <= v0:
             continue
         p = drawn[i]
-        shadow = (c0, float(t1[s]))
-        if hiders is not None:
-            seen = hiders.visible(i, s, e, c0, c1)
-            if seen is None:
-                continue
-            s, e, c0, c1 = s + seen[0], s + seen[1], c0 + seen[0], c0 + seen[1]
         lo, hi = limits[(p.bottom, p.top)]
         lo, hi = lo[v0:v1], hi[v0:v1]
         t1c = t1_32[None, s:e]
@@ -1067,60 +1058,7 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, ima
         cv2.copyTo(colours, mask, image[v0:v1, c0:c1])
         if labels is not None:
             cv2.copyTo(np.full(mask.shape, p.label, np.int16), mask, labels[v0:v1, c0:c1])
-        shadows.append((shadow[0], v0, v1, shadow[1], float(zmin[i])))
-
-
-class _Hiders:
-    """Columns of a cylinder that cylinders already drawn hide for sure, so that the depth test skips them.
-
-    An object standing on the floor and taller than the camera (a robot's body) covers, in each of its
-    columns, every row from its top edge down to the floor line: a span that contains the horizon. Any
-    object farther in that column whose span lies inside it is hidden there (the z-buffer holds that
-    object, or something nearer). Kept per column: the nearest such depth drawn so far (in drawing
-    order, so the pixels and the shadows are exactly those of the plain depth test), with margins far
-    above rounding; the few cylinders hidden in every column cost nothing more.
-    """
-
-    MARGIN = 1e-5
-
-    def __init__(self, r: _Renderer, prisms: list[_Prism], lens: np.ndarray, t1: np.ndarray,
-                 t2: np.ndarray) -> None:
-        hc = r.rig.height_m
-        bottom = np.array([p.bottom for p in prisms])
-        top = np.array([p.top for p in prisms])
-        self.occluder = ((bottom <= 0.0) & (top > hc)).tolist()
-        self.nearest = np.full(r.cam.width, np.inf)
-        if not any(self.occluder):
-            self.t_hidden = None
-            return
-        m = self.MARGIN
-        above = float(top[np.array(self.occluder)].min()) - hc     # the lowest occluder's height over the camera
-        up, down = np.repeat(top - hc, lens), np.repeat(hc - bottom, lens)
-        # how far above and below the horizon (height over depth) each column of a cylinder reaches
-        reach_up = np.where(up > 0, up / t1, up / t2)
-        reach_down = np.where(down > 0, down / t1, down / t2)
-        with np.errstate(divide="ignore"):
-            # an occluder nearer than this in the column hides it: nearer, and reaching as far up and down
-            t_hidden = np.minimum(t1 / (1 + m), np.where(reach_up > 0, above / reach_up, np.inf))
-            np.minimum(t_hidden, np.where(reach_down > 0, hc / reach_down, np.inf), out=t_hidden)
-        self.t_hidden = t_hidden * (1 - m)
-        self.t1 = t1
-
-    def visible(self, i: int, s: int, e: int, c0: int, c1: int) -> tuple[int, int] | None:
-        """Entries ``s:e`` (columns ``c0:c1``) of cylinder ``i`` in drawing order: the range of them, as
-        offsets from ``s``, that may show; None when none does. Records cylinder ``i`` as drawn."""
-        if self.t_hidden is None:
-            return 0, e - s
-        nearest = self.nearest[c0:c1]
-        hidden = nearest < self.t_hidden[s:e]
-        if self.occluder[i]:
-            np.minimum(nearest, self.t1[s:e], out=nearest)
-        if not np.count_nonzero(hidden):
-            return 0, e - s
-        shown = np.flatnonzero(~hidden)
-        if not shown.size:
-            return None
-        return int(shown[0]), int(shown[-1]) + 1
+        shadows.append((c0, v0, v1, float(t1[s]), float(zmin[i])))
 
 
 def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rng: np.random.Generator,

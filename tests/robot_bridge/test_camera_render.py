@@ -183,30 +183,6 @@ def test_bare_floor_rows_from_the_noise_banks_read_like_measured_ones():
         assert abs(np.std(rgb_b[rows, cols]) - np.std(rgb_m[rows, cols])) < 0.5
 
 
-def test_cylinders_hidden_behind_nearer_bodies_are_skipped_with_the_same_pixels(monkeypatch):
-    # robots one behind the other and a crowd beside them: ``render`` skips the cylinders that a nearer
-    # body hides for sure (and the hidden columns of the others); ``render_with_pixels`` depth-tests them all
-    from robot_bridge.sim import camera
-
-    robots = ([(1.0 + 0.6 * i, 0.05 * i, math.radians(30 * i)) for i in range(8)]
-              + [(1.5 + 0.7 * j, 0.7 if j % 2 else -0.7, math.radians(-50 * j)) for j in range(6)])
-    scene = Scene(walls=(Wall(7.0, -6.0, 7.0, 6.0),))
-    skipped = []
-    visible = camera._Hiders.visible
-
-    def spy(self, *args):
-        seen = visible(self, *args)
-        skipped.append(seen is None)
-        return seen
-
-    monkeypatch.setattr(camera._Hiders, "visible", spy)
-    for seed in range(3):
-        rgb, depth = render(RIG, CAMERA, robots, scene, np.random.default_rng(seed))
-        rgb_all, depth_all, _ = render_with_pixels(RIG, CAMERA, robots, scene, np.random.default_rng(seed))
-        assert np.array_equal(rgb, rgb_all) and np.array_equal(depth, depth_all)
-    assert any(skipped) and not all(skipped)
-
-
 def test_rows_with_nothing_in_depth_range_read_zero_as_if_measured(monkeypatch):
     # a room far beyond the 4.5 m range, robots beyond it too, and a pole just inside it: the rows above
     # the first that can read anything are not measured; measuring every row gives the same depth image
