@@ -2,7 +2,9 @@
 
 The scheduler never polls idle agents (a ready queue, filled when an agent gets a message, an
 event or a result), so a 100-agent ring costs what a 10-agent ring does. Results from other
-threads (robot actions, Zenoh messages, the diagnoser) wake the loop through a condition variable.
+threads (robot actions, Zenoh messages, the diagnoser) wake the loop through a condition variable;
+a message or wake-up from the loop's own thread (an agent sending to another in-process) takes no
+lock and notifies nobody: nobody sleeps while the loop runs.
 """
 from __future__ import annotations
 
@@ -10,6 +12,7 @@ import logging
 import threading
 import time
 from collections import deque
+from threading import get_ident
 from typing import Callable, Iterable
 
 from agentspeak.agent import Agent
@@ -67,6 +70,7 @@ class LocalRuntime:
         self._cond = threading.Condition()
         self._sleepers = 0                   # threads waiting on _cond (changed under its lock)
         self._stop_at: float | None = None
+        self._loop_thread: int | None = None   # ident of the thread inside run(), if any
         self.stopped = False
         self.printer = printer
         self.environment = environment
@@ -100,6 +104,13 @@ class LocalRuntime:
 
     # -- cross-thread entry points
     def wake(self, agent: Agent) -> None:
+        if get_ident() == self._loop_thread and not self._sleepers:
+            # from the loop's own thread nobody waits to be notified: no lock. A wake from another
+            # thread at the same moment may queue the agent twice: one turn with nothing to do.
+            if agent.name not in self._ready_set:
+                self._ready_set.add(agent.name)
+                self.ready.append(agent)
+            return
         with self._cond:
             if agent.name not in self._ready_set:
                 self._ready_set.add(agent.name)
@@ -110,6 +121,14 @@ class LocalRuntime:
     def route(self, message: Message) -> None:
         target = self.agents.get(message.receiver)
         if target is not None:
+            if get_ident() == self._loop_thread and not self._sleepers \
+                    and type(target.arch).wake is LocalArch.wake:
+                # in-process delivery from the loop's thread (Agent.deliver and wake, inlined)
+                target.mailbox.append(message)
+                if message.receiver not in self._ready_set:
+                    self._ready_set.add(message.receiver)
+                    self.ready.append(target)
+                return
             target.deliver(message)
             return
         if self.remote is not None and self.remote(message):
@@ -144,39 +163,54 @@ class LocalRuntime:
 
     def run(self, timeout: float | None = None, stop_when_idle: bool = True) -> str:
         """Run until ``.stopMAS``, until idle (if asked) or until ``timeout`` seconds. Returns why."""
+        outer = self._loop_thread
+        self._loop_thread = get_ident()
+        try:
+            return self._run(timeout, stop_when_idle)
+        finally:
+            self._loop_thread = outer
+
+    def _run(self, timeout: float | None, stop_when_idle: bool) -> str:
         deadline = None if timeout is None else time.monotonic() + timeout
         ready = self.ready
+        ready_set = self._ready_set
         timed = self._timed
         timed.update(a for a in self.agents.values() if a.timers)
+        monotonic = time.monotonic
+        turn = range(CYCLES_PER_TURN)
         while True:
-            now = time.monotonic()
-            if self._stop_at is not None and now >= self._stop_at:
+            if self._stop_at is not None and monotonic() >= self._stop_at:
                 self.stopped = True
                 return "stopped"
-            if deadline is not None and now >= deadline:
+            if deadline is not None and monotonic() >= deadline:
                 return "timeout"
             # timers that are due make their agents ready (only agents that have timers are looked at)
             if timed:
+                now = monotonic()
                 for agent in list(timed):
                     if not agent.timers:
                         timed.discard(agent)
-                    elif agent.timers[0][0] <= now and agent.name not in self._ready_set:
-                        self._ready_set.add(agent.name)
+                    elif agent.timers[0][0] <= now and agent.name not in ready_set:
+                        ready_set.add(agent.name)
                         ready.append(agent)
             if ready:
-                with self._cond:
-                    agent = ready.popleft()
-                    self._ready_set.discard(agent.name)
+                # no lock: a wake from another thread in between either finds the agent still marked
+                # ready (and the has_work() check after its turn sees the news) or queues it again
+                agent = ready.popleft()
+                ready_set.discard(agent.name)
                 cycle = agent.cycle
                 CURRENT.agent = agent  # whose beliefs functions such as .count(Q) read
-                for _ in range(CYCLES_PER_TURN):
+                for _ in turn:
                     cycle()
                     if not (agent.events or agent.running or agent.mailbox or agent.feedback) \
                             or self._stop_at is not None:
                         break
                 if agent.timers:
                     timed.add(agent)  # timers are only set by the agent itself, during its turn
-                if agent.has_work() or (agent.timers and agent.timers[0][0] <= time.monotonic()):
+                    if agent.timers[0][0] <= monotonic():
+                        self.wake(agent)
+                        continue
+                if agent.events or agent.running or agent.mailbox or agent.feedback:  # has_work()
                     self.wake(agent)
                 continue
             if stop_when_idle and self.idle() and not self._external_pending():
@@ -187,7 +221,7 @@ class LocalRuntime:
                 waits.append(self._stop_at)
             if deadline is not None:
                 waits.append(deadline)
-            wait = max(0.0, min(waits) - time.monotonic()) if waits else 0.5
+            wait = max(0.0, min(waits) - monotonic()) if waits else 0.5
             with self._cond:
                 if not self.ready:
                     self._sleepers += 1
