@@ -25,7 +25,7 @@ from agentspeak import program as P
 from agentspeak.beliefs import SELF, SOURCE_PERCEPT, SOURCE_SELF, BeliefBase, has_source
 from agentspeak.communication import receive_message
 from agentspeak.intentions import Event, Frame, IntendedMeans, Intention, PlanLibrary
-from agentspeak.program import ACHIEVE, ADD, BEL, DEL, TEST, Plan, PlanTerm, Program, Trigger
+from agentspeak.program import ACHIEVE, ADD, BEL, DEL, TEST, Plan, PlanTerm, Program, Trigger, plan_matcher
 from agentspeak.solver import _COMPILED, SolveError, _true_k, compiled, solve, solve_first
 from agentspeak.stdlib.registry import STDLIB, IAError, Registry, Suspend
 from agentspeak.terms import (
@@ -281,21 +281,35 @@ class Agent:
         intention = ev.intention
         if intention is not None and intention.dropped:
             return True
-        relevant = self.plans.relevant(trigger)
+        lit = trigger.literal
+        if type(lit) is Literal:
+            # PlanLibrary.relevant, inlined; every plan listed under the key has the event's
+            # functor and arity, or a variable trigger (whose matcher has no variables tuple)
+            args = lit.args
+            plans = self.plans
+            index = plans._index if plans._index is not None else plans._build()
+            relevant = index.get((trigger.op, trigger.kind, lit.neg, lit.functor, len(args)))
+            if relevant is None:
+                relevant = plans.relevant(trigger)
+            if Var in map(type, args):
+                args = None  # variables in the event: bind by unification (shared or repeated ones)
+        else:
+            args = None
+            relevant = self.plans.relevant(trigger)
         if not relevant:
             self._no_plan(ev, "no_relevant", f"found a goal for which there is no relevant plan: {trigger}")
             return True
-        lit = trigger.literal
         for plan in relevant:
-            b: dict = {}
-            if not unify(plan.trigger.literal, lit, b, []):
-                continue
-            context = plan.context
+            tvars, context = plan.matcher or plan_matcher(plan)
+            if tvars is not None and args is not None:
+                b: dict = dict(zip(tvars, args))  # distinct variables <- the event's arguments
+            else:
+                b = {}
+                if not unify(plan.trigger.literal, lit, b, []):
+                    continue
             if context is not None:
                 try:
-                    entry = _COMPILED.get(id(context))
-                    fn = entry[1] if entry is not None and entry[0] is context else compiled(context)
-                    if not fn(self, b, [], _true_k):
+                    if not context(self, b, [], _true_k):
                         continue
                 except (SolveError, ArithmeticError_) as exc:
                     log.warning("[%s] error in the context of the plan at %s:%s: %s", self.name,

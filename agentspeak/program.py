@@ -311,6 +311,8 @@ class Plan:
     line: int = 0
     atomic: bool = field(init=False, default=False)
     all_unifs: bool = field(init=False, default=False)
+    matcher: tuple | None = field(init=False, default=None, repr=False)
+    """(trigger variables, compiled context) for deliberation, made on first use (``plan_matcher``)."""
 
     def __post_init__(self) -> None:
         self.refresh_label_flags()
@@ -355,6 +357,22 @@ class Plan:
         if self.body:
             text += " <- " + body_str(self.body)
         return text
+
+
+def plan_matcher(plan: Plan) -> tuple:
+    """What deliberation needs of a plan, worked out once: ``(vars, context)``. ``vars`` is the tuple of
+    trigger arguments when they are distinct variables and the trigger has no annotations (then an
+    event binds them one to one, without unification), else None; ``context`` is the compiled
+    context closure, or None for a plan without one."""
+    from agentspeak.solver import compiled
+
+    lit = plan.trigger.literal
+    tvars = None
+    if (type(lit) is Literal and lit.annots is None and lit.annot_tail is None
+            and all(type(a) is Var for a in lit.args) and len(set(map(id, lit.args))) == len(lit.args)):
+        tvars = lit.args
+    plan.matcher = (tvars, compiled(plan.context) if plan.context is not None else None)
+    return plan.matcher
 
 
 @dataclass(eq=False)
