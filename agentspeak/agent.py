@@ -300,7 +300,7 @@ class Agent:
             self._no_plan(ev, "no_relevant", f"found a goal for which there is no relevant plan: {trigger}")
             return True
         for plan in relevant:
-            tvars, context = plan.matcher or plan_matcher(plan)
+            tvars, context, _ = plan.matcher or plan_matcher(plan)
             if tvars is not None and args is not None:
                 b: dict = dict(zip(tvars, args))  # distinct variables <- the event's arguments
             else:
@@ -362,16 +362,16 @@ class Agent:
         stack = intention.stack
         if ev.handles is not None or (trigger.op == DEL and trigger.kind != BEL):
             im.handles = ev.handles if ev.handles is not None else _PENDING_GOAL
-        elif self.tro and trigger.kind == ACHIEVE and trigger.op == ADD and stack:
+        elif stack and self.tro:
             top = stack[-1]
-            tt = top.plan.trigger
             frames = top.frames
-            if (len(frames) == 1 and frames[0].pc == len(frames[0].body) - 1  # at its last step
-                    and tt.kind == ACHIEVE and tt.op == ADD and top.handles is None
-                    and not plan.atomic and not top.plan.atomic):
-                tl, pl = tt.literal, plan.trigger.literal
-                if (type(tl) is Literal and type(pl) is Literal and tl.functor == pl.functor
-                        and len(tl.args) == len(pl.args)):
+            if len(frames) == 1 and top.handles is None:
+                f0 = frames[0]
+                tail = (plan.matcher or plan_matcher(plan))[2]
+                # a +!g event for a plan of the caller's own +!g trigger (same functor and arity,
+                # neither atomic), the caller at its last formula
+                if (tail is not None and trigger.op == ADD and trigger.kind == ACHIEVE
+                        and f0.pc == len(f0.body) - 1 and (top.plan.matcher or plan_matcher(top.plan))[2] == tail):
                     # Tail call: the finished caller is replaced; the callee reports its result
                     # directly to the caller's caller, so the stack stays flat.
                     stack.pop()

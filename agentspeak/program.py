@@ -321,6 +321,7 @@ class Plan:
         annots = self.label.annots if self.label is not None and self.label.annots else ()
         names = {a.functor for a in annots if isinstance(a, Literal)}
         self.atomic = "atomic" in names
+        self.matcher = None  # tail calls depend on atomic
         self.all_unifs = "all_unifs" in names
 
     def ensure_label(self) -> Literal:
@@ -360,10 +361,11 @@ class Plan:
 
 
 def plan_matcher(plan: Plan) -> tuple:
-    """What deliberation needs of a plan, worked out once: ``(vars, context)``. ``vars`` is the tuple of
+    """What deliberation needs of a plan, worked out once: ``(vars, context, tail)``. ``vars`` is the tuple of
     trigger arguments when they are distinct variables and the trigger has no annotations (then an
     event binds them one to one, without unification), else None; ``context`` is the compiled
-    context closure, or None for a plan without one."""
+    context closure, or None for a plan without one; ``tail`` is ``(functor, arity)`` of a non-atomic
+    ``+!g`` plan (a tail call replaces a caller with the same), else None."""
     from agentspeak.solver import compiled
 
     lit = plan.trigger.literal
@@ -371,7 +373,11 @@ def plan_matcher(plan: Plan) -> tuple:
     if (type(lit) is Literal and lit.annots is None and lit.annot_tail is None
             and all(type(a) is Var for a in lit.args) and len(set(map(id, lit.args))) == len(lit.args)):
         tvars = lit.args
-    plan.matcher = (tvars, compiled(plan.context) if plan.context is not None else None)
+    trig = plan.trigger
+    tail = None  # the key of a tail call's caller and callee: (functor, arity) of a non-atomic +!g plan
+    if trig.op == ADD and trig.kind == ACHIEVE and type(lit) is Literal and not plan.atomic:
+        tail = (lit.functor, len(lit.args))
+    plan.matcher = (tvars, compiled(plan.context) if plan.context is not None else None, tail)
     return plan.matcher
 
 

@@ -423,7 +423,7 @@ def _compile_fact_literal(f: Literal, then):
     if then is None:
         def literal(kb, b, trail, k):
             bb = kb.bb
-            if annot_vars or bb.has_rules(key):
+            if annot_vars or bb._rules.get(key):  # has_rules, inlined
                 for _ in solve(kb, f, b, trail):
                     if k():
                         return True
@@ -438,7 +438,7 @@ def _compile_fact_literal(f: Literal, then):
 
     def literal_then(kb, b, trail, k):
         bb = kb.bb
-        if annot_vars or bb.has_rules(key):
+        if annot_vars or bb._rules.get(key):  # has_rules, inlined
             for _ in solve(kb, f, b, trail):
                 if then(kb, b, trail, k):
                     return True

@@ -58,7 +58,11 @@ class Literal:
                  neg: bool = False, annot_tail: Var | None = None) -> None:
         self.functor = functor
         self.args = args
-        self.annots = normalise_annots(annots) if annots else None
+        if annots:
+            # one annotation (the usual source(...)) is already normal
+            self.annots = annots if len(annots) == 1 and type(annots) is tuple else normalise_annots(annots)
+        else:
+            self.annots = None
         self.neg = neg
         self.annot_tail = annot_tail
         self._hash = None
@@ -437,11 +441,15 @@ def resolve(t: Term, b: Bindings) -> Term:
             if type(left) is int and type(right) is int:  # the common case, without a call
                 op = t.op
                 if op == "+":
-                    return normalise_number(left + right)
-                if op == "-":
-                    return normalise_number(left - right)
-                if op == "*":
-                    return normalise_number(left * right)
+                    r = left + right
+                elif op == "-":
+                    r = left - right
+                elif op == "*":
+                    r = left * right
+                else:
+                    r = None
+                if r is not None:
+                    return r if -_EXACT < r < _EXACT else float(r)  # normalise_number, inlined
         value = try_eval_arith(t.op, left, right)
         if value is not None:
             return value
@@ -589,6 +597,10 @@ def _num(x: Term, op: str) -> float | int:
     if isinstance(x, bool):
         return int(x)
     raise ArithmeticError_(f"'{op}' needs numbers, got {to_str(x)}")
+
+
+_EXACT = 2 ** 53
+"""Integers at least this large are doubles in Jason (they print and compare as such)."""
 
 
 def normalise_number(x: float | int) -> float | int:
