@@ -409,7 +409,30 @@ class Agent:
         if intention is None or intention.dropped or not intention.stack:
             return
         intention.suspended = None
-        self.exec_int(intention)
+        # exec_int, inlined (this runs once per reasoning cycle)
+        im = intention.stack[-1]
+        frame = im.frames[-1]
+        if frame.pc >= len(frame.body):
+            if frame.kind != "body":
+                self._loop_step(intention, im, frame)
+            self.clr_int(intention)
+        else:
+            instr = frame.body[frame.pc]
+            try:
+                _DISPATCH[type(instr)](self, intention, im, frame, instr)
+            except IAError as exc:
+                self._fail(intention, exc.error, exc.message, instr, extra=exc.annots)
+            except SolveError as exc:
+                self._fail(intention, exc.error, exc.message, instr)
+            except ArithmeticError_ as exc:
+                self._fail(intention, "wrong_arguments", str(exc), instr)
+            else:
+                if intention.suspended is None and not intention.dropped:
+                    stack = intention.stack
+                    frames = stack[-1].frames if stack else None
+                    # clr_int, unless the top plan still has formulas to run (its first test, inlined)
+                    if not (frames is not None and len(frames) == 1 and frames[0].pc < len(frames[0].body)):
+                        self.clr_int(intention)
         if intention.suspended is None and intention.stack and not intention.dropped:
             self.running.append(intention)
 
@@ -778,6 +801,31 @@ def _add_annots(lit: Literal, annots: tuple) -> Literal:
 
 # ---------------------------------------------------------------------- body formulas
 def _exec_achieve(ag: Agent, intention: Intention, im: IntendedMeans, frame: Frame, instr) -> None:
+    lit = instr.term
+    if type(lit) is Literal and lit.annots is None and lit.annot_tail is None:
+        # _fresh_goal's usual case, inlined: arguments that resolve to numbers, strings or atoms
+        b = im.b
+        args = []
+        for a in lit.args:
+            ta = type(a)
+            if ta is Var:
+                a = b.get(a, a)
+                ta = type(a)
+            if ta is not int and ta is not float and ta is not str:
+                a = resolve(a, b)
+                ta = type(a)
+                if not (ta is int or ta is float or ta is str
+                        or (ta is Literal and not a.args and a.annots is None)):
+                    break
+            args.append(a)
+        else:
+            lit = Literal(lit.functor, tuple(args), _SOURCE_SELF_ONLY, lit.neg)
+            trigger = Trigger(ADD, ACHIEVE, lit)
+            if ag.event_waiters:
+                ag._notify_waiters(trigger)
+            ag.events.append(Event(trigger, intention))
+            intention.suspended = "event"
+            return
     trigger = Trigger(ADD, ACHIEVE, ag._fresh_goal(instr.term, im.b))
     if ag.event_waiters:  # post_internal, inlined: this is the step of every subgoal
         ag._notify_waiters(trigger)

@@ -166,7 +166,8 @@ class BeliefBase:
                 return bucket.with_first_arg(a)
             if t is Literal and not a.args:
                 return bucket.with_first_arg(("atom", a.functor, a.neg))
-        return bucket.all()
+        s = bucket._sorted
+        return s if s is not None else bucket.all()
 
     def literals(self) -> Iterator[Literal]:
         for bucket in self._facts.values():
