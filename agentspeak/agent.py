@@ -349,9 +349,9 @@ class Agent:
     def push_im(self, ev: Event, plan: Plan, b: dict) -> None:
         """Rule AddIM (with tail-recursion optimisation)."""
         trigger = ev.trigger
-        im = IntendedMeans(plan, b, trigger.literal)
         intention = ev.intention
         if intention is None:
+            im = IntendedMeans(plan, b, trigger.literal)
             intention = Intention()
             intention.stack.append(im)
             if plan.atomic:
@@ -361,23 +361,13 @@ class Agent:
             return
         stack = intention.stack
         if ev.handles is not None or (trigger.op == DEL and trigger.kind != BEL):
+            im = IntendedMeans(plan, b, trigger.literal)
             im.handles = ev.handles if ev.handles is not None else _PENDING_GOAL
-        elif stack and self.tro:
-            top = stack[-1]
-            frames = top.frames
-            if len(frames) == 1 and top.handles is None:
-                f0 = frames[0]
-                tail = (plan.matcher or plan_matcher(plan))[2]
-                # a +!g event for a plan of the caller's own +!g trigger (same functor and arity,
-                # neither atomic), the caller at its last formula
-                if (tail is not None and trigger.op == ADD and trigger.kind == ACHIEVE
-                        and f0.pc == len(f0.body) - 1 and (top.plan.matcher or plan_matcher(top.plan))[2] == tail):
-                    # Tail call: the finished caller is replaced; the callee reports its result
-                    # directly to the caller's caller, so the stack stays flat.
-                    stack.pop()
-                    if stack:  # at the bottom of the stack nobody reads the result
-                        im.result = resolve(top.result, top.b)
-        stack.append(im)
+            stack.append(im)
+        elif stack and self.tro and self._tail_call(trigger, stack, plan, b):
+            pass
+        else:
+            stack.append(IntendedMeans(plan, b, trigger.literal))
         if plan.atomic:
             intention.atomic += 1
             self.atomic_intention = intention
@@ -387,6 +377,30 @@ class Agent:
                 self.suspended.pop(intention.id, None)
             if intention not in self.running:
                 self.running.append(intention)
+
+    @staticmethod
+    def _tail_call(trigger: Trigger, stack: list, plan: Plan, b: dict) -> bool:
+        """A +!g event for a plan of the caller's own +!g trigger (same functor and arity, neither
+        atomic), the caller at its last formula: the finished caller is replaced by the callee, which
+        reports its result directly to the caller's caller, so the stack stays flat. The caller's
+        intended means object is reused for the callee (nothing else refers to a finished caller)."""
+        top = stack[-1]
+        frames = top.frames
+        if len(frames) != 1 or top.handles is not None:
+            return False
+        f0 = frames[0]
+        tail = (plan.matcher or plan_matcher(plan))[2]
+        if (tail is None or trigger.op != ADD or trigger.kind != ACHIEVE or f0.pc != len(f0.body) - 1
+                or (top.plan.matcher or plan_matcher(top.plan))[2] != tail):
+            return False
+        # what the caller's caller unifies with: the caller's result (at the bottom nobody reads it)
+        top.result = resolve(top.result, top.b) if len(stack) > 1 else plan.trigger.literal
+        top.plan = plan
+        top.b = b
+        top.event_literal = trigger.literal
+        f0.body = plan.body
+        f0.pc = 0
+        return True
 
     # -- act
     def sel_int(self) -> Intention:
