@@ -989,11 +989,30 @@ def _action_outcome(value) -> tuple[bool, str]:
 
 def _exec_internal(ag: Agent, intention, im, frame, instr) -> None:
     lit = instr.term
-    spec = ag.registry.get(lit.functor)
+    spec = ag.registry.actions.get(lit.functor) or ag.registry.get(lit.functor)
     if spec is None:
         raise IAError("ia_failed", f"unknown internal action {lit.functor}")
     b = im.b
-    args = tuple([resolve(a, b) for a in lit.args]) if lit.args else ()
+    if lit.args:
+        out = []
+        for a in lit.args:  # resolve(a, b), without a call for variables bound to atoms or numbers
+            ta = type(a)
+            if ta is Var:
+                v = b.get(a)
+                if v is not None:
+                    tv = type(v)
+                    if tv is int or tv is float or tv is str or (tv is Literal and not v.args and v.annots is None
+                                                                   and v.annot_tail is None):
+                        out.append(v)
+                        continue
+            elif ta is int or ta is float or ta is str or (ta is Literal and not a.args and a.annots is None
+                                                           and a.annot_tail is None):
+                out.append(a)
+                continue
+            out.append(resolve(a, b))
+        args = tuple(out)
+    else:
+        args = ()
     n = len(args)
     if n < spec.min_args or (spec.max_args is not None and n > spec.max_args):
         ag._check_arity(spec, lit, args)
@@ -1015,7 +1034,10 @@ def _exec_internal(ag: Agent, intention, im, frame, instr) -> None:
 
 
 def _exec_constraint(ag: Agent, intention, im, frame, instr) -> None:
-    if solve_first(ag, instr.term, im.b):
+    term = instr.term
+    entry = _COMPILED.get(id(term))  # solve_first, inlined
+    fn = entry[1] if entry is not None and entry[0] is term else compiled(term)
+    if fn(ag, im.b, [], _true_k):
         frame.pc += 1
         return
     raise IAError("constraint_failed", f"constraint {to_str(resolve(instr.term, im.b))} is false")

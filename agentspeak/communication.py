@@ -12,10 +12,10 @@ import itertools
 import logging
 import os
 import uuid
-from dataclasses import dataclass, field
 from typing import Any
 
 from agentspeak.beliefs import SELF, SOURCE_SELF, source
+from agentspeak.intentions import Event
 from agentspeak.program import ACHIEVE, ADD, BEL, DEL, Plan, PlanTerm, Trigger
 from agentspeak.solver import SolveError, solve
 from agentspeak.terms import NIL, Cons, Literal, Term, Var, is_ground, list_items, make_list, resolve, to_str
@@ -34,14 +34,42 @@ def new_message_id() -> str:
     return f"mid{_prefix}{next(_ids)}"
 
 
-@dataclass
 class Message:
-    sender: str
-    receiver: str
-    performative: str
-    content: Term
-    msg_id: str = field(default_factory=new_message_id)
-    in_reply_to: str | None = None
+    """A speech act. Its ``msg_id`` (unique across processes) is made when first read: most messages
+    (``tell``, ``achieve``) never need one, and making it is a good part of an in-process send."""
+
+    __slots__ = ("sender", "receiver", "performative", "content", "_msg_id", "in_reply_to")
+
+    def __init__(self, sender: str, receiver: str, performative: str, content: Term,
+                 msg_id: str | None = None, in_reply_to: str | None = None) -> None:
+        self.sender = sender
+        self.receiver = receiver
+        self.performative = performative
+        self.content = content
+        self._msg_id = msg_id
+        self.in_reply_to = in_reply_to
+
+    @property
+    def msg_id(self) -> str:
+        mid = self._msg_id
+        if mid is None:
+            mid = self._msg_id = new_message_id()
+        return mid
+
+    @msg_id.setter
+    def msg_id(self, value: str) -> None:
+        self._msg_id = value
+
+    def __eq__(self, other: object) -> bool:
+        return (type(other) is Message and self.sender == other.sender and self.receiver == other.receiver
+                and self.performative == other.performative and self.content == other.content
+                and self.msg_id == other.msg_id and self.in_reply_to == other.in_reply_to)
+
+    __hash__ = None  # type: ignore[assignment]  # mutable, like the dataclass it replaces
+
+    def __repr__(self) -> str:
+        return (f"Message(sender={self.sender!r}, receiver={self.receiver!r}, performative={self.performative!r}, "
+                f"content={self.content!r}, msg_id={self.msg_id!r}, in_reply_to={self.in_reply_to!r})")
 
     def __str__(self) -> str:
         return f"<{self.msg_id},{self.sender},{self.performative},{self.receiver},{to_str(self.content)}>"
@@ -111,6 +139,14 @@ def receive_message(agent: Any, msg: Message) -> None:
     if agent.plans.relevant(_KQML_RECEIVED):
         goal = Literal("kqml_received", (sender, Literal(perf), msg.content, msg.msg_id), (SOURCE_SELF,))
         agent.post_external(Trigger(ADD, ACHIEVE, goal), force=True)
+        return
+    content = msg.content
+    if perf == "achieve" and type(content) is Literal and content.annots is None and content.annot_tail is None:
+        # _achieve of one literal without annotations (the usual request), inlined
+        trigger = Trigger(ADD, ACHIEVE, Literal(content.functor, content.args, (_source_of(sender),), content.neg))
+        if agent.event_waiters:
+            agent._notify_waiters(trigger)
+        agent.events.append(Event(trigger))
         return
     handler = _HANDLERS.get(perf)
     if handler is None:

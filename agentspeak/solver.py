@@ -498,8 +498,11 @@ def _compile_unify(f: Rel):
     def unify_rel(kb, b, trail, k):
         mark = len(trail)
         x = left0
-        if type(x) is Var:
-            x = deref(x, b)
+        while type(x) is Var:  # deref, inlined
+            v = b.get(x)
+            if v is None:
+                break
+            x = v
         if type(x) is not int and type(x) is not float and type(x) is not Var:
             try:
                 x = resolve(x, b)
@@ -515,6 +518,13 @@ def _compile_unify(f: Rel):
                 raise SolveError("wrong_arguments", str(exc)) from None
             if type(y) is Func or type(x) is Func:
                 raise SolveError("wrong_arguments", f"{to_str(f, b)}: a function argument is unbound")
+        if type(x) is Var and type(y) is not Var:  # `X = value` with X free: bind, no unify call
+            b[x] = y
+            trail.append(x)
+            if k():
+                return True
+            undo(b, trail, mark)
+            return False
         if unify(x, y, b, trail) and k():
             return True
         undo(b, trail, mark)

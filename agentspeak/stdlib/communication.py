@@ -36,7 +36,7 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
     if not isinstance(performative, Literal) or performative.args:
         raise wrong_arguments(".send: the performative must be an atom")
     perf = performative.functor
-    names = _names(receiver)
+    names = (receiver.functor,) if type(receiver) is Literal and not receiver.args else _names(receiver)
     if isinstance(content, Var):
         raise wrong_arguments(".send: the content is an unbound variable")
     sender = agent.name
