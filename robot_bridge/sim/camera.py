@@ -1073,24 +1073,25 @@ def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rng: np.ran
     """
     s = r.sensor
     h, w = disparity.shape
-    if s.shadows and shadows:
-        fb1 = s.focal_baseline_px_m
-        for u_left, v0, v1, zf, _ in shadows:
-            if zf >= s.max_m:
-                continue            # nothing behind it is in range anyway
-            # the projector sits beside the IR camera: the background d columns left of a nearer object
-            # gets no pattern while d <= fb * (1/z_object - 1/z_background), i.e. beyond the depth
-            # 1 / (1/z_object - d/fb) (and at least 5 cm behind the object)
-            widest = int(fb1 / zf) + 1
-            a = max(0, u_left - widest)
-            if a >= u_left:
-                continue
-            d = np.arange(u_left - a, 0, -1, dtype=np.float64)
-            room = 1.0 / zf - d / fb1
-            beyond = np.where(room > 0, 1.0 / np.maximum(room, 1e-12), np.inf)
-            limit = r.fb32 / np.maximum(beyond, zf + 0.05).astype(np.float32)      # as a disparity
+    fb1 = s.focal_baseline_px_m
+    # the projector sits beside the IR camera: the background d columns left of a nearer object gets
+    # no pattern while d <= fb * (1/z_object - 1/z_background), i.e. beyond the depth
+    # 1 / (1/z_object - d/fb) (and at least 5 cm behind the object); nothing behind an object beyond
+    # the range is in range anyway
+    cast = [(max(0, u_left - int(fb1 / zf) - 1), u_left, v0, v1, zf)
+            for u_left, v0, v1, zf, _ in (shadows if s.shadows else ()) if zf < s.max_m]
+    cast = [c for c in cast if c[0] < c[1]]
+    if cast:                        # the limits of all shadows at once, then each shadow's block
+        widths = np.array([u_left - a for a, u_left, _, _, _ in cast])
+        ends = np.cumsum(widths)
+        d = (np.repeat(ends, widths) - np.arange(int(ends[-1]))).astype(np.float64)   # width .. 1 each
+        zf = np.repeat(np.array([c[4] for c in cast]), widths)
+        room = 1.0 / zf - d / fb1
+        beyond = np.where(room > 0, 1.0 / np.maximum(room, 1e-12), np.inf)
+        limits = r.fb32 / np.maximum(beyond, zf + 0.05).astype(np.float32)           # as a disparity
+        for (a, u_left, v0, v1, _), e, w_ in zip(cast, ends.tolist(), widths.tolist()):
             blk = disparity[v0:v1, a:u_left]
-            blk[blk <= limit[None, :]] = 0
+            blk[blk <= limits[None, e - w_:e]] = 0
 
     k = max(0, int(s.registration_px))          # depth-to-colour registration error (columns)
     n = floor * w
