@@ -273,6 +273,7 @@ class _Renderer:
         self._floor_depth_bank: np.ndarray | None = None
         self._floor_colour_cache: dict[tuple, np.ndarray] = {}
         self._height_cache: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+        self._cap_blocks: dict[tuple, np.ndarray] = {}
         self._static: OrderedDict[tuple, tuple] = OrderedDict()     # static layers of cameras standing still
         self._poses_seen: OrderedDict[tuple, None] = OrderedDict()
         self._static_lock = threading.Lock()
@@ -337,6 +338,20 @@ class _Renderer:
                 self._floor_colour_cache.clear()
             self._floor_colour_cache[key] = bank
         return bank
+
+    def cap_block(self, rgb: RGB, factor: float, rows: int, cols: int) -> np.ndarray:
+        """A ``rows`` x ``cols`` block of one cap colour to copy from through a mask (kept per colour,
+        grown as needed; read-only)."""
+        key = (rgb, factor)
+        block = self._cap_blocks.get(key)
+        if block is None or block.shape[0] < rows or block.shape[1] < cols:
+            shape = (rows, cols) if block is None else (max(rows, block.shape[0]), max(cols, block.shape[1]))
+            block = np.empty(shape + (3,), np.uint8)
+            block[:] = _cap_colour(rgb, factor)
+            if len(self._cap_blocks) >= 16:                # scenes with ever new lighting must not pile up
+                self._cap_blocks.clear()
+            self._cap_blocks[key] = block
+        return block[:rows, :cols]
 
     def height_limits(self, bottom: float, top: float) -> tuple[np.ndarray, np.ndarray]:
         """Per row (h x 1 float32), the depths between which a ray is within ``bottom..top`` in height."""
@@ -1021,7 +1036,7 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, ima
     v0s = np.maximum(0, np.floor(ks.min(axis=0) * cam.fy + cam.cy)).astype(np.intp).tolist()
     v1s = np.minimum(cam.height, np.ceil(ks.max(axis=0) * cam.fy + cam.cy) + 1).astype(np.intp).tolist()
     side_only = ((a < 0) & (b > 0)).tolist()       # camera between bottom and top: no cap in sight
-    limits = {(p.bottom, p.top): r.height_limits(p.bottom, p.top) for p in drawn}
+    limits = {key: r.height_limits(*key) for key in {(p.bottom, p.top) for p in drawn}}
     fb32 = r.fb32
     for i, (s, e, c0, c1, v0, v1) in enumerate(zip(starts.tolist(), ends.tolist(), u0.tolist(), u1.tolist(),
                                                     v0s, v1s)):
@@ -1052,8 +1067,7 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, ima
             cv2.copyTo(cv2.repeat(dhit, v1 - v0, 1), mask, region)
         else:
             cv2.copyTo(dhit, mask, region)
-            cap = np.empty_like(colours)
-            cap[:] = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)     # lit top / dark underside
+            cap = r.cap_block(p.rgb, (0.9 if p.top < hc else 0.45) * gain, v1 - v0, c1 - c0)  # lit top / dark underside
             cv2.copyTo(cap, (t1c < lo).view(np.uint8), colours)
         cv2.copyTo(colours, mask, image[v0:v1, c0:c1])
         if labels is not None:
