@@ -196,8 +196,11 @@ class Agent:
         self.cycles += 1
         if self.arch is not self._arch_seen:
             self._see_arch(self.arch)
-        if self._perceive is not None or self.feedback or self.timers or self.mailbox:
+        if self._perceive is not None or self.feedback or self.timers:
             did = self.sense()
+        elif self.mailbox:  # sense() with only a message to read, inlined
+            receive_message(self, self.mailbox.popleft())
+            did = True
         else:
             did = False
         if self.events and self.deliberate():
@@ -500,7 +503,7 @@ class Agent:
             frames = im.frames
             while len(frames) > 1 and frames[-1].pc >= len(frames[-1].body) and frames[-1].kind == "body":
                 frames.pop()
-            if not im.is_finished():
+            if len(frames) != 1 or frames[0].pc < len(frames[0].body):  # not im.is_finished()
                 return
             stack.pop()
             if im.plan.atomic:

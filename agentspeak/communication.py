@@ -126,6 +126,7 @@ def _annotate(lit: Term, who: Term) -> Term:
 
 
 _KQML_RECEIVED = Trigger(ADD, ACHIEVE, Literal("kqml_received", (Var(), Var(), Var(), Var())))
+_KQML_KEY = _KQML_RECEIVED.key
 
 
 def receive_message(agent: Any, msg: Message) -> None:
@@ -136,7 +137,9 @@ def receive_message(agent: Any, msg: Message) -> None:
     if msg.in_reply_to is not None and msg.in_reply_to in agent.pending_asks:
         agent.pending_asks.pop(msg.in_reply_to)(msg)
         return
-    if agent.plans.relevant(_KQML_RECEIVED):
+    plans = agent.plans  # plans.relevant(_KQML_RECEIVED), inlined: asked of every message
+    index = plans._index if plans._index is not None else plans._build()
+    if index.get(_KQML_KEY) or plans._var_plans.get((ADD, ACHIEVE)):
         goal = Literal("kqml_received", (sender, Literal(perf), msg.content, msg.msg_id), (SOURCE_SELF,))
         agent.post_external(Trigger(ADD, ACHIEVE, goal), force=True)
         return
