@@ -188,7 +188,8 @@ def test_rows_with_nothing_in_depth_range_read_zero_as_if_measured(monkeypatch):
     # the first that can read anything are not measured; measuring every row gives the same depth image
     from robot_bridge.sim.camera import _renderer
 
-    room = (Wall(8.0, -8.0, 8.0, 8.0), Wall(8.0, 8.0, -8.0, 8.0), Wall(-8.0, 8.0, -8.0, -8.0), Wall(-8.0, -8.0, 8.0, -8.0))
+    corners = ((8.0, -8.0), (8.0, 8.0), (-8.0, 8.0), (-8.0, -8.0))
+    room = tuple(Wall(*a, *b) for a, b in zip(corners, corners[1:] + corners[:1]))
     pole = CylinderProp(4.4, 1.0, 0.05, 0.0, 1.0, (90, 90, 92))
     robots = [(6.0, 0.3, 0.4), (7.0, -0.5, 1.0)]
     r = _renderer(RIG, Scene().depth)
