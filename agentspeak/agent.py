@@ -367,7 +367,8 @@ class Agent:
             im = IntendedMeans(plan, b, trigger.literal)
             im.handles = ev.handles if ev.handles is not None else _PENDING_GOAL
             stack.append(im)
-        elif stack and self.tro and self._tail_call(trigger, stack, plan, b):
+        elif (stack and self.tro and trigger.op == ADD and trigger.kind == ACHIEVE
+              and (plan.matcher or plan_matcher(plan))[2] is not None and self._tail_call(trigger, stack, plan, b)):
             pass
         else:
             stack.append(IntendedMeans(plan, b, trigger.literal))

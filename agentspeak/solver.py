@@ -419,6 +419,9 @@ def _compile_fact_literal(f: Literal, then):
     runs for each matching belief. Literals with rules or annotation variables use the machine."""
     annot_vars = f.annots is not None and _annots_have_vars(f)
     key = (f.neg, f.functor, len(f.args))
+    # a first argument that is a variable: while it is free every belief of the key is a candidate
+    # (BeliefBase.candidates_by_key without a call), bound it selects by the first-argument index
+    first = f.args[0] if f.args and type(f.args[0]) is Var else None
 
     if then is None:
         def literal(kb, b, trail, k):
@@ -428,11 +431,17 @@ def _compile_fact_literal(f: Literal, then):
                     if k():
                         return True
                 return False
-            for fact in bb.candidates_by_key(key, f, b):
+            if first is not None and first not in b:
+                bucket = bb._facts.get(key)
+                found = () if bucket is None else (bucket._sorted or bucket.all())
+            else:
+                found = bb.candidates_by_key(key, f, b)
+            for fact in found:
                 mark = len(trail)
-                if unify(f, fact, b, trail) and k():
+                if unify(f, fact, b, trail) and (k is _true_k or k()):
                     return True
-                undo(b, trail, mark)
+                while len(trail) > mark:  # undo, inlined
+                    b.pop(trail.pop(), None)
             return False
         return literal
 
@@ -443,11 +452,17 @@ def _compile_fact_literal(f: Literal, then):
                 if then(kb, b, trail, k):
                     return True
             return False
-        for fact in bb.candidates_by_key(key, f, b):
+        if first is not None and first not in b:
+            bucket = bb._facts.get(key)
+            found = () if bucket is None else (bucket._sorted or bucket.all())
+        else:
+            found = bb.candidates_by_key(key, f, b)
+        for fact in found:
             mark = len(trail)
             if unify(f, fact, b, trail) and then(kb, b, trail, k):
                 return True
-            undo(b, trail, mark)
+            while len(trail) > mark:  # undo, inlined
+                b.pop(trail.pop(), None)
         return False
     return literal_then
 
@@ -482,7 +497,7 @@ def _compile_order(f: Rel):
             y = resolve(y, b)
             ty = type(y)
         if (tx is int or tx is float) and (ty is int or ty is float):
-            return cmp(x, y) and k()
+            return cmp(x, y) and (k is _true_k or k())
         try:
             ok = _rel(kb, f, b, trail)
         except ArithmeticError_ as exc:
