@@ -158,7 +158,7 @@ side_turn(B, Y, T) :- norm(Y - B, A) & A < 0 & T = -90 - A.
 +!showAnotherSide(_) : find_turn(T) <- .print("I turn ", T, " degrees to show another side"); !turnInPlace(T).
 
 +!turnInPlace(T) <- turn(T).
--!turnInPlace(T)[reason(R)] <- .print("I could not turn (", R, ")").
+-!turnInPlace(T) <- .print("I could not turn ", T, " degrees").
 
 +!afterFind(H, findRobot(_, found), Ds) <- .progress(found_by, H); !tryMove(H, Ds, 1).
 +!afterFind(H, findRobot(_, not_found), Ds) <- .print(H, " could not find me"); !findMe(H, Ds).

@@ -69,6 +69,7 @@ available :- not helping(_) & not on_mission & not diagnosing & not self_suspect
    <- turn(S);
       .wait(W);
       !search(F, Turned + S).
+-!search(F, _).          // a turn failed (timed out, blocked): this search is over
 
 +!centre(F, _) : robot_seen(F, A, _, _) & abs(A, AA) & centre_tolerance(T) & AA <= T.
 +!centre(F, N) : robot_seen(F, A, _, _) & centre_tries(Max) & N < Max & look_wait(W)
