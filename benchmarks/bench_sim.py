@@ -14,6 +14,7 @@ Targets (issue 5): >= 20x real time for 2 robots, >= 1x for 50, every frame rend
 from __future__ import annotations
 
 import math
+import os
 import time
 
 from robot_bridge.sim.world import Obstacle, World
@@ -95,11 +96,13 @@ def run(quick: bool) -> str:
                          f"{goal:>7} | {verdict}")
     finally:
         cv2.setNumThreads(threads)
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     lines.append(f"(simulated seconds per wall second, dt = 0.02 s, 10 Hz cameras; 'fr' = 640x480 RGB-D frames "
                  f"rendered / due in the run, 'fr/s' = frames rendered per wall second, 'ms CPU/fr' = process CPU "
                  f"time (physics included) per frame rendered, less sensitive than wall time to other loads on the "
                  f"machine; reads_pixels: up to {render_threads()} render threads; one OpenCV thread each; "
-                 f"'met' judges the every-frame column)")
+                 f"'met' judges the every-frame column; machine load average (1 min) at the end: {load:.1f} "
+                 f"on {os.cpu_count()} cores)")
     return "\n".join(lines)
 
 
