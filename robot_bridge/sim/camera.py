@@ -256,7 +256,8 @@ class _Renderer:
         self.disparity_bank = bank.ravel()          # a frame takes h * w values from a random offset
         # only true disparities within the largest noise of the bank (plus a step) of the range can read
         # anything; nearer or farther the reading is 0 whatever the noise (``_depth_noise`` skips them)
-        reach = float(np.abs(bank[bank > -1e8]).max()) + 1.0
+        readings = bank[bank > -1e8]
+        reach = (float(np.abs(readings).max()) if readings.size else 0.0) + 1.0
         d_lo = float(self.fb32) / sensor.max_m - reach
         d_hi = float(self.fb32) / (sensor.min_m - 1e-6) + reach
         self.z_readable = (float(self.fb32) / d_hi, float(self.fb32) / d_lo if d_lo > 0 else math.inf)
