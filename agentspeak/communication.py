@@ -18,7 +18,7 @@ from agentspeak.beliefs import SELF, SOURCE_SELF, source
 from agentspeak.intentions import Event
 from agentspeak.program import ACHIEVE, ADD, BEL, DEL, Plan, PlanTerm, Trigger
 from agentspeak.solver import SolveError, solve
-from agentspeak.terms import NIL, Cons, Literal, Term, Var, is_ground, list_items, make_list, resolve, to_str
+from agentspeak.terms import NIL, Cons, Literal, Term, Var, is_ground, list_items, make_list, rename, resolve, to_str
 
 log = logging.getLogger("faultmas.agentspeak")
 
@@ -118,7 +118,11 @@ def _source_of(who: Term) -> Literal:
 
 
 def _annotate(lit: Term, who: Term) -> Term:
+    """``lit[source(who)]``, its variables renamed apart (Jason's ``!!CA`` does so): agents of one
+    source share their plans' variables, and a sender's variable must not be the receiver's."""
     if isinstance(lit, Literal):
+        if not is_ground(lit):
+            lit = rename(lit, {})
         if lit.annots is None:  # the usual content: no annotations of its own
             return Literal(lit.functor, lit.args, (_source_of(who),), lit.neg)
         return Literal(lit.functor, lit.args, lit.annots, lit.neg).add_annot(_source_of(who))
@@ -127,6 +131,15 @@ def _annotate(lit: Term, who: Term) -> Term:
 
 _KQML_RECEIVED = Trigger(ADD, ACHIEVE, Literal("kqml_received", (Var(), Var(), Var(), Var())))
 _KQML_KEY = _KQML_RECEIVED.key
+
+
+def _simple_args(args: tuple) -> bool:
+    """Numbers, strings and atoms only (so the literal is ground: nothing to rename)."""
+    for a in args:
+        ta = type(a)
+        if not (ta is int or ta is float or ta is str or (ta is Literal and not a.args and a.annots is None)):
+            return False
+    return True
 
 
 def receive_message(agent: Any, msg: Message) -> None:
@@ -144,7 +157,8 @@ def receive_message(agent: Any, msg: Message) -> None:
         agent.post_external(Trigger(ADD, ACHIEVE, goal), force=True)
         return
     content = msg.content
-    if perf == "achieve" and type(content) is Literal and content.annots is None and content.annot_tail is None:
+    if (perf == "achieve" and type(content) is Literal and content.annots is None and content.annot_tail is None
+            and _simple_args(content.args)):
         # _achieve of one literal without annotations (the usual request), inlined
         trigger = Trigger(ADD, ACHIEVE, Literal(content.functor, content.args, (_source_of(sender),), content.neg))
         if agent.event_waiters:

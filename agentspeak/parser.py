@@ -6,6 +6,7 @@ column, and saying what was expected. ``parse_program_all_errors`` keeps going a
 """
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 import threading
@@ -439,11 +440,40 @@ class _BadInput(Exception):
 
 def parse_program(text: str, source_file: str = "<string>", base_dir: str | None = None,
                   _seen: set | None = None) -> Program:
-    """Parse a whole agent program; raise ``AslSyntaxError`` at the first error."""
+    """Parse a whole agent program; raise ``AslSyntaxError`` at the first error.
+
+    A file without includes is parsed once per process: later calls with the same text get a copy
+    whose plans and rules are their own objects (labels, flags) but share the immutable terms, so
+    100 agents of one source share one set of compiled contexts (and stay in the CPU's caches)."""
+    key = (text, source_file)
+    cached = _PARSED.get(key)
+    if cached is not None:
+        return _copy_program(cached)
     program, errors = _parse(text, source_file, stop_at_first=True)
     if errors:
         raise errors[0]
+    if not program.__dict__.get("includes"):
+        if len(_PARSED) >= _PARSED_MAX:
+            del _PARSED[next(iter(_PARSED))]
+        _PARSED[key] = program
+        return _copy_program(program)
     return _expand_includes(program, source_file, base_dir, _seen)
+
+
+_PARSED: dict[tuple, Program] = {}
+"""(text, file) -> the program as parsed (never handed out: callers get copies)."""
+_PARSED_MAX = 32
+
+
+def _copy_program(program: Program) -> Program:
+    """A program of new Plan and Rule objects over the same (immutable) terms and instructions."""
+    return Program(
+        beliefs=list(program.beliefs),
+        rules=[dataclasses.replace(r) for r in program.rules],
+        goals=list(program.goals),
+        plans=[Plan(p.trigger, p.context, p.body, p.label, p.source_file, p.line) for p in program.plans],
+        source_file=program.source_file,
+        warnings=list(program.warnings))
 
 
 def parse_program_all_errors(text: str, source_file: str = "<string>") -> tuple[Program, list[AslSyntaxError]]:
