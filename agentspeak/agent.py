@@ -15,6 +15,7 @@ from __future__ import annotations
 import heapq
 import itertools
 import logging
+import operator
 import time
 from collections import deque
 from concurrent.futures import Future
@@ -29,7 +30,7 @@ from agentspeak.program import ACHIEVE, ADD, BEL, DEL, TEST, Plan, PlanTerm, Pro
 from agentspeak.solver import _COMPILED, SolveError, _true_k, compiled, solve, solve_first
 from agentspeak.stdlib.registry import STDLIB, IAError, Registry, Suspend
 from agentspeak.terms import (
-    ArithmeticError_, Literal, Term, Var, is_ground, rename, resolve, to_str, variables,
+    _EXACT, Arith, ArithmeticError_, Literal, Term, Var, is_ground, rename, resolve, to_str, variables,
 )
 from agentspeak.unify import undo, unify
 
@@ -367,11 +368,27 @@ class Agent:
             im = IntendedMeans(plan, b, trigger.literal)
             im.handles = ev.handles if ev.handles is not None else _PENDING_GOAL
             stack.append(im)
-        elif (stack and self.tro and trigger.op == ADD and trigger.kind == ACHIEVE
-              and (plan.matcher or plan_matcher(plan))[2] is not None and self._tail_call(trigger, stack, plan, b)):
-            pass
         else:
-            stack.append(IntendedMeans(plan, b, trigger.literal))
+            tail = (plan.matcher or plan_matcher(plan))[2] if stack and self.tro else None
+            top = stack[-1] if tail is not None and trigger.op == ADD and trigger.kind == ACHIEVE else None
+            frames = top.frames if top is not None else None
+            if (frames is not None and len(frames) == 1 and top.handles is None
+                    and frames[0].pc == len(frames[0].body) - 1
+                    and (top.plan.matcher or plan_matcher(top.plan))[2] == tail):
+                # Tail call: a +!g event for a plan of the caller's own +!g trigger (same functor and
+                # arity, neither atomic), the caller at its last formula. The finished caller is
+                # replaced by the callee, which reports its result directly to the caller's caller,
+                # so the stack stays flat. The caller's intended means object is reused for the
+                # callee (nothing else refers to a finished caller).
+                top.result = resolve(top.result, top.b) if len(stack) > 1 else plan.trigger.literal
+                top.plan = plan
+                top.b = b
+                top.event_literal = trigger.literal
+                f0 = frames[0]
+                f0.body = plan.body
+                f0.pc = 0
+            else:
+                stack.append(IntendedMeans(plan, b, trigger.literal))
         if plan.atomic:
             intention.atomic += 1
             self.atomic_intention = intention
@@ -381,30 +398,6 @@ class Agent:
                 self.suspended.pop(intention.id, None)
             if intention not in self.running:
                 self.running.append(intention)
-
-    @staticmethod
-    def _tail_call(trigger: Trigger, stack: list, plan: Plan, b: dict) -> bool:
-        """A +!g event for a plan of the caller's own +!g trigger (same functor and arity, neither
-        atomic), the caller at its last formula: the finished caller is replaced by the callee, which
-        reports its result directly to the caller's caller, so the stack stays flat. The caller's
-        intended means object is reused for the callee (nothing else refers to a finished caller)."""
-        top = stack[-1]
-        frames = top.frames
-        if len(frames) != 1 or top.handles is not None:
-            return False
-        f0 = frames[0]
-        tail = (plan.matcher or plan_matcher(plan))[2]
-        if (tail is None or trigger.op != ADD or trigger.kind != ACHIEVE or f0.pc != len(f0.body) - 1
-                or (top.plan.matcher or plan_matcher(top.plan))[2] != tail):
-            return False
-        # what the caller's caller unifies with: the caller's result (at the bottom nobody reads it)
-        top.result = resolve(top.result, top.b) if len(stack) > 1 else plan.trigger.literal
-        top.plan = plan
-        top.b = b
-        top.event_literal = trigger.literal
-        f0.body = plan.body
-        f0.pc = 0
-        return True
 
     # -- act
     def sel_int(self) -> Intention:
@@ -799,6 +792,7 @@ def _simple_args(args: tuple) -> bool:
 
 
 _SOURCE_SELF_ONLY = (SOURCE_SELF,)
+_INT_OPS = {"+": operator.add, "-": operator.sub, "*": operator.mul}
 
 
 class _PendingGoal:
@@ -830,6 +824,18 @@ def _exec_achieve(ag: Agent, intention: Intention, im: IntendedMeans, frame: Fra
                 a = b.get(a, a)
                 ta = type(a)
             if ta is not int and ta is not float and ta is not str:
+                if ta is Arith and a.right is not None and a.op in _INT_OPS:
+                    # `N + 1` over integers (resolve's own fast case, without the call)
+                    x, y = a.left, a.right
+                    if type(x) is Var:
+                        x = b.get(x, x)
+                    if type(y) is Var:
+                        y = b.get(y, y)
+                    if type(x) is int and type(y) is int:
+                        r = _INT_OPS[a.op](x, y)
+                        if -_EXACT < r < _EXACT:
+                            args.append(r)
+                            continue
                 a = resolve(a, b)
                 ta = type(a)
                 if not (ta is int or ta is float or ta is str
