@@ -422,6 +422,9 @@ def _compile_fact_literal(f: Literal, then):
     # a first argument that is a variable: while it is free every belief of the key is a candidate
     # (BeliefBase.candidates_by_key without a call), bound it selects by the first-argument index
     first = f.args[0] if f.args and type(f.args[0]) is Var else None
+    # `p(X)`: one argument, a variable, no annotations. While X is free, every belief of the key
+    # matches (beliefs are ground; annotations of the belief do not matter): X is bound, no unify
+    single = first if len(f.args) == 1 and f.annots is None and f.annot_tail is None else None
 
     if then is None:
         def literal(kb, b, trail, k):
@@ -434,6 +437,18 @@ def _compile_fact_literal(f: Literal, then):
             if first is not None and first not in b:
                 bucket = bb._facts.get(key)
                 found = () if bucket is None else (bucket._sorted or bucket.all())
+                if single is not None:
+                    mark = len(trail)
+                    trail.append(single)
+                    for fact in found:
+                        b[single] = fact.args[0]
+                        if k is _true_k or k():
+                            return True
+                        while len(trail) > mark + 1:
+                            b.pop(trail.pop(), None)
+                    b.pop(single, None)
+                    trail.pop()
+                    return False
             else:
                 found = bb.candidates_by_key(key, f, b)
             for fact in found:
@@ -455,6 +470,18 @@ def _compile_fact_literal(f: Literal, then):
         if first is not None and first not in b:
             bucket = bb._facts.get(key)
             found = () if bucket is None else (bucket._sorted or bucket.all())
+            if single is not None:
+                mark = len(trail)
+                trail.append(single)
+                for fact in found:
+                    b[single] = fact.args[0]
+                    if then(kb, b, trail, k):
+                        return True
+                    while len(trail) > mark + 1:
+                        b.pop(trail.pop(), None)
+                b.pop(single, None)
+                trail.pop()
+                return False
         else:
             found = bb.candidates_by_key(key, f, b)
         for fact in found:

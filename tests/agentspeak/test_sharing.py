@@ -77,3 +77,16 @@ def test_tail_calls_give_their_result_to_the_caller_and_keep_the_stack_flat():
     +!g(N, N).
     """
     assert run_asl(src) == ["done(7)", "0", "1", "2", "3"]
+
+
+def test_context_lookups_backtrack_over_beliefs_and_leave_no_bindings_behind():
+    src = """
+    n(1). n(2). n(3). m(7)[source(percept)].
+    !go.
+    +!go : n(X) & X > 1 & not n(5) <- .print(X); !h; !k; !w.
+    +!h : n(Y) & Y > 5 <- .print(never).
+    +!h : m(Z) <- .print(Z).
+    +!k : n(4) | n(V) <- .print(V).
+    +!w : .findall(X, n(X) & X >= 2, L) <- .print(L).
+    """
+    assert run_asl(src) == ["2", "7", "1", "[2,3]"]
