@@ -133,19 +133,10 @@ _KQML_RECEIVED = Trigger(ADD, ACHIEVE, Literal("kqml_received", (Var(), Var(), V
 _KQML_KEY = _KQML_RECEIVED.key
 
 
-def _simple_args(args: tuple) -> bool:
-    """Numbers, strings and atoms only (so the literal is ground: nothing to rename)."""
-    for a in args:
-        ta = type(a)
-        if not (ta is int or ta is float or ta is str or (ta is Literal and not a.args and a.annots is None)):
-            return False
-    return True
-
-
 def receive_message(agent: Any, msg: Message) -> None:
     """Apply the semantics of one received message."""
-    sender = _atom_of(msg.sender) if msg.sender != agent.name else SELF
     perf = msg.performative
+    name = msg.sender
     # replies to a pending ask resume the asking intention
     if msg.in_reply_to is not None and msg.in_reply_to in agent.pending_asks:
         agent.pending_asks.pop(msg.in_reply_to)(msg)
@@ -153,18 +144,27 @@ def receive_message(agent: Any, msg: Message) -> None:
     plans = agent.plans  # plans.relevant(_KQML_RECEIVED), inlined: asked of every message
     index = plans._index if plans._index is not None else plans._build()
     if index.get(_KQML_KEY) or plans._var_plans.get((ADD, ACHIEVE)):
+        sender = _atom_of(name) if name != agent.name else SELF
         goal = Literal("kqml_received", (sender, Literal(perf), msg.content, msg.msg_id), (SOURCE_SELF,))
         agent.post_external(Trigger(ADD, ACHIEVE, goal), force=True)
         return
     content = msg.content
-    if (perf == "achieve" and type(content) is Literal and content.annots is None and content.annot_tail is None
-            and _simple_args(content.args)):
-        # _achieve of one literal without annotations (the usual request), inlined
-        trigger = Trigger(ADD, ACHIEVE, Literal(content.functor, content.args, (_source_of(sender),), content.neg))
-        if agent.event_waiters:
-            agent._notify_waiters(trigger)
-        agent.events.append(Event(trigger))
-        return
+    if perf == "achieve" and type(content) is Literal and content.annots is None and content.annot_tail is None:
+        # _achieve of one literal of numbers, strings and atoms (ground: nothing to rename), inlined
+        for a in content.args:
+            ta = type(a)
+            if not (ta is int or ta is float or ta is str or (ta is Literal and not a.args and a.annots is None)):
+                break
+        else:
+            src = _SOURCES.get(name) if name != agent.name else SOURCE_SELF  # _source_of, inlined
+            if src is None:
+                src = _source_of(_atom_of(name))
+            trigger = Trigger(ADD, ACHIEVE, Literal(content.functor, content.args, (src,), content.neg))
+            if agent.event_waiters:
+                agent._notify_waiters(trigger)
+            agent.events.append(Event(trigger))
+            return
+    sender = _atom_of(name) if name != agent.name else SELF
     handler = _HANDLERS.get(perf)
     if handler is None:
         log.warning("[%s] message from %s dropped: unknown performative '%s'", agent.name, msg.sender, perf)
