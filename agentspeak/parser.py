@@ -454,7 +454,10 @@ def parse_program(text: str, source_file: str = "<string>", base_dir: str | None
         raise errors[0]
     if not program.__dict__.get("includes"):
         if len(_PARSED) >= _PARSED_MAX:
-            del _PARSED[next(iter(_PARSED))]
+            try:
+                del _PARSED[next(iter(_PARSED))]  # the oldest
+            except (KeyError, RuntimeError, StopIteration):  # another thread got there first
+                pass
         _PARSED[key] = program
         return _copy_program(program)
     return _expand_includes(program, source_file, base_dir, _seen)

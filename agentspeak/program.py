@@ -312,7 +312,8 @@ class Plan:
     atomic: bool = field(init=False, default=False)
     all_unifs: bool = field(init=False, default=False)
     matcher: tuple | None = field(init=False, default=None, repr=False)
-    """(trigger variables, compiled context) for deliberation, made on first use (``plan_matcher``)."""
+    """(trigger variables, compiled context, tail-call key) for deliberation, made on first use
+    (``plan_matcher``); shared by every agent whose plan has the same terms."""
 
     def __post_init__(self) -> None:
         self.refresh_label_flags()
@@ -361,11 +362,13 @@ class Plan:
 
 
 def plan_matcher(plan: Plan) -> tuple:
-    """What deliberation needs of a plan, worked out once: ``(vars, context, tail)``. ``vars`` is the tuple of
-    trigger arguments when they are distinct variables and the trigger has no annotations (then an
-    event binds them one to one, without unification), else None; ``context`` is the compiled
-    context closure, or None for a plan without one; ``tail`` is ``(functor, arity)`` of a non-atomic
-    ``+!g`` plan (a tail call replaces a caller with the same), else None."""
+    """What deliberation needs of a plan, worked out once: ``(vars, context, tail)``.
+
+    ``vars`` is the tuple of trigger arguments when they are distinct variables and the trigger has
+    no annotations (then an event binds them one to one, without unification), else None;
+    ``context`` is the compiled context closure, or None for a plan without one; ``tail`` is
+    ``(functor, arity)`` of a non-atomic ``+!g`` plan (a tail call replaces a caller with the
+    same), else None."""
     from agentspeak.solver import compiled
 
     lit = plan.trigger.literal
