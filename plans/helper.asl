@@ -16,7 +16,7 @@ search_step(40).         // degrees per look: the camera sees 57 degrees, so vie
 look_wait(300).          // ms for fresh camera frames after a turn
 centre_tolerance(4).     // degrees off the image centre that count as centred
 centre_tries(4).
-step_back(0.7).          // metres to move before a second search (closer than 0.8 m the depth camera is blind)
+step_away(0.7).          // metres to move before a second search (closer than 0.8 m the depth camera is blind)
 near_limit(1.0, 1.4).    // metres: a robot found closer than the first may drive out of the depth
                          // range during its test motion: I back off to the second
 far_limit(3.2, 2.6).     // metres: farther than the first, its cylinders are small: I come to the second
@@ -44,6 +44,7 @@ available :- not helping(_) & not on_mission & not diagnosing & not self_suspect
       .progress(released, F);
       .abolish(noThanks[source(F)]);
       .abolish(thanks[source(F)]);
+      .abolish(stepped(F));
       !returnToTask.
 
 +!returnToTask : home_yaw(H) & odom(_, _, Y) & norm(H - Y, T)
@@ -78,16 +79,23 @@ available :- not helping(_) & not on_mission & not diagnosing & not self_suspect
       !centre(F, N + 1).
 +!centre(F, _).          // lost it again, or close enough after the tries
 
+// Where to step when a full turn showed nothing: I do not know where the robot is, so the first step
+// goes back and, in case that was towards it, the next ones forward and back past where I started.
 +!lookFromElsewhere(F) : robot_seen(F, _, _, _).
-+!lookFromElsewhere(F) : step_back(M)
++!lookFromElsewhere(F) : step_away(M)
    <- .print("no sign of ", F, " from here: I step away and look again");
-      !stepAway(M);
+      .count(stepped(F), N);
+      +stepped(F);
+      !stepAway(F, N, M);
       !search(F, 0).
 
-+!stepAway(M) <- move(-M).
--!stepAway(M) <- !stepForward(M).      // something behind me: the other way
-+!stepForward(M) <- move(M).
--!stepForward(M).
++!stepAway(F, 0, M) <- move(-M).
++!stepAway(F, N, M) : N mod 2 == 1 <- move(2 * M).
++!stepAway(F, _, M) <- move(-2 * M).
+-!stepAway(F, N, M) : N mod 2 == 1 <- !stepInstead(-M).    // blocked ahead: back instead
+-!stepAway(F, _, M) <- !stepInstead(M).                      // blocked behind: forward instead
++!stepInstead(M) <- move(M).
+-!stepInstead(M).
 
 // the robot in front of me (centred): back off or come closer so that its test motion stays in range
 +!keepDistance(F) : robot_seen(F, _, D, _) & near_limit(L, G) & D < L & look_wait(W)
