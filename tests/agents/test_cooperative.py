@@ -47,12 +47,11 @@ def test_faultmas_run_json_contract_with_the_default_encoder_fault():
     assert "robot detected" in done.stderr       # progress is shown as the steps happen
 
 
-# Placements of the evaluation that used to end undiagnosed: with a weak left wheel the first leg
-# curls the robot; 100034 then showed the helper its side at only 40 degrees off end-on, so its test
-# motion turned it end-on and out of sight; 100028 ended end-on, where its cylinders hide each other.
-@pytest.mark.parametrize("seed", [100034, 100028])
-def test_a_weak_wheel_that_turns_the_robot_end_on_is_still_diagnosed(seed):
-    result = run_scenario(random_pair_scenario("left_actuator", seed), processes=False, timeout=90)
+def test_a_weak_wheel_that_turns_the_robot_end_on_is_still_diagnosed():
+    # an evaluation placement that used to end undiagnosed: the first leg (a weak left wheel curls it)
+    # left the robot only 40 degrees off end-on to the helper, so its test motion turned it end-on,
+    # where its two cylinders hide each other; now it turns to show its side first
+    result = run_scenario(random_pair_scenario("left_actuator", 100034), processes=False, timeout=90)
     assert result.finished, [(m.agent, m.step, m.detail) for m in result.marks]
     assert result.robots[0].diagnosis == "left_actuator"
     assert marks_of(result, "robot_found")
