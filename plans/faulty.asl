@@ -21,6 +21,8 @@ answer_timeout(20000).      // ms for the other answers
 max_trials(2).              // test motions with one helper before giving up on it
 max_finds(3).               // times one helper may look for me; I turn between them to show another side
 find_turn(70).              // degrees I turn for that
+settle_wait(600).           // ms after a turn before the helper looks (the base slows down; with dead
+                            // encoders a failed turn has still turned me, and odometry cannot tell)
 
 outcome([], none).
 outcome([left_encoder, right_encoder], encoders).
@@ -55,9 +57,10 @@ helper_obs(_, _, []).    // the helper lost sight of me: it saw nothing that hel
 // Degrees to turn in place so that a helper looking along bearing B sees my side (my heading Y in its
 // frame): end-on, my two cylinders hide each other, and a test motion along its line of sight hardly
 // moves me in its image. Side-on enough already: no turn.
-side_turn(B, Y, 0) :- norm(Y - B, A) & abs(A, AA) & AA >= 65 & AA <= 115.
-side_turn(B, Y, T) :- norm(Y - B, A) & A >= 0 & T = 90 - A.
-side_turn(B, Y, T) :- norm(Y - B, A) & A < 0 & T = -90 - A.
+side_turn(B, Y, T) :- norm(Y - B, A) & abs(A, AA) & aspect_turn(A, AA, T).
+aspect_turn(_, AA, 0) :- AA >= 65 & AA <= 115.
+aspect_turn(A, AA, T) :- (AA < 65 | AA > 115) & A >= 0 & T = 90 - A.
+aspect_turn(A, AA, T) :- (AA < 65 | AA > 115) & A < 0 & T = -90 - A.
 
 !goToDestination.
 
@@ -159,8 +162,8 @@ side_turn(B, Y, T) :- norm(Y - B, A) & A < 0 & T = -90 - A.
 +!showAnotherSide(0).
 +!showAnotherSide(_) : find_turn(T) <- .print("I turn ", T, " degrees to show another side"); !turnInPlace(T).
 
-+!turnInPlace(T) <- turn(T).
--!turnInPlace(T) <- .print("I could not turn ", T, " degrees").
++!turnInPlace(T) : settle_wait(W) <- turn(T); .wait(W).
+-!turnInPlace(T) : settle_wait(W) <- .print("I could not turn ", T, " degrees"); .wait(W).
 
 +!afterFind(H, findRobot(_, found), Ds) <- .progress(found_by, H); !tryMove(H, Ds, 1).
 +!afterFind(H, findRobot(_, not_found), Ds) <- .print(H, " could not find me"); !findMe(H, Ds).
