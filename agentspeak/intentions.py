@@ -53,7 +53,9 @@ class IntendedMeans:
         self.plan = plan
         self.b = b
         self.frames = [Frame(plan.body)]
-        self.result = plan.trigger.literal  # what the caller unifies with (changed by TRO)
+        # what the caller unifies with (changed by TRO): the event's literal, as Jason's IntendedMeans
+        # keeps the event's trigger; the plan's own trigger would drop annotations of arguments
+        self.result = event_literal
         self.handles: IntendedMeans | None = None
         self.event_literal = event_literal
 

@@ -141,3 +141,14 @@ def test_include_directive(tmp_path):
     rt.add_agent("ag", program=parse_program(main.read_text(), str(main)))
     rt.run(timeout=5)
     assert lines == ["from_lib"]
+
+
+def test_a_subgoal_binds_the_callers_variables_when_an_argument_has_annotations():
+    # Regression: the finished subgoal was unified back through the plan's own trigger, which had
+    # lost the annotations of the event's arguments, so the caller's S = val(3)[source(b)] did not
+    # match and X stayed unbound (Jason unifies with the event's literal).
+    src = """!start.
++!start <- S = val(3)[source(b)]; !p(S, X); .print(X); !p(val(4)[a, b], Y); .print(Y).
++!p(val(V), A) <- A = V * 10.
+"""
+    assert run_asl(src) == ["30", "40"]
