@@ -15,7 +15,6 @@ from __future__ import annotations
 import heapq
 import itertools
 import logging
-import operator
 import time
 from collections import deque
 from concurrent.futures import Future
@@ -30,7 +29,7 @@ from agentspeak.program import ACHIEVE, ADD, BEL, DEL, TEST, Plan, PlanTerm, Pro
 from agentspeak.solver import _COMPILED, SolveError, _true_k, compiled, solve, solve_first
 from agentspeak.stdlib.registry import STDLIB, IAError, Registry, Suspend
 from agentspeak.terms import (
-    _EXACT, Arith, ArithmeticError_, Literal, Term, Var, is_ground, rename, resolve, to_str, variables,
+    _EXACT, INT_OPS, Arith, ArithmeticError_, Literal, Term, Var, is_ground, rename, resolve, to_str, variables,
 )
 from agentspeak.unify import undo, unify
 
@@ -792,7 +791,6 @@ def _simple_args(args: tuple) -> bool:
 
 
 _SOURCE_SELF_ONLY = (SOURCE_SELF,)
-_INT_OPS = {"+": operator.add, "-": operator.sub, "*": operator.mul}
 
 
 class _PendingGoal:
@@ -824,7 +822,7 @@ def _exec_achieve(ag: Agent, intention: Intention, im: IntendedMeans, frame: Fra
                 a = b.get(a, a)
                 ta = type(a)
             if ta is not int and ta is not float and ta is not str:
-                if ta is Arith and a.right is not None and a.op in _INT_OPS:
+                if ta is Arith and a.right is not None and a.op in INT_OPS:
                     # `N + 1` over integers (resolve's own fast case, without the call)
                     x, y = a.left, a.right
                     if type(x) is Var:
@@ -832,7 +830,7 @@ def _exec_achieve(ag: Agent, intention: Intention, im: IntendedMeans, frame: Fra
                     if type(y) is Var:
                         y = b.get(y, y)
                     if type(x) is int and type(y) is int:
-                        r = _INT_OPS[a.op](x, y)
+                        r = INT_OPS[a.op](x, y)
                         if -_EXACT < r < _EXACT:
                             args.append(r)
                             continue

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import operator
 from typing import Any, Iterator
 
 Term = Any
@@ -438,17 +439,10 @@ def resolve(t: Term, b: Bindings) -> Term:
                 right = b.get(right, right)
             if type(right) is not int and type(right) is not float:
                 right = resolve(right, b)
-            if type(left) is int and type(right) is int:  # the common case, without a call
-                op = t.op
-                if op == "+":
-                    r = left + right
-                elif op == "-":
-                    r = left - right
-                elif op == "*":
-                    r = left * right
-                else:
-                    r = None
-                if r is not None:
+            if type(left) is int and type(right) is int:  # the common case, without eval_arith
+                int_op = INT_OPS.get(t.op)
+                if int_op is not None:
+                    r = int_op(left, right)
                     return r if -_EXACT < r < _EXACT else float(r)  # normalise_number, inlined
         value = try_eval_arith(t.op, left, right)
         if value is not None:
@@ -600,6 +594,9 @@ def _num(x: Term, op: str) -> float | int:
 
 
 _EXACT = 2 ** 53
+INT_OPS = {"+": operator.add, "-": operator.sub, "*": operator.mul}
+"""Operators whose integer result needs no more than Python's own operation (the fast cases of
+``resolve`` and of goal posting; division, ``div``, ``mod`` and ``**`` go through ``eval_arith``)."""
 """Integers at least this large are doubles in Jason (they print and compare as such)."""
 
 
