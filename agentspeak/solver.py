@@ -426,6 +426,8 @@ def _compile_fact_literal(f: Literal, then):
     # matches (beliefs are ground; annotations of the belief do not matter): X is bound, no unify
     single = first if len(f.args) == 1 and f.annots is None and f.annot_tail is None else None
 
+    # Two bodies on purpose: the last literal of a context calls k directly; routing it through a
+    # `then` that calls k would add a Python call per candidate belief in every context (hot path).
     if then is None:
         def literal(kb, b, trail, k):
             bb = kb.bb
