@@ -445,7 +445,9 @@ def parse_program(text: str, source_file: str = "<string>", base_dir: str | None
     A file without includes is parsed once per process: later calls with the same text get a copy
     whose plans and rules are their own objects (labels, flags) but share the immutable terms, so
     100 agents of one source share one set of compiled contexts (and stay in the CPU's caches)."""
-    key = (text, source_file)
+    # the functions known decide whether `ns.f(...)` is a call: a function registered later must not
+    # meet a parse made before it
+    key = (text, source_file, len(FUNCTIONS.functions))
     cached = _PARSED.get(key)
     if cached is not None:
         return _copy_program(cached)

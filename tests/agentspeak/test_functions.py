@@ -124,3 +124,20 @@ def test_bad_function_argument_in_a_belief_is_a_load_error_with_file_and_line():
         parse_program("b(1).\np(math.abs(a)).\n", "f.asl")
     assert (info.value.file, info.value.line) == ("f.asl", 2)
     assert "math.abs(a): the argument 'a' is not a number" in str(info.value)
+
+
+def test_a_function_registered_after_a_parse_is_seen_by_the_next_parse_of_the_same_text():
+    # parse_program caches programs by text; `ns.f(...)` is a call only if ns.f is registered, so a
+    # later registration must not be met by the earlier, cached parse
+    from agentspeak.terms import Func
+    from agentspeak.stdlib.registry import FUNCTIONS
+
+    src = "+!g <- X = latecomer.triple(2).\n"
+    before = parse_program(src, "late.asl")
+    FUNCTIONS.arith_function("latecomer.triple", args=1)(lambda x: 3 * x)
+    try:
+        after = parse_program(src, "late.asl")
+    finally:
+        FUNCTIONS.functions.pop("latecomer.triple", None)
+    assert type(before.plans[0].body[0].term.right) is not Func
+    assert type(after.plans[0].body[0].term.right) is Func
