@@ -302,19 +302,28 @@ class Agent:
         if not relevant:
             self._no_plan(ev, "no_relevant", f"found a goal for which there is no relevant plan: {trigger}")
             return True
+        trail: list = []  # one for every context: a context that fails undoes its own bindings
         for plan in relevant:
             tvars, context, _ = plan.matcher or plan_matcher(plan)
             if tvars is not None and args is not None:
-                b: dict = dict(zip(tvars, args))  # distinct variables <- the event's arguments
+                # distinct variables <- the event's arguments (a display: dict(zip()) costs 5x more)
+                n = len(args)
+                if n == 1:
+                    b: dict = {tvars[0]: args[0]}
+                elif n == 2:
+                    b = {tvars[0]: args[0], tvars[1]: args[1]}
+                else:
+                    b = dict(zip(tvars, args))
             else:
                 b = {}
                 if not unify(plan.trigger.literal, lit, b, []):
                     continue
             if context is not None:
                 try:
-                    if not context(self, b, [], _true_k):
+                    if not context(self, b, trail, _true_k):
                         continue
                 except (SolveError, ArithmeticError_) as exc:
+                    trail = []
                     log.warning("[%s] error in the context of the plan at %s:%s: %s", self.name,
                                 plan.source_file, plan.line, getattr(exc, "message", exc))
                     continue
@@ -354,9 +363,7 @@ class Agent:
         trigger = ev.trigger
         intention = ev.intention
         if intention is None:
-            im = IntendedMeans(plan, b, trigger.literal)
-            intention = Intention()
-            intention.stack.append(im)
+            intention = Intention(IntendedMeans(plan, b, trigger.literal))
             if plan.atomic:
                 intention.atomic += 1
                 self.atomic_intention = intention
@@ -438,11 +445,24 @@ class Agent:
                 self._fail(intention, "wrong_arguments", str(exc), instr)
             else:
                 if intention.suspended is None and not intention.dropped:
+                    # clr_int's two usual cases inlined: the top plan still has formulas to run
+                    # (the intention stays in the queue), or the intention's only plan is done
                     stack = intention.stack
-                    frames = stack[-1].frames if stack else None
-                    # clr_int, unless the top plan still has formulas to run (its first test, inlined)
-                    if not (frames is not None and len(frames) == 1 and frames[0].pc < len(frames[0].body)):
-                        self.clr_int(intention)
+                    if stack:
+                        top = stack[-1]
+                        frames = top.frames
+                        if len(frames) == 1:
+                            f0 = frames[0]
+                            if f0.pc < len(f0.body):
+                                self.running.append(intention)
+                                return
+                            if len(stack) == 1 and top.handles is None:
+                                stack.pop()
+                                if top.plan.atomic:
+                                    intention.atomic -= 1
+                                self._finished(intention)
+                                return
+                    self.clr_int(intention)
         if intention.suspended is None and intention.stack and not intention.dropped:
             self.running.append(intention)
 
@@ -530,7 +550,8 @@ class Agent:
         intention.dropped = True
         if self.atomic_intention is intention:
             self.atomic_intention = None
-        self.suspended.pop(intention.id, None)
+        if self.suspended:
+            self.suspended.pop(intention.id, None)
         if intention.fork is not None:
             intention.fork.branch_done(self, intention, True)
 
@@ -1013,10 +1034,29 @@ def _exec_internal(ag: Agent, intention, im, frame, instr) -> None:
                                                                    and v.annot_tail is None):
                         out.append(v)
                         continue
-            elif ta is int or ta is float or ta is str or (ta is Literal and not a.args and a.annots is None
-                                                           and a.annot_tail is None):
+            elif ta is int or ta is float or ta is str:
                 out.append(a)
                 continue
+            elif ta is Literal and a.annots is None and a.annot_tail is None:
+                if not a.args:
+                    out.append(a)
+                    continue
+                # a structure of numbers, strings, atoms and variables bound to them (the usual
+                # message content): resolve's result built here, without its calls
+                sub = []
+                for x in a.args:
+                    tx = type(x)
+                    if tx is Var:
+                        x = b.get(x, x)
+                        tx = type(x)
+                    if tx is int or tx is float or tx is str or (tx is Literal and not x.args and x.annots is None
+                                                                 and x.annot_tail is None):
+                        sub.append(x)
+                    else:
+                        break
+                else:
+                    out.append(Literal(a.functor, tuple(sub), None, a.neg))
+                    continue
             out.append(resolve(a, b))
         args = tuple(out)
     else:

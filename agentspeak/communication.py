@@ -92,6 +92,7 @@ def _strip_self_source(lit: Literal) -> Literal:
 
 
 _SOURCES: dict[str, Literal] = {}
+_SELF_ANNOTS = (SOURCE_SELF,)
 _ATOMS: dict[str, Literal] = {}
 
 
@@ -131,6 +132,18 @@ def _annotate(lit: Term, who: Term) -> Term:
 
 _KQML_RECEIVED = Trigger(ADD, ACHIEVE, Literal("kqml_received", (Var(), Var(), Var(), Var())))
 _KQML_KEY = _KQML_RECEIVED.key
+_ADD_ACHIEVE = (ADD, ACHIEVE)
+_SOURCE_ANNOTS: dict[str, tuple] = {}
+
+
+def _source_annots(name: str) -> tuple:
+    """``(source(name),)``: the annotations of a plain message content, made once per sender name."""
+    found = _SOURCE_ANNOTS.get(name)
+    if found is None:
+        found = (_source_of(_atom_of(name)),)
+        if len(_SOURCE_ANNOTS) < 10_000:
+            _SOURCE_ANNOTS[name] = found
+    return found
 
 
 def receive_message(agent: Any, msg: Message) -> None:
@@ -143,7 +156,7 @@ def receive_message(agent: Any, msg: Message) -> None:
         return
     plans = agent.plans  # plans.relevant(_KQML_RECEIVED), inlined: asked of every message
     index = plans._index if plans._index is not None else plans._build()
-    if index.get(_KQML_KEY) or plans._var_plans.get((ADD, ACHIEVE)):
+    if index.get(_KQML_KEY) or plans._var_plans.get(_ADD_ACHIEVE):
         sender = _atom_of(name) if name != agent.name else SELF
         goal = Literal("kqml_received", (sender, Literal(perf), msg.content, msg.msg_id), (SOURCE_SELF,))
         agent.post_external(Trigger(ADD, ACHIEVE, goal), force=True)
@@ -156,10 +169,10 @@ def receive_message(agent: Any, msg: Message) -> None:
             if not (ta is int or ta is float or ta is str or (ta is Literal and not a.args and a.annots is None)):
                 break
         else:
-            src = _SOURCES.get(name) if name != agent.name else SOURCE_SELF  # _source_of, inlined
-            if src is None:
-                src = _source_of(_atom_of(name))
-            trigger = Trigger(ADD, ACHIEVE, Literal(content.functor, content.args, (src,), content.neg))
+            annots = _SOURCE_ANNOTS.get(name) if name != agent.name else _SELF_ANNOTS
+            if annots is None:
+                annots = _source_annots(name)
+            trigger = Trigger(ADD, ACHIEVE, Literal(content.functor, content.args, annots, content.neg))
             if agent.event_waiters:
                 agent._notify_waiters(trigger)
             agent.events.append(Event(trigger))

@@ -83,9 +83,9 @@ class IntendedMeans:
 class Intention:
     __slots__ = ("id", "stack", "suspended", "atomic", "waiting", "fork", "dropped", "__weakref__")
 
-    def __init__(self) -> None:
+    def __init__(self, im: IntendedMeans | None = None) -> None:
         self.id = next(_intention_ids)
-        self.stack: list[IntendedMeans] = []
+        self.stack: list[IntendedMeans] = [] if im is None else [im]  # its first intended means, if given
         self.suspended: str | None = None   # why it is not in the running queue (None = running)
         self.atomic = 0                     # number of [atomic] plans on the stack
         self.waiting = None                 # the Suspend (or event) it waits for

@@ -15,7 +15,7 @@ import operator
 from typing import TYPE_CHECKING, Iterator, Protocol
 
 from agentspeak.terms import (
-    And, Arith, ArithmeticError_, Cons, Func, Literal, Not, Or, Rel, Term, Var, compare, deref,
+    _EXACT, INT_OPS, And, Arith, ArithmeticError_, Cons, Func, Literal, Not, Or, Rel, Term, Var, compare, deref,
     is_list, list_items, make_list, resolve, to_str,
 )
 from agentspeak.copier import rule_copier
@@ -538,6 +538,10 @@ def _compile_order(f: Rel):
 def _compile_unify(f: Rel):
     """``X = expr``: both sides resolved (arithmetic evaluated), then unified."""
     left0, right0 = f.left, f.right
+    # `X = A op B` with an integer operator: the sum of two integers without a resolve call
+    int_op = INT_OPS.get(right0.op) if type(right0) is Arith and right0.right is not None else None
+    op_left = right0.left if int_op is not None else None
+    op_right = right0.right if int_op is not None else None
 
     def unify_rel(kb, b, trail, k):
         mark = len(trail)
@@ -552,20 +556,32 @@ def _compile_unify(f: Rel):
                 x = resolve(x, b)
             except ArithmeticError_ as exc:
                 raise SolveError("wrong_arguments", str(exc)) from None
-        y = right0
-        if type(y) is Var:
-            y = deref(y, b)
-        if type(y) is not int and type(y) is not float and type(y) is not Var:
-            try:
-                y = resolve(y, b)
-            except ArithmeticError_ as exc:
-                raise SolveError("wrong_arguments", str(exc)) from None
-            if type(y) is Func or type(x) is Func:
-                raise SolveError("wrong_arguments", f"{to_str(f, b)}: a function argument is unbound")
+        y = None
+        if int_op is not None:
+            p, q = op_left, op_right
+            if type(p) is Var:
+                p = b.get(p, p)
+            if type(q) is Var:
+                q = b.get(q, q)
+            if type(p) is int and type(q) is int and type(x) is not Func:
+                r = int_op(p, q)
+                if -_EXACT < r < _EXACT:
+                    y = r
+        if y is None:
+            y = right0
+            if type(y) is Var:
+                y = deref(y, b)
+            if type(y) is not int and type(y) is not float and type(y) is not Var:
+                try:
+                    y = resolve(y, b)
+                except ArithmeticError_ as exc:
+                    raise SolveError("wrong_arguments", str(exc)) from None
+                if type(y) is Func or type(x) is Func:
+                    raise SolveError("wrong_arguments", f"{to_str(f, b)}: a function argument is unbound")
         if type(x) is Var and type(y) is not Var:  # `X = value` with X free: bind, no unify call
             b[x] = y
             trail.append(x)
-            if k():
+            if k is _true_k or k():
                 return True
             undo(b, trail, mark)
             return False
