@@ -16,7 +16,7 @@ search_step(40).         // degrees per look: the camera sees 57 degrees, so vie
 look_wait(300).          // ms for fresh camera frames after a turn
 centre_tolerance(4).     // degrees off the image centre that count as centred
 centre_tries(4).
-step_away(0.7).          // metres to move before a second search (closer than 0.8 m the depth camera is blind)
+step_away(0.7).          // metres to step aside before a second search (see lookFromElsewhere)
 near_limit(1.0, 1.4).    // metres: a robot found closer than the first may drive out of the depth
                          // range during its test motion: I back off to the second
 far_limit(3.2, 2.6).     // metres: farther than the first, its cylinders are small: I come to the second
@@ -79,21 +79,27 @@ available :- not helping(_) & not on_mission & not diagnosing & not self_suspect
       !centre(F, N + 1).
 +!centre(F, _).          // lost it again, or close enough after the tries
 
-// Where to step when a full turn showed nothing: I do not know where the robot is, so the first step
-// goes back and, in case that was towards it, the next ones forward and back past where I started.
+// Where to step when a full turn showed nothing: sideways, across my line of sight. The usual reason
+// for a blind turn is a robot seen end-on (its two cylinders hide each other), often after a glimpse
+// that left me facing it: stepping along my own axis would keep that view, a side step of 0.7 m changes
+// it by about 30 degrees at 1-1.5 m. I do not know where the robot is, so the steps alternate sides and
+// also move me out of the depth camera's blind range (closer than 0.8 m) when it is right next to me.
 +!lookFromElsewhere(F) : robot_seen(F, _, _, _).
 +!lookFromElsewhere(F) : step_away(M)
-   <- .print("no sign of ", F, " from here: I step away and look again");
+   <- .print("no sign of ", F, " from here: I step aside and look again");
       .count(stepped(F), N);
       +stepped(F);
       !stepAway(F, N, M);
       !search(F, 0).
 
-+!stepAway(F, 0, M) <- move(-M).
-+!stepAway(F, N, M) : N mod 2 == 1 <- move(2 * M).
-+!stepAway(F, _, M) <- move(-2 * M).
--!stepAway(F, N, M) : N mod 2 == 1 <- !stepInstead(-M).    // blocked ahead: back instead
--!stepAway(F, _, M) <- !stepInstead(M).                      // blocked behind: forward instead
++!stepAway(F, 0, M) <- !sidestep(90, M).
++!stepAway(F, N, M) : N mod 2 == 1 <- !sidestep(-90, 2 * M).
++!stepAway(F, _, M) <- !sidestep(90, 2 * M).
+-!stepAway(F, _, _).     // a turn failed: look again from where I am
+
++!sidestep(A, M) <- turn(A); !stepOrBack(M); turn(-A).
++!stepOrBack(M) <- move(M).
+-!stepOrBack(M) <- !stepInstead(-M).     // blocked that way: the other way instead
 +!stepInstead(M) <- move(M).
 -!stepInstead(M).
 

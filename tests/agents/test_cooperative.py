@@ -60,6 +60,18 @@ def test_a_weak_wheel_that_turns_the_robot_end_on_is_still_diagnosed():
     assert marks_of(result, "robot_found")
 
 
+def test_an_immobile_robot_seen_end_on_is_found_by_a_side_step():
+    # the one miss of the any-heading evaluation (seed 100020 of random_pair_scenario): a robot that
+    # cannot turn to show its side, 3 degrees off end-on to the helper. A glimpse left the helper facing
+    # it, and its old step back along its own axis kept the end-on view; a side step changes the view
+    placement = Scenario((RobotSetup("faulty", 0.0, 0.0, -98.513, "both_actuators", "faulty.asl"),
+                          RobotSetup("helper", 0.2097, 1.0463, -44.981)), seed=100020, lighting=0.7840)
+    result = run_scenario(placement, processes=False, timeout=120)
+    assert result.finished, [(m.agent, m.step, m.detail) for m in result.marks]
+    assert result.robots[0].diagnosis == "both_actuators"
+    assert marks_of(result, "robot_found")
+
+
 def test_a_helper_killed_mid_way_is_replaced_by_another():
     base = paper_scenario("left_actuator", seed=4)
     scenario = Scenario(base.robots + (RobotSetup("helper2", 0.0, 1.5, 0.0),), seed=4)
