@@ -294,8 +294,10 @@ class Agent:
             relevant = index.get((trigger.op, trigger.kind, lit.neg, lit.functor, len(args)))
             if relevant is None:
                 relevant = plans.relevant(trigger)
-            if Var in map(type, args):
-                args = None  # variables in the event: bind by unification (shared or repeated ones)
+            for a in args:  # (a loop: `Var in map(type, args)` costs 3x more for one argument)
+                if type(a) is Var:
+                    args = None  # variables in the event: bind by unification (shared or repeated ones)
+                    break
         else:
             args = None
             relevant = self.plans.relevant(trigger)
@@ -303,13 +305,18 @@ class Agent:
             self._no_plan(ev, "no_relevant", f"found a goal for which there is no relevant plan: {trigger}")
             return True
         trail: list = []  # one for every context: a context that fails undoes its own bindings
+        b = None          # the bindings of the plan tried before, if its context failed cleanly
         for plan in relevant:
             tvars, context, _ = plan.matcher or plan_matcher(plan)
             if tvars is not None and args is not None:
                 # distinct variables <- the event's arguments (a display: dict(zip()) costs 5x more)
                 n = len(args)
                 if n == 1:
-                    b: dict = {tvars[0]: args[0]}
+                    if b is None:
+                        b = {tvars[0]: args[0]}
+                    else:  # reused: a dict costs more than emptying one
+                        b.clear()
+                        b[tvars[0]] = args[0]
                 elif n == 2:
                     b = {tvars[0]: args[0], tvars[1]: args[1]}
                 else:
@@ -324,10 +331,14 @@ class Agent:
                         continue
                 except (SolveError, ArithmeticError_) as exc:
                     trail = []
+                    b = None
                     log.warning("[%s] error in the context of the plan at %s:%s: %s", self.name,
                                 plan.source_file, plan.line, getattr(exc, "message", exc))
                     continue
-            self.push_im(ev, plan, b)
+            if intention is None and not plan.atomic:  # push_im's new intention, inlined
+                self.running.append(Intention(IntendedMeans(plan, b, lit)))
+            else:
+                self.push_im(ev, plan, b)
             return True
         self._no_plan(ev, "no_applicable", f"found a goal for which there is no applicable plan: {trigger}")
         return True

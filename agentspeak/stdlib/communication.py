@@ -33,6 +33,11 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
     """``.send(R, Perf, C[, Ans[, TimeoutMs]])``. With Ans, an ask suspends this intention until
     the answer (``false`` if unknown, ``timeout`` on timeout) - other intentions go on."""
     agent = ctx.agent
+    if (answer is None and type(receiver) is Literal and not receiver.args and type(performative) is Literal
+            and not performative.args and type(content) is not Var):
+        # the usual send: one receiver named by an atom, no answer awaited (the checks below pass)
+        agent.arch.send(agent, Message(agent.name, receiver.functor, performative.functor, content))
+        return True
     if not isinstance(performative, Literal) or performative.args:
         raise wrong_arguments(".send: the performative must be an atom")
     perf = performative.functor
