@@ -18,7 +18,7 @@ from agentspeak.beliefs import SELF, SOURCE_SELF, source
 from agentspeak.intentions import Event
 from agentspeak.program import ACHIEVE, ADD, BEL, DEL, Plan, PlanTerm, Trigger
 from agentspeak.solver import SolveError, solve
-from agentspeak.terms import NIL, Cons, Literal, Term, Var, is_ground, list_items, make_list, rename, resolve, to_str
+from agentspeak.terms import NIL, Cons, Literal, Term, is_ground, list_items, make_list, rename, resolve, to_str
 
 log = logging.getLogger("faultmas.agentspeak")
 
@@ -130,9 +130,6 @@ def _annotate(lit: Term, who: Term) -> Term:
     return lit
 
 
-_KQML_RECEIVED = Trigger(ADD, ACHIEVE, Literal("kqml_received", (Var(), Var(), Var(), Var())))
-_KQML_KEY = _KQML_RECEIVED.key
-_ADD_ACHIEVE = (ADD, ACHIEVE)
 _SOURCE_ANNOTS: dict[str, tuple] = {}
 
 
@@ -154,9 +151,10 @@ def receive_message(agent: Any, msg: Message) -> None:
     if msg.in_reply_to is not None and msg.in_reply_to in agent.pending_asks:
         agent.pending_asks.pop(msg.in_reply_to)(msg)
         return
-    plans = agent.plans  # plans.relevant(_KQML_RECEIVED), inlined: asked of every message
-    index = plans._index if plans._index is not None else plans._build()
-    if index.get(_KQML_KEY) or plans._var_plans.get(_ADD_ACHIEVE):
+    plans = agent.plans  # has +!kqml_received(S, P, C, M) a relevant plan? Known per plan index
+    if plans._index is None:
+        plans._build()
+    if plans.kqml_override:
         sender = _atom_of(name) if name != agent.name else SELF
         goal = Literal("kqml_received", (sender, Literal(perf), msg.content, msg.msg_id), (SOURCE_SELF,))
         agent.post_external(Trigger(ADD, ACHIEVE, goal), force=True)

@@ -99,6 +99,10 @@ class Intention:
         return reversed(self.stack)
 
 
+KQML_RECEIVED_KEY = (ADD, ACHIEVE, False, "kqml_received", 4)
+"""The index key of ``+!kqml_received(Sender, Performative, Content, MsgId)`` plans."""
+
+
 class PlanLibrary:
     """Plans in source order, indexed by trigger (op, kind, functor/arity); variable triggers last-bound."""
 
@@ -106,6 +110,7 @@ class PlanLibrary:
         self.plans: list[Plan] = []
         self._index: dict[tuple, list[Plan]] | None = None
         self._var_plans: dict[tuple, list[Plan]] = {}
+        self.kqml_override = False  # a plan is relevant to +!kqml_received/4 (valid while _index is)
 
     def add(self, plan: Plan, at_end: bool = True) -> None:
         plan.ensure_label()
@@ -145,6 +150,7 @@ class PlanLibrary:
                     plans.extend(extra)
                     plans.sort(key=lambda p: order[id(p)])
         self._var_plans = var_plans
+        self.kqml_override = bool(index.get(KQML_RECEIVED_KEY) or var_plans.get((ADD, ACHIEVE)))
         self._index = index
         return index
 

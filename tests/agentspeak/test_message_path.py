@@ -1,0 +1,70 @@
+"""The per-message path (send -> mailbox -> event -> intention) keeps Jason's semantics on its fast paths:
+contents of every shape, sources, plan selection after failing contexts, ``+!kqml_received`` overrides."""
+from __future__ import annotations
+
+from tests.agentspeak.harness import run_asl_logged, run_mas
+
+RELAY = """
++!t(H, X)[source(S)] : limit(M) & H >= M <- .print(done, H, " ", X, " ", S).
++!t(H, X)[source(S)] : next(N) <- H1 = H + 1; .send(N, achieve, t(H1, X)).
+"""
+
+
+def test_a_ring_passes_contents_of_every_shape_with_the_senders_source():
+    starter = "!go.\n+!go <- .send(a, achieve, t(0, {0})).\n"
+    contents = ['"text"', "2.5", "atom", "f(g(1), [1, 2])", "p[q]", "_"]
+    for content in contents:
+        agents = {"s": starter.replace("{0}", content),
+                  "a": "next(b). limit(3).\n" + RELAY, "b": "next(a). limit(3).\n" + RELAY}
+        lines = run_mas(agents)
+        assert len(lines) == 1 and lines[0].startswith("[b] done3 "), (content, lines)
+        assert lines[0].endswith(" a"), (content, lines)
+    shown = {c: run_mas({"s": starter.replace("{0}", c), "a": "next(b). limit(1).\n" + RELAY,
+                         "b": "next(a). limit(1).\n" + RELAY})[0] for c in contents[:5]}
+    assert shown == {'"text"': "[b] done1 text a", "2.5": "[b] done1 2.5 a", "atom": "[b] done1 atom a",
+                     "f(g(1), [1, 2])": "[b] done1 f(g(1),[1,2]) a", "p[q]": "[b] done1 p[q] a"}
+
+
+def test_an_achieve_from_oneself_has_source_self_and_a_variable_content_is_renamed_apart(caplog):
+    src = """!go.
++!go <- .my_name(Me); .send(Me, achieve, g(1, X)); X = 5; .print(sent, X).
++!g(N, Y)[source(S)] <- .print(got, N, S); Y = 7; .print(y, Y).
+"""
+    out, warnings = run_asl_logged(src, caplog)
+    # round robin: the sender's next step runs before the receiver's new intention; the receiver's
+    # Y is its own (binding it does not bind the sender's X, already 5)
+    assert out == ["got1self", "sent5", "y7"] and warnings == []
+
+
+def test_integer_sums_in_a_constraint_keep_jason_numbers_and_unify_when_bound(caplog):
+    src = """!go.
++!go <- A = 9007199254740991; B = A + 1; .print(B); C = 2; C = 1 + 1; .print(ok);
+   D = 3; E = D * 4 - 1; .print(E).
++!bad <- C = 2; C = 1 + 2; .print(never).
+-!bad[error(E)] <- .print(failed, E).
+!bad.
+"""
+    out, _ = run_asl_logged(src, caplog)
+    assert sorted(out) == sorted(["9007199254740992", "ok", "11", "failedconstraint_failed"])
+
+
+def test_the_next_plan_sees_none_of_the_bindings_of_a_failed_or_broken_context(caplog):
+    src = """lim(5). v(1).
+!go(7). !go(2). !go(0).
++!go(H) : lim(M) & H >= M <- .print(big, H, M).
++!go(H) : v(Z) & Z = H + 1 & H < 1 & .no_such_action(Z) <- .print(never).
++!go(H) : v(M) <- .print(small, H, M).
+"""
+    out, warnings = run_asl_logged(src, caplog)
+    assert out == ["big75", "small21", "small01"]
+    assert len(warnings) == 1 and "error in the context" in warnings[0]  # the unknown action, for !go(0)
+
+
+def test_kqml_received_plans_override_a_performative_even_when_added_later():
+    receiver = """
++!arm <- +{+!kqml_received(S, achieve, C, M) <- .print(custom, S, C)}.
++!g(X)[source(S)] <- .print(plain, X, S); !arm.
+"""
+    sender = "!go.\n+!go <- .send(r, achieve, g(1)); .wait(50); .send(r, achieve, g(2)).\n"
+    assert run_mas({"s": sender, "r": receiver}) == ["[r] plain1s", "[r] customsg(2)"]
+
