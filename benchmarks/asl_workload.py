@@ -1,12 +1,14 @@
 """Child side of the AgentSpeak benchmark: run one Jason project in this (fresh) process, report JSON.
 
-    python -m benchmarks.asl_workload PROJECT.mas2j [--set NAME=VALUE ...] [--timeout S]
+    python -m benchmarks.asl_workload PROJECT.mas2j [--set NAME=VALUE ...] [--timeout S] [--profile N]
 
 Runs in its own process so every workload starts from a clean heap and its peak RSS is its own.
 Parse + load (``build_local_mas``) and the run (``LocalRuntime.run``) are timed separately in CPU
 time, after the grammar is built once (reported apart: it is not the file's cost). The agents'
 console lines are collected, not printed, so printing costs no run time.
-The one JSON object on stdout is read by ``benchmarks.bench_asl``.
+The one JSON object on stdout is read by ``benchmarks.bench_asl``. ``--profile N`` runs the run phase
+under cProfile and prints its N costliest functions (own time) to stderr: where a speed-up should look
+(cProfile's own overhead inflates the CPU time reported in the JSON).
 """
 from __future__ import annotations
 
@@ -42,7 +44,8 @@ def parse_sets(items: list[str]) -> dict[str, str]:
     return sets
 
 
-def run_project(mas2j: str, sets: dict[str, str] | None = None, timeout: float | None = None) -> dict:
+def run_project(mas2j: str, sets: dict[str, str] | None = None, timeout: float | None = None,
+                profile: int = 0) -> dict:
     """Load and run ``mas2j`` (its .asl files rewritten by ``sets``) and measure it. Returns a JSON-able dict."""
     from agentspeak.mas2j import load_mas2j
 
@@ -69,9 +72,19 @@ def run_project(mas2j: str, sets: dict[str, str] | None = None, timeout: float |
                 decl.source = rewritten[decl.source]
         t0 = time.process_time()
         runtime = build_local_mas(project, printer=lambda name, text: lines.append(f"[{name}] {text}"))
+        profiler = None
+        if profile:
+            import cProfile
+            profiler = cProfile.Profile()
         t1 = time.process_time()
-        why = runtime.run(timeout=timeout)
+        if profiler is not None:
+            why = profiler.runcall(runtime.run, timeout=timeout)
+        else:
+            why = runtime.run(timeout=timeout)
         t2 = time.process_time()
+        if profiler is not None:
+            import pstats
+            pstats.Stats(profiler, stream=sys.stderr).sort_stats("tottime").print_stats(profile)
     return {
         "lines": lines,
         "last_line": lines[-1] if lines else None,
@@ -92,9 +105,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                     help="rewrite the initial belief NAME(...) of every .asl to NAME(VALUE)")
     ap.add_argument("--timeout", type=float, default=None, help="stop the run after S seconds")
+    ap.add_argument("--profile", type=int, default=0, metavar="N",
+                    help="profile the run phase; print its N costliest functions to stderr")
     args = ap.parse_args(argv)
     try:
-        result = run_project(args.mas2j, parse_sets(args.set), args.timeout)
+        result = run_project(args.mas2j, parse_sets(args.set), args.timeout, args.profile)
     except (OSError, ValueError) as exc:          # SourceError / AslSyntaxError are ValueErrors
         print(f"{args.mas2j}: {exc}", file=sys.stderr)
         return 2
