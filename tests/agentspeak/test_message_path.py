@@ -51,6 +51,7 @@ def test_integer_sums_in_a_constraint_keep_jason_numbers_and_unify_when_bound(ca
 def test_the_next_plan_sees_none_of_the_bindings_of_a_failed_or_broken_context(caplog):
     src = """lim(5). v(1).
 !go(7). !go(2). !go(0).
++!go(7) : v(M) & M > 5 <- .print(never).
 +!go(H) : lim(M) & H >= M <- .print(big, H, M).
 +!go(H) : v(Z) & Z = H + 1 & H < 1 & .no_such_action(Z) <- .print(never).
 +!go(H) : v(M) <- .print(small, H, M).
