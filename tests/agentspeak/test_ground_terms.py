@@ -33,6 +33,7 @@ def _same(a, b) -> bool:
     'm(12,"abc")', "p", "'Quoted atom'", "~p(1)[a,b]", "p[source(bob),a,a]", "[]", "[1,[2,3],x]",
     "f(-3, -2.5, 1.0, 1e3, 2.5E-3)", 'say("a\\"b\\nc\\t")', "p(a)[]", "notx(divide, modes)",
     "  pos( 3 , 4 )  ", "42", '"text"', 'm("a,b", - 3, x)', 'p( -1e2 )',
+    'm("a\\\\", "b\\"c", 3)', 'm( "x" , "" ,y )', 'm(7,"' + "x" * 4096 + '")', 'm("(a)", "[b]", "\'c\'")',
 ])
 def test_reader_builds_what_the_grammar_builds(text: str) -> None:
     term = read_ground_term(text)
@@ -43,6 +44,7 @@ def test_reader_builds_what_the_grammar_builds(text: str) -> None:
 @pytest.mark.parametrize("text", [
     "p(X)", "p(_)", "1 + 2", "p(1-2)", "not p", "p(3 div 2)", ".print(a)", "a.b", "{+!g <- true}",
     "p(a", "p()", "[a|T]", "p // comment", "true", "- x", "p(a) q", "",
+    'm("abc)', 'm("a"b)', 'm("a" 1)', 'm(1,)', 'm("a\\")', 'm("a") x',
 ])
 def test_reader_steps_aside_outside_its_subset(text: str) -> None:
     assert read_ground_term(text) is None
@@ -80,3 +82,16 @@ def test_printed_ground_terms_read_back_as_the_grammar_reads_them(term) -> None:
     fast = read_ground_term(text)
     full = _full_parse(text)
     assert fast is None or _same(fast, full), text
+
+
+_flat_strings = st.text(alphabet=st.sampled_from('ab ,()[]\'"\\\\n\t'), max_size=12)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.one_of(st.integers(-99, 99), _atoms.map(Literal), _flat_strings), min_size=1, max_size=4),
+       st.sampled_from(["", " ", "\n"]))
+def test_flat_structures_with_awkward_strings_read_as_the_grammar_reads_them(args, blank) -> None:
+    text = f"{blank}m({blank}{(',' + blank).join(to_str(a) for a in args)}){blank}"
+    fast = read_ground_term(text)
+    assert fast is not None, text
+    assert _same(fast, _full_parse(text)), text
