@@ -88,6 +88,30 @@ def test_a_helper_killed_mid_way_is_replaced_by_another():
     assert result.robots[0].diagnosis == "left_actuator"
 
 
+def test_a_helper_turned_away_from_the_robot_finds_it_again_and_the_diagnosis_holds(monkeypatch):
+    # right after the helper found the faulty robot, something turns the helper 120 degrees away
+    # (its odometry sees the turn, its plans do not know): the test motion must be watched anyway
+    import agents.cooperative as cooperative
+
+    worlds = []
+    real_build_world = cooperative.build_world
+
+    def build_and_keep(scenario, *args, **kwargs):
+        world, bridges = real_build_world(scenario, *args, **kwargs)
+        worlds.append(world)
+        return world, bridges
+
+    def turn_helper_away(mark):
+        if mark.agent == "faulty" and mark.step == "found_by":
+            worlds[0].command("helper", "turn", (120.0, 60.0))     # degrees, deg/s
+
+    monkeypatch.setattr(cooperative, "build_world", build_and_keep)
+    result = run_scenario(paper_scenario("encoders", seed=8), processes=False, timeout=120, echo=turn_helper_away)
+    assert result.finished, [(m.agent, m.step, m.detail) for m in result.marks]
+    assert marks_of(result, "lost_sight"), "the helper noticed it had lost sight of the robot"
+    assert len(marks_of(result, "robot_found")) == 1 and result.robots[0].diagnosis == "encoders"
+
+
 def test_the_helper_returns_to_its_task_when_the_faulty_robot_dies():
     def kill_faulty_while_searched(mark, kill):
         if mark.agent == "helper" and mark.step == "searching":
