@@ -36,7 +36,8 @@ def new_message_id() -> str:
 
 class Message:
     """A speech act. Its ``msg_id`` (unique across processes) is made when first read: most messages
-    (``tell``, ``achieve``) never need one, and making it is a good part of an in-process send."""
+    (``tell``, ``achieve``) never need one, and making it is a good part of an in-process send.
+    ``.send`` builds messages without ``__init__`` (see ``agentspeak.agent._new``)."""
 
     __slots__ = ("sender", "receiver", "performative", "content", "_msg_id", "in_reply_to")
 
@@ -92,6 +93,7 @@ def _strip_self_source(lit: Literal) -> Literal:
 
 
 _SOURCES: dict[str, Literal] = {}
+_new = object.__new__  # objects of the message path without class calls: see agentspeak.agent._new
 _SELF_ANNOTS = (SOURCE_SELF,)
 _ATOMS: dict[str, Literal] = {}
 
@@ -170,10 +172,18 @@ def receive_message(agent: Any, msg: Message) -> None:
             annots = _SOURCE_ANNOTS.get(name) if name != agent.name else _SELF_ANNOTS
             if annots is None:
                 annots = _source_annots(name)
-            trigger = Trigger(ADD, ACHIEVE, Literal(content.functor, content.args, annots, content.neg))
+            # Event(Trigger(ADD, ACHIEVE, Literal(content.functor, content.args, annots, content.neg)))
+            # without class calls
+            lit = _new(Literal)
+            lit.functor, lit.args, lit.annots = content.functor, content.args, annots
+            lit.neg, lit.annot_tail, lit._hash = content.neg, None, None
+            trigger = _new(Trigger)
+            trigger.op, trigger.kind, trigger.literal = ADD, ACHIEVE, lit
             if agent.event_waiters:
                 agent._notify_waiters(trigger)
-            agent.events.append(Event(trigger))
+            ev = _new(Event)
+            ev.trigger, ev.intention, ev.handles = trigger, None, None
+            agent.events.append(ev)
             return
     sender = _atom_of(name) if name != agent.name else SELF
     handler = _HANDLERS.get(perf)

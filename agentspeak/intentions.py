@@ -3,6 +3,9 @@
 An intended means (``IntendedMeans``) is one running instance of a plan: the plan (shared, never
 copied), its own bindings dict, and a stack of frames (the plan body plus any ``if``/``while``/
 ``for`` block being executed). An intention is a stack of intended means.
+
+``Event``, ``Frame``, ``IntendedMeans`` and ``Intention`` are also built without ``__init__`` on the
+message path (see ``agentspeak.agent._new``): a new slot must be set there too.
 """
 from __future__ import annotations
 

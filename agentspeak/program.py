@@ -18,7 +18,8 @@ BEL, ACHIEVE, TEST = "", "!", "?"
 
 
 class Trigger:
-    """``+b``, ``-b``, ``+!g``, ``-!g``, ``+?g``, ``-?g``, ``^!g``."""
+    """``+b``, ``-b``, ``+!g``, ``-!g``, ``+?g``, ``-?g``, ``^!g``. Also built without ``__init__`` when a
+    message arrives (see ``agentspeak.agent._new``)."""
 
     __slots__ = ("op", "kind", "literal")
 

@@ -51,6 +51,7 @@ class Literal:
 
     ``annots`` is a tuple kept sorted and without duplicates when ground (Jason keeps annotations
     as a sorted set), or ``None`` for no annotations. ``annot_tail`` is the ``|T`` of ``[a|T]``.
+    The message path also builds literals without ``__init__`` (see ``agentspeak.agent._new``).
     """
 
     __slots__ = ("functor", "args", "annots", "neg", "annot_tail", "_hash")

@@ -8,6 +8,7 @@ from agentspeak.stdlib.registry import Suspend, internal_action, wrong_arguments
 from agentspeak.terms import NIL, Literal, Var, list_items, make_list, to_str
 
 _ASK = ("askOne", "askAll", "askHow")
+_new = object.__new__  # a Message without the class call: see agentspeak.agent._new
 
 
 def _names(receiver) -> list[str]:
@@ -36,7 +37,10 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
     if (answer is None and type(receiver) is Literal and not receiver.args and type(performative) is Literal
             and not performative.args and type(content) is not Var):
         # the usual send: one receiver named by an atom, no answer awaited (the checks below pass)
-        agent.arch.send(agent, Message(agent.name, receiver.functor, performative.functor, content))
+        msg = _new(Message)  # Message(agent.name, receiver.functor, performative.functor, content)
+        msg.sender, msg.receiver, msg.performative = agent.name, receiver.functor, performative.functor
+        msg.content, msg._msg_id, msg.in_reply_to = content, None, None
+        agent.arch.send(agent, msg)
         return True
     if not isinstance(performative, Literal) or performative.args:
         raise wrong_arguments(".send: the performative must be an atom")

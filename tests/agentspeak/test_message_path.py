@@ -69,3 +69,62 @@ def test_kqml_received_plans_override_a_performative_even_when_added_later():
     sender = "!go.\n+!go <- .send(r, achieve, g(1)); .wait(50); .send(r, achieve, g(2)).\n"
     assert run_mas({"s": sender, "r": receiver}) == ["[r] plain1s", "[r] customsg(2)"]
 
+
+
+def _slots(obj) -> dict:
+    """Every slot of ``obj`` by name: an AttributeError names a slot that a fast path left unset."""
+    names = [n for cls in type(obj).__mro__ for n in getattr(cls, "__slots__", ()) if n != "__weakref__"]
+    return {n: getattr(obj, n) for n in names}
+
+
+def test_objects_the_message_path_builds_without_their_class_call_are_complete():
+    # receive_message, Agent.deliberate, .send and internal actions build Literal, Trigger, Event,
+    # Intention, IntendedMeans, Frame, Message and IAContext with object.__new__: compare every slot
+    # with what the constructors make
+    from agentspeak.agent import Agent, IAContext
+    from agentspeak.arch import AgentArch
+    from agentspeak.communication import Message, receive_message
+    from agentspeak.intentions import Event, IntendedMeans, Intention
+    from agentspeak.parser import parse_program
+    from agentspeak.program import ACHIEVE, ADD, Trigger
+    from agentspeak.stdlib.registry import STDLIB, Registry
+    from agentspeak.terms import Literal
+
+    sent: list = []
+    seen: list = []
+
+    class Recorder(AgentArch):
+        def send(self, agent, message):
+            sent.append(message)
+
+    lib = Registry(dict(STDLIB.actions))
+    lib.register(".see", lambda ctx, *args: seen.append(ctx), 0, None)
+    agent = Agent("r", arch=Recorder(), registry=lib)
+    agent.load(parse_program("+!g(X)[source(S)] <- .see(X); .send(S, achieve, h(X, 2)).\n"))
+    receive_message(agent, Message("s", "r", "achieve", Literal("g", (7,))))
+    event = agent.events[-1]
+    source = Literal("source", (Literal("s"),))
+    expected = Event(Trigger(ADD, ACHIEVE, Literal("g", (7,), (source,))))
+    assert _slots(event)["intention"] is None and _slots(event)["handles"] is None
+    assert _slots(event.trigger) == _slots(expected.trigger)
+    assert _slots(event.trigger.literal) == _slots(expected.trigger.literal)
+
+    agent.deliberate()
+    intention = agent.running[-1]
+    im = intention.stack[0]
+    made = Intention(IntendedMeans(im.plan, im.b, im.event_literal))
+    assert {k: v for k, v in _slots(intention).items() if k not in ("id", "stack")} == \
+        {k: v for k, v in _slots(made).items() if k not in ("id", "stack")}
+    assert intention.id < made.id and len(intention.stack) == 1
+    assert {k: v for k, v in _slots(im).items() if k != "frames"} == \
+        {k: v for k, v in _slots(made.stack[0]).items() if k != "frames"}
+    assert [_slots(f) for f in im.frames] == [_slots(f) for f in made.stack[0].frames]
+
+    agent.act()  # .see(X)
+    agent.act()  # .send(S, achieve, h(X, 2))
+    assert not agent.running and intention.dropped
+    ctx = seen[0]
+    assert _slots(ctx) == _slots(IAContext(agent, intention, im, im.b, ctx.trail))
+    message = sent[0]
+    assert _slots(message) == _slots(Message("r", "s", "achieve", Literal("h", (7, 2))))
+    assert _slots(message.content) == _slots(Literal("h", (7, 2)))
