@@ -22,7 +22,7 @@ from functools import partial
 from typing import Iterable
 
 from agents.transport.base import Transport
-from agents.transport.envelope import BadMessage, Envelope
+from agents.transport.envelope import BadMessage, Envelope, make_envelope
 from agents.transport.trust import CODE_PERFORMATIVES, TrustPolicy
 from agentspeak.agent import Agent
 from agentspeak.beliefs import SOURCE_PERCEPT
@@ -82,7 +82,8 @@ class NetworkArch(LocalArch):
     """``LocalArch`` whose MAS extends beyond this process: names, stop and trust come from the bridge.
 
     ``body``: the architecture the agent had before it joined the network (e.g. a ``RobotArch``); its
-    ``perceive`` and ``act`` stay in force, so a robot agent keeps its robot.
+    ``perceive`` and ``act`` stay in force (``EmbodiedNetworkArch``), so a robot agent keeps its robot.
+    An agent without a body keeps the default ``perceive``, which the reasoning cycle skips.
     """
 
     def __init__(self, runtime: LocalRuntime, bridge: "TransportBridge", body: LocalArch | None = None) -> None:
@@ -90,11 +91,9 @@ class NetworkArch(LocalArch):
         self.bridge = bridge
         self.body = body
 
-    def perceive(self, agent: Agent):
-        return self.body.perceive(agent) if self.body is not None else None
-
-    def act(self, agent: Agent, action: Literal):
-        return self.body.act(agent, action) if self.body is not None else super().act(agent, action)
+    @staticmethod
+    def for_agent(runtime: LocalRuntime, bridge: "TransportBridge", body: LocalArch | None) -> "NetworkArch":
+        return NetworkArch(runtime, bridge) if body is None else EmbodiedNetworkArch(runtime, bridge, body)
 
     def progress(self, agent: Agent, report) -> None:
         """``.progress``: published on the MAS's control key for the process that runs the MAS."""
@@ -108,6 +107,16 @@ class NetworkArch(LocalArch):
 
     def accepts_plans_from(self, agent: Agent, sender: str) -> bool:
         return self.bridge.may_tell_how(sender)
+
+
+class EmbodiedNetworkArch(NetworkArch):
+    """A ``NetworkArch`` whose agent perceives and acts through its body (e.g. a robot)."""
+
+    def perceive(self, agent: Agent):
+        return self.body.perceive(agent)
+
+    def act(self, agent: Agent, action: Literal):
+        return self.body.act(agent, action)
 
 
 class TransportBridge:
@@ -135,8 +144,8 @@ class TransportBridge:
         self.transport.on_control(self._on_control)
         for agent in self.runtime.agents.values():
             body = agent.arch if type(agent.arch) is not LocalArch else None
-            agent.arch = NetworkArch(self.runtime, self, body)
-            self.transport.register(agent.name, partial(self._on_envelope, agent))
+            agent.arch = NetworkArch.for_agent(self.runtime, self, body)
+            self.transport.register(agent.name, partial(self._on_envelope, agent), partial(_wake, agent))
         self.transport.on_presence(self._on_presence)
         self._attached = True
         return self
@@ -161,9 +170,8 @@ class TransportBridge:
     def send_remote(self, message: Message) -> bool:
         """``LocalRuntime.remote``: send a message for an agent outside this process; False if unreachable."""
         try:
-            envelope = Envelope(self.mas, message.sender, (message.receiver,), message.performative,
-                                to_str(message.content), in_reply_to=message.in_reply_to,
-                                message_id=message.msg_id)
+            envelope = make_envelope(self.mas, message.sender, (message.receiver,), message.performative,
+                                     to_str(message.content), message.in_reply_to, message.msg_id)
         except BadMessage as bad:
             log.warning("[%s] cannot send %s to %s: %s", message.sender, message.performative,
                         message.receiver, bad)
@@ -191,8 +199,9 @@ class TransportBridge:
             detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             self._refuse(agent, envelope, "unparsable_content", detail[:100])
             return
-        agent.deliver(Message(envelope.sender, agent.name, envelope.performative, content,
-                              msg_id=envelope.message_id, in_reply_to=envelope.in_reply_to))
+        # Agent.deliver without its wake: the transport calls _wake once per batch of messages
+        agent.mailbox.append(Message(envelope.sender, agent.name, envelope.performative, content,
+                                     msg_id=envelope.message_id, in_reply_to=envelope.in_reply_to))
 
     def _refuse(self, agent: Agent, envelope: Envelope, reason: str, detail: str = "") -> None:
         agent.count_dropped(reason)
@@ -217,13 +226,21 @@ class TransportBridge:
 
     def run(self, timeout: float | None = None) -> str:
         """Run the runtime until ``.stopMAS`` (any process) or ``timeout``: 'stopped' or 'timeout'.
-        Never stops on idle (other processes may still send): publishes idle/busy instead."""
+        Never stops on idle (other processes may still send): publishes idle/busy instead.
+        What the agents send to other processes meanwhile goes in batches, flushed whenever the
+        runtime goes idle (and by the transport within a millisecond while it stays busy)."""
+        with self.transport.batching():
+            return self._run(timeout)
+
+    def _run(self, timeout: float | None) -> str:
         deadline = None if timeout is None else time.monotonic() + timeout
         runtime = self.runtime
+        flush = self.transport.flush
         self.publish_status(busy=True)
         while True:
             remaining = None if deadline is None else max(0.0, deadline - time.monotonic())
             why = runtime.run(timeout=remaining, stop_when_idle=True)
+            flush()
             if why != "idle":
                 return why
             if not self.published_idle and not runtime.wait_for_work(IDLE_GRACE):
@@ -233,6 +250,11 @@ class TransportBridge:
                 return "timeout"
             if runtime.wait_for_work(0.5 if remaining is None else min(remaining, 0.5)) and self.published_idle:
                 self.publish_status(busy=True)
+
+
+def _wake(agent: Agent) -> None:
+    """The second half of ``Agent.deliver``, once per batch of messages put in its mailbox."""
+    agent.arch.wake(agent)
 
 
 def _presence_percept(agent: Agent, name: str, alive: bool) -> None:

@@ -12,15 +12,20 @@ import threading
 import time
 from abc import ABC, abstractmethod
 from collections import Counter
-from typing import Any, Callable, Iterable
+from contextlib import contextmanager
+from threading import get_ident
+from typing import Any, Callable, Iterable, Iterator
 
-from agents.transport.envelope import DEFAULT_MAX_SIZE, BadMessage, Envelope, decode
+from agents.transport.envelope import (BATCH_BYTES, BATCH_SEPARATOR, DEFAULT_MAX_SIZE, QUESTIONS, BadMessage,
+                                       Envelope, decode, split_batch)
 from agents.transport.keys import check_name
+from agents.transport.outbox import Outbox
 from agents.transport.status import AgentStatus
 
 log = logging.getLogger("faultmas.transport")
 
 OnEnvelope = Callable[[Envelope], None]
+OnDelivered = Callable[[], None]
 OnPresence = Callable[[str, bool], None]
 OnControl = Callable[[dict[str, Any]], None]
 OnStatus = Callable[[AgentStatus], None]
@@ -153,6 +158,9 @@ class Transport(ABC):
         self.received: Counter[str] = Counter()   # by receiver
         self._counters = threading.Lock()
         self._agents: dict[str, OnEnvelope] = {}
+        self._delivered: dict[str, OnDelivered] = {}
+        self._outbox = Outbox()
+        self._batching: int | None = None  # the thread whose sends to other processes are batched
         self._presence = Presence()
         self._control_callbacks: list[OnControl] = []
         self._status_callbacks: list[OnStatus] = []
@@ -167,6 +175,7 @@ class Transport(ABC):
 
     def close(self) -> None:
         if self._opened:
+            self._outbox.close()
             for agent in list(self._agents):
                 self.unregister(agent)
             self._close()
@@ -179,19 +188,25 @@ class Transport(ABC):
         self.close()
 
     # -- agents ----------------------------------------------------------------------------------
-    def register(self, agent: str, on_envelope: OnEnvelope) -> None:
-        """Receive ``agent``'s messages through ``on_envelope`` (must not block) and announce it alive."""
+    def register(self, agent: str, on_envelope: OnEnvelope, on_delivered: OnDelivered | None = None) -> None:
+        """Receive ``agent``'s messages through ``on_envelope`` (must not block) and announce it alive.
+        ``on_delivered``: called after each group of messages handed over together (one network
+        message, which may be a batch), e.g. to wake the agent once per group, not per message."""
         check_name(agent)
         if not self._opened:
             raise RuntimeError("open the transport before registering agents")
         if agent in self._agents:
             raise ValueError(f"agent {agent!r} is already registered in this process")
         self._agents[agent] = on_envelope
+        if on_delivered is not None:
+            self._delivered[agent] = on_delivered
         self._attach(agent)
 
     def unregister(self, agent: str) -> None:
         """Stop receiving for ``agent`` and withdraw its presence."""
+        self._outbox.flush()  # what it sent goes before its presence does
         if self._agents.pop(agent, None) is not None:
+            self._delivered.pop(agent, None)
             self._detach(agent)
 
     def local_agents(self) -> tuple[str, ...]:
@@ -216,12 +231,54 @@ class Transport(ABC):
                 unreachable.append(receiver)
         return tuple(unreachable)
 
+    @contextmanager
+    def batching(self) -> Iterator[None]:
+        """While in this block, what the calling thread sends to other processes is held and put in
+        batches (see ``outbox``): for the thread that runs the agents, which calls ``flush`` when
+        they go idle. Other threads' messages still go out at once."""
+        if self._batching is not None:  # another loop batches already: this one sends at once
+            yield
+            return
+        self._batching = get_ident()
+        try:
+            yield
+        finally:
+            self._batching = None
+            self._outbox.flush()
+
+    def flush(self) -> None:
+        """Send every message held for a batch now."""
+        self._outbox.flush()
+
+    def _send_payload(self, receiver: str, envelope: Envelope, payload: bytes,
+                      put: Callable[[bytes], None]) -> None:
+        """For concrete transports: ``put(payload)`` now, or hold it when the caller batches. Questions
+        and answers are not held (someone waits for them; the runtime need not go idle meanwhile)."""
+        if self._batching is not None and get_ident() == self._batching:
+            self._outbox.hold(receiver, payload, put, envelope.in_reply_to is not None
+                              or envelope.performative in QUESTIONS)
+        else:
+            put(payload)
+
     def _is_local(self, receiver: str) -> bool:
         """Local receivers are served without the network (FIFO per pair holds: always this path)."""
         return receiver in self._agents
 
     def receive_bytes(self, agent: str, payload: bytes, where: str = "") -> None:
-        """Check bytes that arrived for ``agent`` and deliver them, or drop them with one log line."""
+        """Check bytes that arrived for ``agent`` (one message or a batch) and deliver each message,
+        or drop it with one log line; then ``on_delivered`` once."""
+        if BATCH_SEPARATOR in payload:
+            limit = max(self.max_message_size, BATCH_BYTES)
+            if len(payload) > limit:
+                self._drop("too_large", where or agent, None, f"{len(payload)} bytes > limit {limit}")
+                return
+            for message in split_batch(payload):
+                self._receive(agent, message, where)
+        else:
+            self._receive(agent, payload, where)
+        self._group_delivered(agent)
+
+    def _receive(self, agent: str, payload: bytes, where: str) -> None:
         try:
             envelope = decode(payload, self.max_message_size)
         except BadMessage as bad:
@@ -232,9 +289,16 @@ class Transport(ABC):
         elif agent not in envelope.receivers:
             self._drop("not_addressed", where or agent, envelope.sender, f"to {list(envelope.receivers)}")
         else:
-            self._deliver(agent, envelope)
+            self._hand_over(agent, envelope)
 
     def _deliver(self, agent: str, envelope: Envelope) -> bool:
+        """Deliver one envelope to a local agent (a group of one)."""
+        if not self._hand_over(agent, envelope):
+            return False
+        self._group_delivered(agent)
+        return True
+
+    def _hand_over(self, agent: str, envelope: Envelope) -> bool:
         callback = self._agents.get(agent)
         if callback is None:
             return False
@@ -245,6 +309,11 @@ class Transport(ABC):
         except Exception:  # the agent's problem; the network thread carries on
             log.exception("delivery to agent %s failed", agent)
         return True
+
+    def _group_delivered(self, agent: str) -> None:
+        callback = self._delivered.get(agent)
+        if callback is not None:
+            _call_safely(callback)
 
     def report_drop(self, envelope: Envelope, receiver: str, reason: str, detail: str = "") -> None:
         """For the agent layer: refuse a delivered envelope (e.g. ``unparsable_content``,
@@ -273,6 +342,7 @@ class Transport(ABC):
     # -- control and status ----------------------------------------------------------------------
     def publish_control(self, command: str, **fields: Any) -> None:
         """Send a MAS-wide command (e.g. ``stop``) to every process of the MAS, this one included."""
+        self._outbox.flush()  # messages sent before a stop arrive before it
         self._publish_control({"command": command, **fields})
 
     def on_control(self, callback: OnControl) -> None:
@@ -284,6 +354,7 @@ class Transport(ABC):
 
     def publish_status(self, agent: str, busy: bool) -> AgentStatus:
         """Publish ``agent``'s idle/busy state with its counters; also kept for status queries."""
+        self._outbox.flush()  # 'idle' only once what was sent is on its way
         status = self.status_of(agent, busy)
         self._publish_status(status)
         return status

@@ -13,6 +13,12 @@ Wire form (version 1)::
 
 ``re`` (``in_reply_to``) is left out when the message answers nothing. ``content`` is AgentSpeak
 text; parsing it is the agent layer's job (with the interpreter's own parser).
+
+Batch form: several envelopes for one receiver in one network message, each encoded as above, one
+per line (JSON Lines; an encoded envelope has no raw newline, JSON escapes it inside strings). A
+receiver checks and delivers each line as if it had come alone, in order; the batch as a whole may
+be up to ``BATCH_BYTES`` even where the per-message limit is lower. A sender batches only what its
+agents send in a burst (``outbox.Outbox``), so a lone question is still one message.
 """
 from __future__ import annotations
 
@@ -35,6 +41,9 @@ PERFORMATIVES: frozenset[str] = frozenset({
     "tellHow", "untellHow", "askHow", "signal",
 })
 
+#: Performatives whose sender waits for an answer.
+QUESTIONS: frozenset[str] = frozenset({"askOne", "askAll", "askHow"})
+
 #: Reasons a received message is dropped; the agent layer counts drops by these names.
 DROP_REASONS: tuple[str, ...] = (
     "too_large", "not_json", "bad_version", "missing_field", "bad_field_type",
@@ -44,10 +53,28 @@ DROP_REASONS: tuple[str, ...] = (
 #: Default limit on an encoded message, in bytes (configurable per transport).
 DEFAULT_MAX_SIZE = 256 * 1024
 
+#: Between the envelopes of a batch (see the module's docstring).
+BATCH_SEPARATOR = b"\n"
+
+#: A sender's batches are at most this many bytes (a bigger message goes alone).
+BATCH_BYTES = 64 * 1024
+
 # A name must be one Zenoh key-expression chunk: no '/', no wildcard or selector characters.
 _NAME = re.compile(r"[^/*$?#\s]+")
 
 _quote = json.encoder.encode_basestring  # a JSON string literal (C implementation), non-ASCII kept
+_CONTROL_BYTES = bytes(range(32))
+
+
+def _quote_content(text: str) -> str:
+    """``_quote`` for the content, which may be KBs: an ASCII text without control characters needs
+    only its quotes and backslashes escaped, done by ``str.replace`` (C, memchr speed); ``_quote``
+    walks every character (~4 ns each, 17 µs for 4 KB) but wins below a few hundred."""
+    if len(text) > 200 and text.isascii():
+        raw = text.encode()
+        if len(raw.translate(None, _CONTROL_BYTES)) == len(raw):
+            return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return _quote(text)
 _PROCESS_PREFIX = uuid.uuid4().hex[:12]
 _COUNTER = itertools.count(1)
 
@@ -62,7 +89,7 @@ _KNOWN_NAMES: set[str] = set()  # names already checked (bounded: hostile input 
 
 def is_valid_name(name: object) -> bool:
     """True when ``name`` can be an agent or MAS name (one key-expression chunk)."""
-    if name in _KNOWN_NAMES:
+    if type(name) is str and name in _KNOWN_NAMES:
         return True
     if not isinstance(name, str) or _NAME.fullmatch(name) is None:
         return False
@@ -117,10 +144,24 @@ class Envelope:
         quote = _quote
         text = (f'{{"v":{self.version},"id":{quote(self.message_id)},"mas":{quote(self.mas)},'
                 f'"from":{quote(self.sender)},"to":[{",".join(map(quote, self.receivers))}],'
-                f'"perf":{quote(self.performative)},"content":{quote(self.content)}')
+                f'"perf":{quote(self.performative)},"content":{_quote_content(self.content)}')
         if self.in_reply_to is not None:
             text += f',"re":{quote(self.in_reply_to)}'
         return (text + "}").encode()
+
+
+def split_batch(payload: bytes) -> list[bytes]:
+    """The messages in one received payload: itself, or each line of a batch. A payload whose first
+    line is not a whole JSON object is one message written over several lines (by hand, say)."""
+    if BATCH_SEPARATOR not in payload:
+        return [payload]
+    lines = payload.split(BATCH_SEPARATOR)
+    if not lines[0].rstrip().endswith(b"}"):
+        return [payload]
+    return [line for line in lines if line]
+
+
+_scan = json.JSONDecoder().scan_once  # json.loads without its wrappers (~1.3 µs less per message)
 
 
 def decode(payload: bytes | bytearray | memoryview, max_size: int = DEFAULT_MAX_SIZE) -> Envelope:
@@ -128,7 +169,13 @@ def decode(payload: bytes | bytearray | memoryview, max_size: int = DEFAULT_MAX_
     if len(payload) > max_size:
         raise BadMessage("too_large", f"{len(payload)} bytes > limit {max_size}")
     try:
-        data = json.loads(bytes(payload).decode())  # str: skips json's encoding detection
+        text = bytes(payload).decode()  # str: skips json's encoding detection
+        try:
+            data, end = _scan(text, 0)
+            if end != len(text):
+                raise ValueError
+        except (StopIteration, ValueError):  # not a bare object: json.loads decides, and says why
+            data = json.loads(text)
     except (UnicodeDecodeError, ValueError) as exc:
         raise BadMessage("not_json", str(exc)[:80]) from None
     envelope = _decode_well_formed(data)
@@ -149,22 +196,41 @@ def _decode_well_formed(data: Any) -> Envelope | None:
             data["v"], data["id"], data["mas"], data["from"], data["to"], data["perf"], data["content"])
     except KeyError:
         return None
-    in_reply_to = data.get("re")
+    if version != VERSION or type(version) is not int or type(to) is not list:
+        return None
+    return _usual(mas, sender, tuple(to), performative, content, data.get("re"), message_id)
+
+
+def make_envelope(mas: str, sender: str, receivers: tuple[str, ...], performative: str, content: str,
+                  in_reply_to: str | None, message_id: str) -> Envelope:
+    """``Envelope(...)`` for the agent layer's own messages: the usual fields (names seen before, a
+    known performative) pass in a few set lookups; anything else gets the full checks (``BadMessage``)."""
+    envelope = _usual(mas, sender, receivers, performative, content, in_reply_to, message_id)
+    if envelope is None:
+        envelope = Envelope(mas, sender, receivers, performative, content, in_reply_to, message_id)
+    return envelope
+
+
+def _usual(mas: Any, sender: Any, receivers: tuple, performative: Any, content: Any, in_reply_to: Any,
+           message_id: Any) -> Envelope | None:
+    """An envelope of these fields if each is as usual (what ``_check_fields`` accepts), else None."""
     known = _KNOWN_NAMES
-    if not (version == VERSION and type(version) is int and type(message_id) is str and message_id
-            and mas in known and sender in known and type(to) is list and to and all(r in known for r in to)
-            and performative in PERFORMATIVES and type(content) is str
-            and (in_reply_to is None or (type(in_reply_to) is str and in_reply_to))):
+    try:
+        if not (type(message_id) is str and message_id and mas in known and sender in known and receivers
+                and all(r in known for r in receivers) and performative in PERFORMATIVES
+                and type(content) is str and (in_reply_to is None or (type(in_reply_to) is str and in_reply_to))):
+            return None
+    except TypeError:  # an unhashable "name" (a list, say): the slow path says what is wrong
         return None
     envelope = _new(Envelope)
     _set(envelope, "mas", mas)
     _set(envelope, "sender", sender)
-    _set(envelope, "receivers", tuple(to))
+    _set(envelope, "receivers", receivers)
     _set(envelope, "performative", performative)
     _set(envelope, "content", content)
     _set(envelope, "in_reply_to", in_reply_to)
     _set(envelope, "message_id", message_id)
-    _set(envelope, "version", version)
+    _set(envelope, "version", VERSION)
     return envelope
 
 

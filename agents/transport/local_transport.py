@@ -70,7 +70,8 @@ class LocalTransport(Transport):
         if owner is None:
             return False
         if self.wire:
-            owner.receive_bytes(receiver, encoded(), f"local:{receiver}")
+            where = f"local:{receiver}"
+            self._send_payload(receiver, envelope, encoded(), lambda payload: owner.receive_bytes(receiver, payload, where))
         else:
             owner._deliver(receiver, envelope)
         return True

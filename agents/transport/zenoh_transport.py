@@ -5,7 +5,8 @@ Per agent: a subscriber on ``faultmas/<mas>/agent/<name>/inbox`` and a livelines
 reach the inbox). Per process: a liveliness subscriber with history (presence), a subscriber on
 ``faultmas/<mas>/control``, one on ``faultmas/<mas>/status/*`` and a queryable there that answers
 with the latest status of the local agents. Messages are put reliably with congestion control
-BLOCK on a cached publisher per receiver; agents of this process are served without the network.
+BLOCK on a cached publisher per receiver (a burst from the agents' thread in batches, see
+``outbox``); agents of this process are served without the network.
 """
 from __future__ import annotations
 
@@ -117,7 +118,7 @@ class ZenohTransport(Transport):
         # receiver whose liveliness token is seen counts as reachable even before matching says so.
         if not (self._presence.is_alive(receiver) or publisher.matching_status.matching):
             return False
-        publisher.put(encoded())
+        self._send_payload(receiver, envelope, encoded(), publisher.put)
         return True
 
     def _publisher(self, receiver: str) -> Any:

@@ -82,3 +82,12 @@ def test_building_a_bad_envelope_raises():
         Envelope("m", "a", ("b",), "shout", "x")
     with pytest.raises(BadMessage, match="bad_field_type"):
         Envelope("m", "a", (), "tell", "x")
+
+
+@pytest.mark.parametrize("field, value", [("mas", ["m"]), ("from", {"a": 1}), ("to", [["bob"]]), ("perf", ["tell"])])
+def test_unhashable_fields_are_refused_not_raised(field, value):
+    data = {"v": 1, "id": "a.1", "mas": "m", "from": "alice", "to": ["bob"], "perf": "tell", "content": "x"}
+    data[field] = value
+    with pytest.raises(BadMessage) as caught:
+        decode(json.dumps(data).encode())
+    assert caught.value.reason == "bad_field_type"

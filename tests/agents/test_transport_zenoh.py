@@ -68,6 +68,15 @@ def test_many_messages_keep_their_order_between_two_processes(team):
     assert [a.content for a in answers if a] == [f"n({i})" for i in range(500)]
 
 
+def test_a_burst_sent_in_batches_arrives_whole_and_in_order_in_another_process(team):
+    transport, inbox = team
+    with transport.batching():
+        for i in range(600):
+            transport.send(Envelope(transport.mas, "alice", ("carol",), "tell", f'n({i},"{"x" * (i % 300)}")'))
+    answers = [inbox.get(timeout=10) for _ in range(600)]
+    assert [a.content for a in answers if a] == [f'n({i},"{"x" * (i % 300)}")' for i in range(600)]
+
+
 def test_status_of_all_processes_is_quiescent_after_a_conversation(team):
     transport, inbox = team
     ask(transport, inbox, Envelope(transport.mas, "alice", ("dave",), "achieve", "go"))

@@ -1,0 +1,119 @@
+"""Messages held for other processes while the agents' thread is busy, then put together.
+
+A Zenoh put costs ~5 µs of the caller's CPU plus a wake-up of Zenoh's sending thread, and the
+receiver pays per sample too (a channel hand-over, a copy, a hand-over to the agent). An agent that
+sends in a burst (a ``for`` loop of ``.send``) therefore holds its messages here, one batch per
+receiver, and a batch goes out as ONE payload in the batch form of the envelope (``envelope.BATCH``:
+the envelopes' JSON, one per line). A batch is sent when it reaches ``max_messages`` or
+``max_bytes``, when its owner calls ``flush`` (the bridge does when the runtime goes idle, so a
+question and its answer are not delayed) and at the latest ``max_delay`` seconds after it started
+(a thread of ours, armed only when an empty outbox gets a message). Order per receiver is kept:
+everything for one receiver goes through one list, put under one lock.
+"""
+from __future__ import annotations
+
+import logging
+import threading
+from typing import Callable
+
+from agents.transport.envelope import BATCH_BYTES, BATCH_SEPARATOR
+
+BATCH_MESSAGES = 256
+"""Messages per batch at most (the receiver handles a batch before its agent runs)."""
+
+BATCH_DELAY = 0.001
+"""Seconds a held message waits at most when its owner does not flush (a busy runtime)."""
+
+Put = Callable[[bytes], None]
+log = logging.getLogger("faultmas.transport")
+
+
+class _Batch:
+    __slots__ = ("put", "payloads", "size")
+
+    def __init__(self, put: Put) -> None:
+        self.put = put
+        self.payloads: list[bytes] = []
+        self.size = 0
+
+    def send(self) -> None:
+        payloads = self.payloads
+        if payloads:
+            self.payloads, self.size = [], 0
+            self.put(payloads[0] if len(payloads) == 1 else BATCH_SEPARATOR.join(payloads))
+
+
+class Outbox:
+    """Held payloads by receiver; ``hold`` from any thread, ``flush`` from any thread."""
+
+    def __init__(self, max_messages: int = BATCH_MESSAGES, max_bytes: int = BATCH_BYTES,
+                 max_delay: float = BATCH_DELAY) -> None:
+        self.max_messages = max_messages
+        self.max_bytes = max_bytes
+        self.max_delay = max_delay
+        self._batches: dict[str, _Batch] = {}
+        self._lock = threading.Lock()
+        self._armed = threading.Event()
+        self._stop: threading.Event | None = None  # set: the timer thread of now ends
+
+    def hold(self, receiver: str, payload: bytes, put: Put, urgent: bool = False) -> None:
+        """Queue ``payload`` for ``receiver`` (``put`` sends bytes to it); may send a full batch now.
+        ``urgent``: send it now (after what was held for ``receiver`` before it), e.g. a question
+        whose sender waits for the answer."""
+        size = len(payload) + 1
+        with self._lock:
+            batch = self._batches.get(receiver)
+            if batch is None:
+                batch = self._batches[receiver] = _Batch(put)
+            elif batch.size + size > self.max_bytes or urgent:
+                batch.send()
+            if urgent or size > self.max_bytes:  # a big message goes alone too
+                put(payload)
+                return
+            batch.payloads.append(payload)
+            batch.size += size
+            if len(batch.payloads) >= self.max_messages:
+                batch.send()
+        if not self._armed.is_set():
+            self._arm()
+
+    def flush(self) -> None:
+        """Send every held batch now."""
+        if self._batches:
+            with self._lock:
+                for batch in self._batches.values():
+                    batch.send()
+
+    def drop(self, receiver: str) -> None:
+        """Forget ``receiver``'s batch without sending it (its publisher is gone)."""
+        with self._lock:
+            self._batches.pop(receiver, None)
+
+    def close(self) -> None:
+        """Flush, and end the timer thread (a later ``hold`` starts another)."""
+        self.flush()
+        stop, self._stop = self._stop, None
+        if stop is not None:
+            stop.set()
+            self._armed.set()
+
+    def _arm(self) -> None:
+        if self._stop is None:
+            self._stop = threading.Event()
+            threading.Thread(target=self._flush_late, args=(self._stop,), daemon=True,
+                             name="faultmas-outbox").start()
+        self._armed.set()
+
+    def _flush_late(self, stop: threading.Event) -> None:
+        """Flush ``max_delay`` after the first message of a batch, unless flushed by then."""
+        armed, wait = self._armed.wait, threading.Event().wait
+        while True:
+            armed()
+            if stop.is_set():
+                return
+            wait(self.max_delay)
+            self._armed.clear()  # a hold from here on arms the next round
+            try:
+                self.flush()
+            except Exception as exc:  # a put that fails (session closing) must not end the timer
+                log.debug("late flush failed: %s", exc)
