@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import json
 import os
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -104,10 +103,6 @@ class Result:
     peak_rss_kb: int = 0
     error: str = ""
     detail: dict = field(default_factory=dict)
-
-    @property
-    def median(self) -> float | None:
-        return statistics.median(self.seconds) if self.seconds and not self.error else None
 
     @property
     def best(self) -> float | None:
