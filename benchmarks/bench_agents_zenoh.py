@@ -9,7 +9,8 @@ every tell (distinct contents: no parse cache hit), adds the belief, and its pla
 ``+m(I,P)[source(S)] <- -m(I,P)[source(S)]`` consumes it; after ``report(N)`` it answers ``done(N)``;
 the rate is N over the time from the goal to the answer. Content ``m(I,"xx...")``: about the payload size. Round trip:
 ``.nano_time`` around ``.send(sink, askOne, v(X), A)`` inside the asking agent (the sink answers from
-its belief base).
+its belief base). Also reported: CPU time per tell of the sending agents' thread and of the whole
+sink process (Linux ``/proc``), which says where the time goes when the machine is shared.
 """
 from __future__ import annotations
 
@@ -42,7 +43,7 @@ def run(quick: bool = False) -> str:
     count = 3_000 if quick else 20_000
     trips = 300 if quick else 2_000
     raw_rates, raw_rtt = _raw(count, trips)
-    agent_rates, agent_rtt = _agents(count, trips)
+    agent_rates, agent_rtt, cpu = _agents(count, trips)
     lines = [f"{'measure (2 processes, loopback)':36} {'raw Zenoh':>14} {'agents':>14} {'ratio':>7}"]
     for size in SIZES:
         raw_rate, agent_rate = raw_rates[size], agent_rates[size]
@@ -53,6 +54,8 @@ def run(quick: bool = False) -> str:
         raw_us, agent_us = pick(raw_rtt) * 1e6, pick(agent_rtt) * 1e6
         lines.append(f"{f'askOne round trip {name} x{trips}':36} {raw_us:>11,.0f} µs {agent_us:>11,.0f} µs "
                      f"{raw_us / agent_us:>6.0%}")
+    lines.append("CPU per tell, sending agents' thread / whole sink process: "
+                 + ", ".join(f"{size} B {sender * 1e6:.0f} / {sink * 1e6:.0f} µs" for size, (sender, sink) in cpu.items()))
     lines.append("raw round trip: 200 B ping/pong; ratio: agents / raw for rates, raw / agents for latencies")
     lines.append("targets: tell >= 30% of raw; askOne median < 1,000 µs")
     return "\n".join(lines)
@@ -102,7 +105,16 @@ class _Printed:
                 raise RuntimeError(f"benchmark agent did not print {text!r}")
 
 
-def _agents(count: int, trips: int) -> tuple[dict[int, float], list[float]]:
+def _process_cpu(pid: int) -> float:
+    """CPU seconds (user + system) process ``pid`` used so far; NaN where /proc is missing."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, IndexError, ValueError):
+        return float("nan")
+
+
+def _agents(count: int, trips: int) -> tuple[dict[int, float], list[float], dict[int, tuple[float, float]]]:
     from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
     from agents.zenoh_arch import TransportBridge
     from agentspeak.program import ACHIEVE, ADD, Trigger
@@ -130,17 +142,21 @@ def _agents(count: int, trips: int) -> tuple[dict[int, float], list[float]]:
     try:
         if not transport.wait_for_agents(["sink"], 60):
             raise RuntimeError("agent sink did not come up")
-        rates = {}
+        rates, cpu = {}, {}
+        loop_clock = time.pthread_getcpuclockid(loop.ident)
         for size in SIZES:
             payload = '"' + "x" * (size - 5) + '"'  # m("x...") is `size` bytes of content
             mark = printed.mark()
             goal(f"blast(100, {payload})")  # warm-up: publishers declared, parser caches filled
             printed.wait_for("done 100", mark)
             mark = printed.mark()
+            sender_cpu, sink_cpu = time.clock_gettime(loop_clock), _process_cpu(child.pid)
             started = time.perf_counter()
             goal(f"blast({count}, {payload})")
             printed.wait_for(f"done {count}", mark)
             rates[size] = count / (time.perf_counter() - started)
+            cpu[size] = ((time.clock_gettime(loop_clock) - sender_cpu) / count,
+                         (_process_cpu(child.pid) - sink_cpu) / count)
         mark = printed.mark()
         goal(f"asks({trips})")
         printed.wait_for("asks done", mark)
@@ -156,7 +172,7 @@ def _agents(count: int, trips: int) -> tuple[dict[int, float], list[float]]:
         except subprocess.TimeoutExpired:
             child.kill()
             child.wait()
-    return rates, rtt
+    return rates, rtt, cpu
 
 
 if __name__ == "__main__":

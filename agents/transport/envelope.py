@@ -162,6 +162,36 @@ def split_batch(payload: bytes) -> list[bytes]:
 
 
 _scan = json.JSONDecoder().scan_once  # json.loads without its wrappers (~1.3 µs less per message)
+_scan_string = json.decoder.scanstring  # one JSON string (C), with json's own rules
+
+# The form ``Envelope.encode`` writes for one receiver, up to the content's opening quote. A JSON
+# string without backslashes and control characters is its own value, so these groups are the
+# values json would give; anything else (spaces, other key order, escapes) takes the general path.
+_PLAIN = r'([^"\\\x00-\x1f]*)'
+_OWN_FORM = re.compile(r'\{"v":1,"id":"%s","mas":"%s","from":"%s","to":\["%s"\],"perf":"%s","content":"'
+                       % ((_PLAIN,) * 5))
+_REPLY_END = re.compile(r',"re":"%s"\}\Z' % _PLAIN)
+
+
+def _read_own_form(text: str) -> Envelope | None:
+    """The envelope in ``text`` if it is in this encoder's own form with usual fields, else None:
+    one pattern match and one C string scan instead of a JSON object and a dict (~2 µs less)."""
+    head = _OWN_FORM.match(text)
+    if head is None:
+        return None
+    try:
+        content, end = _scan_string(text, head.end())
+    except ValueError:
+        return None
+    if end == len(text) - 1 and text[end] == "}":
+        in_reply_to = None
+    else:
+        tail = _REPLY_END.match(text, end)
+        if tail is None:
+            return None
+        in_reply_to = tail.group(1)
+    message_id, mas, sender, receiver, performative = head.groups()
+    return _usual(mas, sender, (receiver,), performative, content, in_reply_to, message_id)
 
 
 def decode(payload: bytes | bytearray | memoryview, max_size: int = DEFAULT_MAX_SIZE) -> Envelope:
@@ -170,6 +200,9 @@ def decode(payload: bytes | bytearray | memoryview, max_size: int = DEFAULT_MAX_
         raise BadMessage("too_large", f"{len(payload)} bytes > limit {max_size}")
     try:
         text = bytes(payload).decode()  # str: skips json's encoding detection
+        envelope = _read_own_form(text)
+        if envelope is not None:
+            return envelope
         try:
             data, end = _scan(text, 0)
             if end != len(text):
@@ -217,8 +250,8 @@ def _usual(mas: Any, sender: Any, receivers: tuple, performative: Any, content: 
     known = _KNOWN_NAMES
     try:
         if not (type(message_id) is str and message_id and mas in known and sender in known and receivers
-                and all(r in known for r in receivers) and performative in PERFORMATIVES
-                and type(content) is str and (in_reply_to is None or (type(in_reply_to) is str and in_reply_to))):
+                and known.issuperset(receivers) and performative in PERFORMATIVES and type(content) is str
+                and (in_reply_to is None or (type(in_reply_to) is str and in_reply_to))):
             return None
     except TypeError:  # an unhashable "name" (a list, say): the slow path says what is wrong
         return None

@@ -162,3 +162,25 @@ def test_make_envelope_checks_what_is_unusual():
         make_envelope("m", "alice", ("b/ob",), "tell", "p", None, "a.1")
     with pytest.raises(ValueError, match="unknown_performative"):
         make_envelope("m", "alice", ("bob",), "shout", "p", None, "a.1")
+
+
+_raw = st.text(alphabet=st.sampled_from('ab"\\\n\x01é{},:'), max_size=4)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(_raw, min_size=6, max_size=6), st.one_of(st.none(), _raw))
+def test_the_own_form_fast_path_reads_what_json_reads(fields, reply):
+    from agents.transport.envelope import _decode_well_formed, _read_own_form
+
+    for name in ("m", "alice", "bob"):
+        make_envelope(name, "alice", ("bob",), "tell", "", None, "1")  # names known, as after a first message
+    message_id, mas, sender, receiver, perf, content = fields
+    text = (f'{{"v":1,"id":"{message_id or "1"}","mas":"{mas or "m"}","from":"{sender or "alice"}",'
+            f'"to":["{receiver or "bob"}"],"perf":"{perf or "tell"}","content":"{content}"'
+            + ("}" if reply is None else f',"re":"{reply}"}}'))
+    fast = _read_own_form(text)
+    try:
+        slow = _decode_well_formed(json.loads(text))
+    except ValueError:
+        slow = None
+    assert fast is None or fast == slow, text
