@@ -42,6 +42,7 @@ def pair():
     with LocalTransport("m", bus, wire=True, max_message_size=1024) as one, \
             LocalTransport("m", bus, wire=True, max_message_size=1024) as two:
         one.register("alice", Inbox())
+        one._outbox.max_delay = 600  # only what a test does sends a batch (the late flush has its own test)
         bob = Recorder()
         two.register("bob", bob, bob.delivered)
         yield one, two, bob
