@@ -267,16 +267,22 @@ class Transport(ABC):
     def receive_bytes(self, agent: str, payload: bytes, where: str = "") -> None:
         """Check bytes that arrived for ``agent`` (one message or a batch) and deliver each message,
         or drop it with one log line; then ``on_delivered`` once."""
-        if BATCH_SEPARATOR in payload:
-            limit = max(self.max_message_size, BATCH_BYTES)
-            if len(payload) > limit:
-                self._drop("too_large", where or agent, None, f"{len(payload)} bytes > limit {limit}")
-                return
-            for message in split_batch(payload):
-                self._receive(agent, message, where)
-        else:
+        if BATCH_SEPARATOR not in payload:
             self._receive(agent, payload, where)
-        self._group_delivered(agent)
+            self._group_delivered(agent)
+            return
+        limit = max(self.max_message_size, BATCH_BYTES)
+        if len(payload) > limit:
+            self._drop("too_large", where or agent, None, f"{len(payload)} bytes > limit {limit}")
+            return
+        try:
+            for message in split_batch(payload):
+                try:
+                    self._receive(agent, message, where)
+                except Exception:  # the rest of the batch is not lost over one message
+                    log.exception("a message for %s could not be handled", agent)
+        finally:
+            self._group_delivered(agent)
 
     def _receive(self, agent: str, payload: bytes, where: str) -> None:
         try:

@@ -209,8 +209,8 @@ def decode(payload: bytes | bytearray | memoryview, max_size: int = DEFAULT_MAX_
                 raise ValueError
         except (StopIteration, ValueError):  # not a bare object: json.loads decides, and says why
             data = json.loads(text)
-    except (UnicodeDecodeError, ValueError) as exc:
-        raise BadMessage("not_json", str(exc)[:80]) from None
+    except (UnicodeDecodeError, ValueError, RecursionError) as exc:  # RecursionError: nested too deep
+        raise BadMessage("not_json", str(exc)[:80] or type(exc).__name__) from None
     envelope = _decode_well_formed(data)
     return envelope if envelope is not None else _refuse(data)
 

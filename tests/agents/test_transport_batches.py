@@ -185,3 +185,11 @@ def test_the_own_form_fast_path_reads_what_json_reads(fields, reply):
     except ValueError:
         slow = None
     assert fast is None or fast == slow, text
+
+
+def test_a_message_nested_too_deep_is_refused_and_the_rest_of_its_batch_delivered(pair):
+    one, two, bob = pair
+    good = Envelope("m", "alice", ("bob",), "tell", "p").encode()
+    two.max_message_size = 10_000
+    one.put_raw("bob", b"\n".join([good, b"[" * 4_000 + b"]" * 4_000, good]))
+    assert bob.contents() == ["p", "p"] and dict(two.dropped) == {"not_json": 1}
