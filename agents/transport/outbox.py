@@ -8,7 +8,8 @@ the envelopes' JSON, one per line). A batch is sent when it reaches ``max_messag
 ``max_bytes``, when its owner calls ``flush`` (the bridge does when the runtime goes idle, so a
 question and its answer are not delayed) and at the latest ``max_delay`` seconds after it started
 (a thread of ours, armed only when an empty outbox gets a message). Order per receiver is kept:
-everything for one receiver goes through one list, put under one lock.
+everything for one receiver goes through one list, put under one lock; a message that may not wait
+(a question, an answer) first sends everything held, for every receiver.
 """
 from __future__ import annotations
 
@@ -38,9 +39,7 @@ class _Batch:
 
     def send(self) -> None:
         payloads = self.payloads
-        if payloads:
-            self.payloads, self.size = [], 0
-            self.put(payloads[0] if len(payloads) == 1 else BATCH_SEPARATOR.join(payloads))
+        self.put(payloads[0] if len(payloads) == 1 else BATCH_SEPARATOR.join(payloads))
 
 
 class Outbox:
@@ -58,36 +57,43 @@ class Outbox:
 
     def hold(self, receiver: str, payload: bytes, put: Put, urgent: bool = False) -> None:
         """Queue ``payload`` for ``receiver`` (``put`` sends bytes to it); may send a full batch now.
-        ``urgent``: send it now (after what was held for ``receiver`` before it), e.g. a question
-        whose sender waits for the answer."""
+        ``urgent``: send it now, after everything held (for any receiver: what was sent before a
+        question is on its way before it), e.g. a question whose sender waits for the answer."""
         size = len(payload) + 1
         with self._lock:
-            batch = self._batches.get(receiver)
-            if batch is None:
-                batch = self._batches[receiver] = _Batch(put)
-            elif batch.size + size > self.max_bytes or urgent:
-                batch.send()
-            if urgent or size > self.max_bytes:  # a big message goes alone too
+            if urgent:
+                self._send_all()
                 put(payload)
                 return
+            batches = self._batches
+            batch = batches.get(receiver)
+            if batch is not None and batch.size + size > self.max_bytes:
+                del batches[receiver]
+                batch.send()
+                batch = None
+            if size > self.max_bytes:  # a big message goes alone (after what was held before it)
+                put(payload)
+                return
+            if batch is None:
+                batch = batches[receiver] = _Batch(put)
             batch.payloads.append(payload)
             batch.size += size
             if len(batch.payloads) >= self.max_messages:
+                del batches[receiver]
                 batch.send()
         if not self._armed.is_set():
             self._arm()
 
     def flush(self) -> None:
         """Send every held batch now."""
-        if self._batches:
+        if self._batches:  # read without the lock: a hold under way is flushed by the timer
             with self._lock:
-                for batch in self._batches.values():
-                    batch.send()
+                self._send_all()
 
-    def drop(self, receiver: str) -> None:
-        """Forget ``receiver``'s batch without sending it (its publisher is gone)."""
-        with self._lock:
-            self._batches.pop(receiver, None)
+    def _send_all(self) -> None:
+        batches, self._batches = self._batches, {}
+        for batch in batches.values():
+            batch.send()
 
     def close(self) -> None:
         """Flush, and end the timer thread (a later ``hold`` starts another)."""
@@ -98,10 +104,11 @@ class Outbox:
             self._armed.set()
 
     def _arm(self) -> None:
-        if self._stop is None:
-            self._stop = threading.Event()
-            threading.Thread(target=self._flush_late, args=(self._stop,), daemon=True,
-                             name="faultmas-outbox").start()
+        with self._lock:  # one timer thread, whichever threads hold
+            if self._stop is None:
+                self._stop = threading.Event()
+                threading.Thread(target=self._flush_late, args=(self._stop,), daemon=True,
+                                 name="faultmas-outbox").start()
         self._armed.set()
 
     def _flush_late(self, stop: threading.Event) -> None:

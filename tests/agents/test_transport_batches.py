@@ -43,8 +43,10 @@ def pair():
             LocalTransport("m", bus, wire=True, max_message_size=1024) as two:
         one.register("alice", Inbox())
         one._outbox.max_delay = 600  # only what a test does sends a batch (the late flush has its own test)
-        bob = Recorder()
+        bob, carol = Recorder(), Recorder()
         two.register("bob", bob, bob.delivered)
+        two.register("carol", carol, carol.delivered)
+        one.carol = carol
         yield one, two, bob
 
 
@@ -84,6 +86,9 @@ def test_questions_and_answers_go_at_once_after_what_was_held_before_them(pair):
         tell(one, "second")
         tell(one, "answer", in_reply_to="x.1")
         assert bob.contents() == ["first", "q(X)", "second", "answer"]
+        assert one.send(Envelope("m", "alice", ("carol",), "tell", "to carol")) == ()
+        tell(one, "q(Y)", performative="askAll")  # what was held for carol goes first too
+        assert one.carol.contents() == ["to carol"]
 
 
 def test_a_batch_is_sent_when_full_and_a_big_message_goes_alone(pair):
