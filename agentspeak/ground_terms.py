@@ -180,6 +180,8 @@ def _read_flat(text: str) -> Literal | None:
             elif "\n" in value:
                 return None
             args.append(value)
+            if close + 2 == end and text[close + 1] == ")":  # the usual end: no blanks to skip
+                return Literal(head.group(1), tuple(args))
             after = _AFTER.match(text, close + 1)
             if after is None:
                 return None

@@ -268,39 +268,46 @@ class Transport(ABC):
         """Check bytes that arrived for ``agent`` (one message or a batch) and deliver each message,
         or drop it with one log line; then ``on_delivered`` once."""
         if BATCH_SEPARATOR not in payload:
-            self._receive(agent, payload, where)
-            self._group_delivered(agent)
+            if self._receive(agent, payload, where):
+                self._count_received(agent, 1)
+                self._group_delivered(agent)
             return
         limit = max(self.max_message_size, BATCH_BYTES)
         if len(payload) > limit:
             self._drop("too_large", where or agent, None, f"{len(payload)} bytes > limit {limit}")
             return
+        delivered = 0
         try:
             for message in split_batch(payload):
                 try:
-                    self._receive(agent, message, where)
+                    delivered += self._receive(agent, message, where)
                 except Exception:  # the rest of the batch is not lost over one message
                     log.exception("a message for %s could not be handled", agent)
         finally:
-            self._group_delivered(agent)
+            if delivered:
+                self._count_received(agent, delivered)
+                self._group_delivered(agent)
 
-    def _receive(self, agent: str, payload: bytes, where: str) -> None:
+    def _receive(self, agent: str, payload: bytes, where: str) -> bool:
+        """Decode and check one message and hand it to ``agent``'s callback; False if refused."""
         try:
             envelope = decode(payload, self.max_message_size)
         except BadMessage as bad:
             self._drop(bad.reason, where or agent, bad.sender, bad.detail)
-            return
+            return False
         if envelope.mas != self.mas:
             self._drop("foreign_mas", where or agent, envelope.sender, f"MAS {envelope.mas!r}")
         elif agent not in envelope.receivers:
             self._drop("not_addressed", where or agent, envelope.sender, f"to {list(envelope.receivers)}")
         else:
-            self._hand_over(agent, envelope)
+            return self._hand_over(agent, envelope)
+        return False
 
     def _deliver(self, agent: str, envelope: Envelope) -> bool:
         """Deliver one envelope to a local agent (a group of one)."""
         if not self._hand_over(agent, envelope):
             return False
+        self._count_received(agent, 1)
         self._group_delivered(agent)
         return True
 
@@ -308,13 +315,15 @@ class Transport(ABC):
         callback = self._agents.get(agent)
         if callback is None:
             return False
-        with self._counters:
-            self.received[agent] += 1
         try:
             callback(envelope)
         except Exception:  # the agent's problem; the network thread carries on
             log.exception("delivery to agent %s failed", agent)
         return True
+
+    def _count_received(self, agent: str, count: int) -> None:
+        with self._counters:
+            self.received[agent] += count
 
     def _group_delivered(self, agent: str) -> None:
         callback = self._delivered.get(agent)
