@@ -219,16 +219,17 @@ class Transport(ABC):
             raise ValueError(f"envelope for MAS {envelope.mas!r} sent on the transport of MAS {self.mas!r}")
         unreachable = []
         encoded = _Encoded(envelope)
+        local = self._agents
         for receiver in envelope.receivers:
-            if self._is_local(receiver):
+            if receiver in local:  # served without the network (FIFO per pair holds: always this path)
                 reached = self._deliver(receiver, envelope)
             else:
                 reached = self._put(receiver, envelope, encoded)
-            if reached:
-                with self._counters:
-                    self.sent[envelope.sender] += 1
-            else:
+            if not reached:
                 unreachable.append(receiver)
+        if len(unreachable) < len(envelope.receivers):
+            with self._counters:
+                self.sent[envelope.sender] += len(envelope.receivers) - len(unreachable)
         return tuple(unreachable)
 
     @contextmanager
@@ -259,10 +260,6 @@ class Transport(ABC):
                               or envelope.performative in QUESTIONS)
         else:
             put(payload)
-
-    def _is_local(self, receiver: str) -> bool:
-        """Local receivers are served without the network (FIFO per pair holds: always this path)."""
-        return receiver in self._agents
 
     def receive_bytes(self, agent: str, payload: bytes, where: str = "") -> None:
         """Check bytes that arrived for ``agent`` (one message or a batch) and deliver each message,
