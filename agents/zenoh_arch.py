@@ -145,7 +145,7 @@ class TransportBridge:
         for agent in self.runtime.agents.values():
             body = agent.arch if type(agent.arch) is not LocalArch else None
             agent.arch = NetworkArch.for_agent(self.runtime, self, body)
-            self.transport.register(agent.name, partial(self._on_envelope, agent), partial(_wake, agent))
+            self.transport.register(agent.name, partial(self._on_envelope, agent), agent.wake)
         self.transport.on_presence(self._on_presence)
         self._attached = True
         return self
@@ -199,9 +199,9 @@ class TransportBridge:
             detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             self._refuse(agent, envelope, "unparsable_content", detail[:100])
             return
-        # Agent.deliver without its wake: the transport calls _wake once per batch of messages
-        agent.mailbox.append(Message(envelope.sender, agent.name, envelope.performative, content,
-                                     msg_id=envelope.message_id, in_reply_to=envelope.in_reply_to))
+        # no wake per message: the transport calls agent.wake once per batch
+        agent.deliver(Message(envelope.sender, agent.name, envelope.performative, content,
+                              msg_id=envelope.message_id, in_reply_to=envelope.in_reply_to), wake=False)
 
     def _refuse(self, agent: Agent, envelope: Envelope, reason: str, detail: str = "") -> None:
         agent.count_dropped(reason)
@@ -250,11 +250,6 @@ class TransportBridge:
                 return "timeout"
             if runtime.wait_for_work(0.5 if remaining is None else min(remaining, 0.5)) and self.published_idle:
                 self.publish_status(busy=True)
-
-
-def _wake(agent: Agent) -> None:
-    """The second half of ``Agent.deliver``, once per batch of messages put in its mailbox."""
-    agent.arch.wake(agent)
 
 
 def _presence_percept(agent: Agent, name: str, alive: bool) -> None:

@@ -760,9 +760,15 @@ class Agent:
         self.feedback.append(callback)
         self.arch.wake(self)
 
-    def deliver(self, message: Any) -> None:
-        """Put a message in the mailbox (safe to call from any thread)."""
+    def deliver(self, message: Any, wake: bool = True) -> None:
+        """Put a message in the mailbox (safe to call from any thread). A transport handing over a
+        batch passes ``wake=False`` for each message and calls ``wake()`` once after the batch."""
         self.mailbox.append(message)
+        if wake:
+            self.arch.wake(self)
+
+    def wake(self) -> None:
+        """Tell the architecture this agent has work (after ``deliver(..., wake=False)``)."""
         self.arch.wake(self)
 
     # ------------------------------------------------------------------ trust and bookkeeping
