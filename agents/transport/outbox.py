@@ -122,5 +122,6 @@ class Outbox:
             self._armed.clear()  # a hold from here on arms the next round
             try:
                 self.flush()
-            except Exception as exc:  # a put that fails (session closing) must not end the timer
-                log.debug("late flush failed: %s", exc)
+            except Exception as exc:  # a put that fails (session closing) must not end the timer,
+                # and must not go unnoticed: the held messages of that flush are gone
+                log.warning("held messages could not be sent (late flush): %s", exc)
