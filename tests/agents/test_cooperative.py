@@ -36,10 +36,14 @@ def test_each_fault_is_diagnosed_by_two_agent_processes_over_zenoh(fault):
         assert marks_of(result, "robot_found"), "the helper's camera found the faulty robot"
 
 
-def test_faultmas_run_json_contract_with_the_default_encoder_fault():
-    done = subprocess.run([sys.executable, "-m", "agents", "run", "--json", "--seed", "2"], cwd=REPO,
-                          capture_output=True, text=True, timeout=200)
+def test_faultmas_run_json_contract_with_the_default_encoder_fault(tmp_path):
+    image = tmp_path / "run.png"
+    done = subprocess.run([sys.executable, "-m", "agents", "run", "--json", "--seed", "2", "--plot", str(image)],
+                          cwd=REPO, capture_output=True, text=True, timeout=200)
     assert done.returncode == 0, done.stderr[-2000:]
+    import cv2
+    picture = cv2.imread(str(image))
+    assert picture is not None and picture.shape[0] > 200 and picture.std() > 0    # a real drawing
     report = json.loads(done.stdout)
     assert report["fault"] == "encoders" and report["diagnosis"] == "encoders" and report["correct"] is True
     assert set(report["steps"]) == {"fault_detection", "robot_detection", "diagnosis", "total"}
@@ -150,6 +154,25 @@ def test_the_same_plans_diagnose_through_the_ros2_bridge_with_real_rclpy_nodes()
     assert result.finished, [(m.agent, m.step, m.detail) for m in result.marks]
     assert result.robots[0].diagnosis == "encoders"
     assert marks_of(result, "robot_found")
+
+
+def test_faultmas_eval_prints_a_table_and_json_of_every_run():
+    command = [sys.executable, "-m", "agents", "eval", "--runs", "1", "--faults", "both_actuators,none",
+               "--jobs", "2", "--seed", "3"]
+    done = subprocess.run(command + ["--json"], cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    report = json.loads(done.stdout)
+    assert [(r["fault"], r["diagnosis"], r["correct"]) for r in report["runs"]] == \
+        [("both_actuators", "both_actuators", True), ("none", "none", True)]
+    rows = {row["scenario"]: row for row in report["table"]}
+    assert rows["none"]["success_rate"] == 1.0 and rows["none"]["runs"] == 1
+    mean, _ = rows["both_actuators"]["steps.total"]
+    assert mean == report["runs"][0]["steps"]["total"] > 0
+    from agents.demo_cli import format_eval_table
+    assert "| none | 1 | 100% | 1.04 |" in format_eval_table([{**rows["none"], "steps.fault_detection": (1.04, None)}], 1)
+    bad = subprocess.run(command[:3] + ["--faults", "gremlins"], cwd=REPO, capture_output=True, text=True,
+                         timeout=60)
+    assert bad.returncode == 2 and "gremlins" in bad.stderr
 
 
 def test_the_eval_draws_any_bearing_and_any_heading_including_end_on_views():
