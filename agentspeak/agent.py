@@ -793,6 +793,18 @@ class Agent:
                     a = b.get(a, a)
                     ta = type(a)
                 if ta is not int and ta is not float and ta is not str:
+                    if ta is Arith and a.right is not None and a.op in INT_OPS:
+                        # `N + 1` over integers (resolve's own fast case, without the call)
+                        x, y = a.left, a.right
+                        if type(x) is Var:
+                            x = b.get(x, x)
+                        if type(y) is Var:
+                            y = b.get(y, y)
+                        if type(x) is int and type(y) is int:
+                            r = INT_OPS[a.op](x, y)
+                            if -_EXACT < r < _EXACT:
+                                args.append(r)
+                                continue
                     a = resolve(a, b)
                     ta = type(a)
                     if not (ta is int or ta is float or ta is str
@@ -862,43 +874,6 @@ def _add_annots(lit: Literal, annots: tuple) -> Literal:
 
 # ---------------------------------------------------------------------- body formulas
 def _exec_achieve(ag: Agent, intention: Intention, im: IntendedMeans, frame: Frame, instr) -> None:
-    lit = instr.term
-    if type(lit) is Literal and lit.annots is None and lit.annot_tail is None:
-        # _fresh_goal's usual case, inlined: arguments that resolve to numbers, strings or atoms
-        b = im.b
-        args = []
-        for a in lit.args:
-            ta = type(a)
-            if ta is Var:
-                a = b.get(a, a)
-                ta = type(a)
-            if ta is not int and ta is not float and ta is not str:
-                if ta is Arith and a.right is not None and a.op in INT_OPS:
-                    # `N + 1` over integers (resolve's own fast case, without the call)
-                    x, y = a.left, a.right
-                    if type(x) is Var:
-                        x = b.get(x, x)
-                    if type(y) is Var:
-                        y = b.get(y, y)
-                    if type(x) is int and type(y) is int:
-                        r = INT_OPS[a.op](x, y)
-                        if -_EXACT < r < _EXACT:
-                            args.append(r)
-                            continue
-                a = resolve(a, b)
-                ta = type(a)
-                if not (ta is int or ta is float or ta is str
-                        or (ta is Literal and not a.args and a.annots is None)):
-                    break
-            args.append(a)
-        else:
-            lit = Literal(lit.functor, tuple(args), _SOURCE_SELF_ONLY, lit.neg)
-            trigger = Trigger(ADD, ACHIEVE, lit)
-            if ag.event_waiters:
-                ag._notify_waiters(trigger)
-            ag.events.append(Event(trigger, intention))
-            intention.suspended = "event"
-            return
     trigger = Trigger(ADD, ACHIEVE, ag._fresh_goal(instr.term, im.b))
     if ag.event_waiters:  # post_internal, inlined: this is the step of every subgoal
         ag._notify_waiters(trigger)
