@@ -58,6 +58,12 @@ def measure(robots: int, cameras: bool, sim_seconds: float, mode: str = "paralle
 
     world = build(robots, cameras, mode=mode)
     world.run(0.1)                      # warm-up: renderer constants, noise banks, render threads
+    if cameras and mode == "parallel":
+        from robot_bridge.sim.render_processes import shared_pool
+
+        pool = shared_pool()
+        if pool is not None:
+            pool.wait_ready(60.0)       # render processes start once, in the first run
     due = [0]
     if cameras:
         for name in world.robots:
@@ -100,10 +106,22 @@ def run(quick: bool) -> str:
     lines.append(f"(simulated seconds per wall second, dt = 0.02 s, 10 Hz cameras; 'fr' = 640x480 RGB-D frames "
                  f"rendered / due in the run, 'fr/s' = frames rendered per wall second, 'ms CPU/fr' = process CPU "
                  f"time (physics included) per frame rendered, less sensitive than wall time to other loads on the "
-                 f"machine; reads_pixels: up to {render_threads()} render threads; one OpenCV thread each; "
+                 f"machine; reads_pixels: {_renderers()}; one OpenCV thread each; "
                  f"'met' judges the every-frame column; machine load average (1 min) at the end: {load:.1f} "
                  f"on {os.cpu_count()} cores)")
     return "\n".join(lines)
+
+
+def _renderers() -> str:
+    from robot_bridge.sim.camera import render_threads
+    from robot_bridge.sim.render_processes import ENV_WORKERS, shared_pool
+
+    pool = shared_pool()
+    if pool is not None and pool.broken is None:
+        return (f"this process and {pool.size} render worker process(es) ({ENV_WORKERS}), "
+                f"{pool.frames_by_workers} frames rendered by the workers")
+    why = f" ({pool.broken})" if pool is not None else f" ({ENV_WORKERS}=0 or one core)"
+    return f"no render processes{why}, up to {render_threads()} render threads"
 
 
 if __name__ == "__main__":

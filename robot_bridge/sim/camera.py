@@ -478,6 +478,19 @@ class DeferredFrame(CameraFrame):
         return self._pixels is not None
 
     @property
+    def job(self) -> tuple[CameraRig, Pose, tuple[Pose, ...], Scene, int]:
+        """What the pixels depend on: rig, camera pose, the robots' poses, scene and noise seed."""
+        return self._job
+
+    def deliver(self, rgb: np.ndarray, depth: np.ndarray) -> None:
+        """Take pixels rendered elsewhere (a render worker) from this frame's ``job``; counted as rendered."""
+        with self._lock:
+            if self._pixels is None:
+                object.__setattr__(self, "_pixels", (rgb, depth))
+                with _frames_lock:
+                    _frames[0] += 1
+
+    @property
     def rgb(self) -> np.ndarray:            # type: ignore[override]
         return self._render()[0]
 
@@ -537,8 +550,9 @@ _pace = _Pace()
 
 
 def render_all(frames: Sequence[CameraFrame]) -> None:
-    """Render the pixels of the deferred ``frames`` not rendered yet, side by side on the cores when
-    that is faster (see ``_Pace``).
+    """Render the pixels of the deferred ``frames`` not rendered yet: shared with render worker
+    processes once they have started (``render_processes``), else side by side in threads when that is
+    faster (see ``_Pace``).
 
     Frames due at the same step (one per camera) are independent, and most of a frame's time is in
     OpenCV calls and whole-image numpy loops, which release the GIL. The calling thread renders too;
@@ -546,6 +560,13 @@ def render_all(frames: Sequence[CameraFrame]) -> None:
     """
     todo = deque(f for f in frames if isinstance(f, DeferredFrame) and not f.rendered)
     count = len(todo)
+    if count >= 2:
+        from robot_bridge.sim.render_processes import shared_pool
+
+        processes = shared_pool()
+        if processes is not None and processes.ready():
+            processes.render(todo)
+            return
     helpers = min(count - 1, render_threads() - 1)
 
     def work() -> None:
@@ -581,8 +602,12 @@ def deferred_frame(robot: str, time: float, pose: Pose, rig: CameraRig, robots: 
 
 
 def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Scene,
-            rng: np.random.Generator | None, count: bool
+            rng: np.random.Generator | None, count: bool, out: tuple[np.ndarray, np.ndarray] | None = None
             ) -> tuple[np.ndarray, np.ndarray, list[MarkerPixels]]:
+    """The frame's colour and depth images and, with ``count``, each robot's marker pixels. With ``out``
+    (an H x W x 3 uint8 image and a flat float32 array of at least H * W + ``registration_px`` values,
+    see ``frame_layout``) the pixels are written there (a render worker's shared memory) instead of
+    into new arrays."""
     import cv2
 
     with _frames_lock:
@@ -612,7 +637,7 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     if scene.rgb_noise > 0:
         pos, neg = r.colour_noise(float(scene.rgb_noise))
         off = int(rng.integers(0, r.extra))
-        image = np.empty((h, w, 3), np.uint8)
+        image = np.empty((h, w, 3), np.uint8) if out is None else out[0]
         top = image[:floor]
         cv2.add(canvas[:floor], pos[off:off + floor], dst=top)
         cv2.subtract(top, neg[off:off + floor], dst=top)
@@ -620,10 +645,13 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
             col = int(rng.integers(0, r.extra))
             bank = r.floor_colour_bank(scene.floor_rgb, gain, float(scene.rgb_noise))
             image[floor:] = bank[floor - r.first_floor_row:, col:col + w]
-    else:
+    elif out is None:
         image = canvas.copy()
+    else:
+        image = out[0]
+        np.copyto(image, canvas)
 
-    noisy = _depth_noise(r, depth, shadows, rng, min(readable, floor), floor)
+    noisy = _depth_noise(r, depth, shadows, rng, min(readable, floor), floor, None if out is None else out[1])
     pixels: list[MarkerPixels] = []
     if count:
         visible = np.zeros(n_labels + 1, np.int64)
@@ -1077,14 +1105,15 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, ima
 
 
 def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rng: np.random.Generator,
-                 top: int, floor: int) -> np.ndarray:
+                 top: int, floor: int, flat: np.ndarray | None = None) -> np.ndarray:
     """Kinect-like measurement of the true depth: shadows, noise, quantisation, holes, range limits.
 
     Works in disparity (fb / z) like the sensor: noise and dropouts come from the bank at a random
     offset, rounding to 1/subpixel steps quantises, and readings outside the range become 0. Rows from
     ``floor`` down are bare floor: their readings come from ``floor_depth_bank`` at a random column.
     Rows above ``top`` hold nothing in range (not even within the noise of it) and read 0.
-    ``disparity`` (the z-buffer, a scratch buffer) is modified in place; the returned depth image is new.
+    ``disparity`` (the z-buffer, a scratch buffer) is modified in place; the returned depth image is new,
+    or a view of ``flat`` (at least h * w + ``registration_px`` values) if given.
     """
     s = r.sensor
     h, w = disparity.shape
@@ -1113,7 +1142,7 @@ def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rng: np.ran
     off = int(rng.integers(0, r.disparity_bank.size - n + 1))
     # ``flat[k:k + n]`` as an image is ``out`` moved k columns right: computing it contiguously shifts
     # depth against colour; what wraps into each row's first k columns is cleared afterwards
-    flat = np.empty(h * w + k, np.float32)
+    flat = np.empty(h * w + k, np.float32) if flat is None else flat[:h * w + k]
     out = flat[:h * w].reshape(h, w)
     flat[:top * w + k] = 0
     _measure(r, disparity[top:floor], r.disparity_bank[off + top * w:off + n].reshape(floor - top, w),

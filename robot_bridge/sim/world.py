@@ -10,6 +10,8 @@ trajectories (each robot draws its noise from its own generator, seeded by the w
 """
 from __future__ import annotations
 
+import functools
+
 import math
 import threading
 import zlib
@@ -421,6 +423,8 @@ class World:
         return self._scene
 
 
+@functools.lru_cache(maxsize=1)
 def _default_rig() -> object:
+    """One rig object for every camera without its own (a frozen value; frames refer to it)."""
     from robot_bridge.sim import camera
     return camera.CameraRig()
