@@ -9,10 +9,12 @@ Why it is built this way:
   pipes, not ``multiprocessing``'s spawn or forkserver children: those re-run the user's main script in
   each child, and a robotics script rarely has an ``if __name__ == "__main__"`` guard. A worker whose
   pipe closes (this process ended) exits by itself: no orphans.
-- Pixels come back through one shared-memory segment per worker and are copied out at once, so a
-  frame's arrays are its own, to keep as long as its reader likes (a copy costs about 0.2 ms, a render
-  about 3 ms).
-- A camera's frames always go to the same renderer, where its static layers stay cached.
+- Pixels stay where the worker rendered them, in shared memory: a frame's arrays are views of its slot,
+  which takes another frame only once nobody uses them any more (a copy would cost this process about
+  0.4 ms a frame, a tenth of a render). Readers keep frames as long as they like; more segments are
+  made as needed.
+- Workers are fed a frame each time one of theirs is done, and this process renders from the other end
+  of the queue in between: the work balances itself, whatever else this process has to do.
 - Pixels do not depend on which process renders a frame: only on the scene and the frame's seed.
 - Anything wrong with a worker (it dies, stalls or fails a frame) ends the pool with a warning and the
   frames are rendered here instead: nothing is lost and nothing hangs.
@@ -25,15 +27,16 @@ import atexit
 import logging
 import mmap
 import os
+import secrets
 import subprocess
 import sys
 import threading
 import time
-from collections import OrderedDict
+import weakref
+from collections import OrderedDict, deque
 from multiprocessing.connection import Connection
-from multiprocessing.shared_memory import SharedMemory
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -45,6 +48,9 @@ _ALIGN = 64
 _READY_SECONDS = 60.0                # a worker that has not started by then is given up
 _FRAME_SECONDS = 5.0                 # a frame taking longer than this (plus a margin) means a stalled worker
 _SENT_OBJECTS = 16                   # rigs and scenes a worker keeps, by key
+IN_FLIGHT = 3                        # frames a worker holds at once: one rendering, the others waiting
+SLOTS_PER_SEGMENT = 4                # frames per shared-memory segment (more segments as frames are kept)
+Slot = tuple[int, int, int]          # segment key, offset, bytes
 
 
 def default_workers() -> int:
@@ -94,7 +100,11 @@ class _Worker:
         self.send_conn: Connection | None = None
         self.recv_conn: Connection | None = None
         self.ready = False
-        self.segment: SharedMemory | None = None
+        self.segments: dict[int, mmap.mmap] = {}
+        self.segment_names: list[str] = []
+        self.free: list[Slot] = []                          # slots no frame uses
+        self.released: deque[Slot] = deque()                # slots freed by the garbage collector (any thread)
+        self.in_flight: dict[tuple[int, int], tuple[Any, Slot]] = {}   # (segment, offset) -> frame, slot
         self.sent: OrderedDict[Any, int] = OrderedDict()     # rig or scene (frozen, hashable) -> its key there
         self.keys = 0
 
@@ -115,29 +125,35 @@ class _Worker:
         self.send_conn = Connection(to_child_w, readable=False)
         self.recv_conn = Connection(from_child_r, writable=False)
 
-    def key_of(self, obj: Any) -> tuple[int, Any | None]:
-        """The key under which the worker knows ``obj`` (by value: equal rigs are one), and ``obj``
-        itself if it must be sent first."""
+    def key_of(self, obj: Any) -> int:
+        """The key under which the worker knows ``obj`` (by value: equal rigs are one); sends it first
+        if the worker does not have it."""
         key = self.sent.get(obj)
         if key is not None:
             self.sent.move_to_end(obj)
-            return key, None
+            return key
         self.keys += 1
         self.sent[obj] = self.keys
+        self.send_conn.send(("object", self.keys, obj))
         if len(self.sent) > _SENT_OBJECTS:
             _, forgotten = self.sent.popitem(last=False)
             self.send_conn.send(("forget", forgotten))
-        return self.keys, obj
+        return self.keys
 
-    def ensure_segment(self, size: int) -> None:
-        if self.segment is not None and self.segment.size >= size:
-            return
-        old = self.segment
-        self.segment = SharedMemory(create=True, size=max(size, 2 * old.size if old is not None else size))
-        if old is not None:                 # the worker keeps its mapping until it maps the new one
-            old.close()
-            old.unlink()
-        self.send_conn.send(("segment", self.segment.name, self.segment.size))
+    def take_slot(self, size: int) -> Slot:
+        """A free slot of at least ``size`` bytes; a new segment of ``SLOTS_PER_SEGMENT`` slots if none."""
+        while self.released:
+            self.free.append(self.released.popleft())
+        for i, slot in enumerate(self.free):
+            if slot[2] >= size:
+                return self.free.pop(i)
+        key = len(self.segments) + 1
+        name = f"faultmas-render-{os.getpid()}-{self.index}-{key}-{secrets.token_hex(4)}"
+        self.segments[key] = _create(name, SLOTS_PER_SEGMENT * size)
+        self.segment_names.append(name)
+        self.send_conn.send(("segment", key, name, SLOTS_PER_SEGMENT * size))
+        self.free.extend((key, i * size, size) for i in range(1, SLOTS_PER_SEGMENT))
+        return key, 0, size
 
     def stop(self) -> None:
         for conn in (self.send_conn, self.recv_conn):
@@ -157,10 +173,13 @@ class _Worker:
             if conn is not None:
                 conn.close()
         self.send_conn = self.recv_conn = None
-        if self.segment is not None:
-            self.segment.close()
-            self.segment.unlink()
-            self.segment = None
+        for name in self.segment_names:     # the worker unlinks each once mapped, unless it died first
+            try:
+                (_SHM_DIR / name).unlink()
+            except FileNotFoundError:
+                pass
+        self.segments.clear()               # each is unmapped once no frame uses its pixels any more
+        self.free.clear()
 
 
 class RenderProcesses:
@@ -169,10 +188,10 @@ class RenderProcesses:
     def __init__(self, workers: int) -> None:
         self.size = workers
         self._workers = [_Worker(i + 1) for i in range(workers)]
-        self._owner: dict[str, int] = {}          # camera (robot name) -> renderer: 0 here, i worker i
         self._started_at: float | None = None
         self.broken: str | None = None            # why the pool was given up
         self.frames_by_workers = 0
+        self.worker_cpu_seconds = 0.0             # CPU time the workers spent rendering
         self._pid = os.getpid()
 
     # -- life
@@ -227,89 +246,83 @@ class RenderProcesses:
 
     # -- work
     def render(self, frames: Sequence[Any]) -> None:
-        """Render ``frames`` (``DeferredFrame``s not rendered yet): the workers' shares there, the
-        rest here, at the same time. Frames a worker could not render are rendered here."""
+        """Render ``frames`` (``DeferredFrame``s not rendered yet) here and in the workers at the same
+        time. Workers are fed a frame whenever one of their ``SLOTS`` frees up, and this process takes
+        frames from the other end of the queue in between, so the work balances itself (this process
+        also copies the workers' pixels out, and runs the world between steps). Frames a worker could
+        not render are rendered here."""
         if os.getpid() != self._pid:        # a forked child must not share the parent's pipes
             self.broken = "a forked process"
         if self.broken is not None or not self.ready():
             for frame in frames:
                 frame._render()
             return
-        shares: list[list[Any]] = [[] for _ in range(self.size + 1)]
-        for frame in frames:
-            owner = self._owner.get(frame.robot)
-            if owner is None:
-                owner = self._owner[frame.robot] = len(self._owner) % (self.size + 1)
-            shares[owner].append(frame)
-        sent: list[tuple[_Worker, list[tuple[Any, int]]]] = []
-        for worker in self._workers:
-            share = shares[worker.index]
-            if share:
-                placed = self._send(worker, share)
-                if placed is None:
-                    shares[0].extend(share)
-                else:
-                    sent.append((worker, placed))
-        for frame in shares[0]:
-            frame._render()
-        for worker, placed in sent:
-            self._collect(worker, placed)
-
-    def _send(self, worker: _Worker, share: list[Any]) -> list[tuple[Any, int]] | None:
-        placed, jobs, offset = [], [], 0
-        for frame in share:
-            job = frame.job
-            image_bytes, depth_bytes = frame_bytes(job)
-            placed.append((frame, offset))
-            jobs.append((offset, job))
-            offset += image_bytes + depth_bytes
+        todo = deque(frames)
         try:
-            worker.ensure_segment(offset)
-            batch = []
-            for offset, (rig, pose, robots, scene, seed) in jobs:
-                rig_key, rig_new = worker.key_of(rig)
-                scene_key, scene_new = worker.key_of(scene)
-                for key, obj in ((rig_key, rig_new), (scene_key, scene_new)):
-                    if obj is not None:
-                        worker.send_conn.send(("object", key, obj))
-                batch.append((offset, rig_key, pose, robots, scene_key, seed))
-            worker.send_conn.send(("batch", batch))
-        except (OSError, ValueError) as exc:
-            self._give_up(f"render process {worker.index} cannot be reached: {exc!r}")
-            return None
-        return placed
-
-    def _collect(self, worker: _Worker, placed: list[tuple[Any, int]]) -> None:
-        failed: dict[int, str] = {}
-        timeout = 30.0 + _FRAME_SECONDS * len(placed)
-        try:
-            if self.broken is not None or not worker.recv_conn.poll(timeout):
-                raise TimeoutError(f"no answer in {timeout:.0f} s" if self.broken is None else self.broken)
-            kind, failed = worker.recv_conn.recv()
-            if kind != "done":
-                raise ValueError(f"unexpected answer {kind!r}")
+            for worker in self._workers:
+                self._feed(worker, todo)
+            while todo:
+                for worker in self._workers:
+                    while worker.in_flight and worker.recv_conn.poll():
+                        self._take(worker)
+                        self._feed(worker, todo)
+                if todo:
+                    todo.pop()._render()
+            for worker in self._workers:
+                while worker.in_flight:
+                    if not worker.recv_conn.poll(_FRAME_SECONDS + 30.0):
+                        raise TimeoutError(f"render process {worker.index} gave no frame in {_FRAME_SECONDS + 30:.0f} s")
+                    self._take(worker)
         except (EOFError, OSError, TimeoutError, ValueError) as exc:
-            code = worker.process.poll() if worker.process is not None else None
-            self._give_up(f"render process {worker.index} failed (exit code {code}): {exc!r}")
-            for frame, _ in placed:
+            codes = ", ".join(f"render process {w.index} exit code {w.process.poll()}"
+                              for w in self._workers if w.process is not None)
+            self._give_up(f"{exc!r} ({codes}; None: still running)")
+            for worker in self._workers:
+                todo.extend(frame for frame, _ in worker.in_flight.values())
+                worker.in_flight.clear()
+            for frame in todo:
                 frame._render()
+
+    def _feed(self, worker: _Worker, todo: deque) -> None:
+        """Send ``worker`` frames from the front of ``todo`` while it holds fewer than ``IN_FLIGHT``."""
+        while todo and len(worker.in_flight) < IN_FLIGHT:
+            frame = todo.popleft()
+            rig, pose, robots, scene, seed = job = frame.job
+            slot = worker.take_slot(sum(frame_bytes(job)))
+            worker.in_flight[slot[:2]] = (frame, slot)
+            rig_key = worker.key_of(rig)
+            scene_key = worker.key_of(scene)
+            worker.send_conn.send(("frame", slot[0], slot[1], rig_key, pose, robots, scene_key, seed))
+
+    def _take(self, worker: _Worker) -> None:
+        """Receive one finished frame from ``worker`` and hand its pixels (copied) to the frame."""
+        reply = worker.recv_conn.recv()
+        if reply[0] != "done" or tuple(reply[1:3]) not in worker.in_flight:
+            raise ValueError(f"unexpected answer {reply[:2]!r} from render process {worker.index}")
+        _, key, offset, error, cpu = reply
+        frame, slot = worker.in_flight.pop((key, offset))
+        self.worker_cpu_seconds += cpu
+        if error is not None:
+            worker.free.append(slot)
+            log.warning("render process %d failed a frame of %s, rendered here instead: %s",
+                        worker.index, frame.robot, error)
+            frame._render()
             return
-        for i, (frame, offset) in enumerate(placed):
-            if i in failed:
-                log.warning("render process %d failed a frame of %s, rendered here instead: %s",
-                            worker.index, frame.robot, failed[i])
-                frame._render()
-                continue
-            frame.deliver(*_copied(worker.segment.buf, offset, frame.job))
-            self.frames_by_workers += 1
+        frame.deliver(*_pixels_in(worker.segments[key], slot, frame.job, worker.released.append))
+        self.frames_by_workers += 1
 
 
-def _copied(buffer: Any, offset: int, job: tuple) -> tuple[np.ndarray, np.ndarray]:
-    """A frame's colour and depth images copied out of a segment (whose views end with this call, so
-    that the segment can be closed later)."""
-    image, flat = frame_views(buffer, offset, job)
-    h, w = image.shape[:2]
-    return image.copy(), flat[:h * w].reshape(h, w).copy()
+def _pixels_in(segment: mmap.mmap, slot: Slot, job: tuple, release: Callable[[Slot], Any]
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """A frame's colour and depth images where a worker rendered them, without a copy: both are views
+    of one array over the slot, and ``release(slot)`` is called once neither is used any more (the
+    frame and everyone who kept its pixels let go), so the slot can take another frame."""
+    rig = job[0]
+    h, w = rig.camera.height, rig.camera.width
+    image_bytes, _ = frame_bytes(job)
+    whole = np.frombuffer(segment, np.uint8, slot[2], slot[1])
+    weakref.finalize(whole, release, slot).atexit = False
+    return whole[:h * w * 3].reshape(h, w, 3), whole[image_bytes:image_bytes + 4 * h * w].view(np.float32).reshape(h, w)
 
 
 _shared: list[RenderProcesses] = []
@@ -331,13 +344,28 @@ def shared_pool() -> RenderProcesses | None:
         return _shared[0]
 
 
+def _create(name: str, size: int) -> mmap.mmap:
+    """A new shared-memory file of ``size`` bytes, mapped. A plain mmap, not ``SharedMemory``, whose
+    ``close`` fails (and complains at exit) while frames still use the pixels in it."""
+    fd = os.open(_SHM_DIR / name, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o600)
+    try:
+        os.ftruncate(fd, size)
+        return mmap.mmap(fd, size)
+    finally:
+        os.close(fd)
+
+
 # ------------------------------------------------------------------------------------------ the worker
 def _attach(name: str, size: int) -> mmap.mmap:
-    fd = os.open(_SHM_DIR / name, os.O_RDWR)
+    """Map the segment ``name`` and remove its name: both sides have it now, and nothing is left
+    behind in /dev/shm whichever process ends first."""
+    path = _SHM_DIR / name
+    fd = os.open(path, os.O_RDWR)
     try:
         return mmap.mmap(fd, size)
     finally:
         os.close(fd)
+        path.unlink()
 
 
 def _render_into(segment: mmap.mmap, offset: int, job: tuple) -> None:
@@ -349,7 +377,7 @@ def _render_into(segment: mmap.mmap, offset: int, job: tuple) -> None:
 
 
 def serve(recv_conn: Connection, send_conn: Connection) -> None:
-    """A render worker's loop: objects, segments and batches in, ``("done", failed)`` out, until
+    """A render worker's loop: objects, segments and frames in, ``("done", offset, error, cpu)`` out, until
     ``("stop",)`` or the pipe closes."""
     import traceback
 
@@ -359,7 +387,7 @@ def serve(recv_conn: Connection, send_conn: Connection) -> None:
 
     cv2.setNumThreads(1)                    # one core per process: threads would only contend
     objects: dict[int, Any] = {}
-    segment: mmap.mmap | None = None
+    segments: dict[int, mmap.mmap] = {}
     send_conn.send(("ready", os.getpid()))
     while True:
         try:
@@ -374,21 +402,16 @@ def serve(recv_conn: Connection, send_conn: Connection) -> None:
         elif kind == "forget":
             objects.pop(message[1], None)
         elif kind == "segment":
-            if segment is not None:
-                try:
-                    segment.close()
-                except BufferError:         # a view survived a failed frame: leave the mapping be
-                    pass
-            segment = _attach(message[1], message[2])
-        elif kind == "batch":
-            failed: dict[int, str] = {}
-            for i, (offset, rig_key, pose, robots, scene_key, seed) in enumerate(message[1]):
-                try:
-                    _render_into(segment, offset, (objects[rig_key], pose, robots, objects[scene_key], seed))
-                except Exception:           # reported, and that frame is rendered by the other side
-                    failed[i] = traceback.format_exc(limit=4)
-            send_conn.send(("done", failed))
-
+            segments[message[1]] = _attach(message[2], message[3])
+        elif kind == "frame":
+            started = time.process_time()
+            _, key, offset, rig_key, pose, robots, scene_key, seed = message
+            try:
+                _render_into(segments[key], offset, (objects[rig_key], pose, robots, objects[scene_key], seed))
+                error = None
+            except Exception:               # reported, and that frame is rendered by the other side
+                error = traceback.format_exc(limit=4)
+            send_conn.send(("done", key, offset, error, time.process_time() - started))
 
 if __name__ == "__main__":
     serve(Connection(int(sys.argv[1]), writable=False), Connection(int(sys.argv[2]), readable=False))
