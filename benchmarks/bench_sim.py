@@ -5,7 +5,7 @@ carries a Kinect-like camera taking 640x480 RGB-D frames at 10 Hz simulated. A f
 the scene whose pixels are rendered when someone reads them (``camera.DeferredFrame``). The target
 is measured with EVERY frame rendered, as a bridge that runs detection on each frame needs: its
 listeners subscribe with ``reads_pixels=True``, so the frames due at the same step are rendered
-together, side by side on the cores while that is faster (``camera.render_all``). Frames rendered are
+together, shared with render worker processes (``camera.render_all``, ``render_processes``). Frames rendered are
 counted, not assumed, and must equal the frames due. For comparison: listeners reading the pixels in
 their callback, one frame after the other, and listeners that keep the latest frame unread (frames
 delivered at 10 Hz, pixels only on demand).
@@ -52,18 +52,18 @@ def build(robots: int, cameras: bool, seed: int = 0, mode: str = "parallel") -> 
 
 def measure(robots: int, cameras: bool, sim_seconds: float, mode: str = "parallel"
             ) -> tuple[float, int, int, float]:
-    """(simulated seconds per wall second, frames rendered, frames due, CPU seconds of this process)
-    stepping flat out."""
+    """(simulated seconds per wall second, frames rendered, frames due, CPU seconds of this process and
+    of its render workers) stepping flat out."""
     from robot_bridge.sim.camera import frames_rendered
 
     world = build(robots, cameras, mode=mode)
-    world.run(0.1)                      # warm-up: renderer constants, noise banks, render threads
-    if cameras and mode == "parallel":
-        from robot_bridge.sim.render_processes import shared_pool
+    from robot_bridge.sim.render_processes import shared_pool
 
-        pool = shared_pool()
-        if pool is not None:
-            pool.wait_ready(60.0)       # render processes start once, in the first run
+    world.run(0.1)                      # warm-up: renderer constants, noise banks, render threads
+    pool = shared_pool() if cameras and mode == "parallel" else None
+    if pool is not None:
+        pool.wait_ready(60.0)           # render processes start once, in the first run
+    workers_cpu = pool.worker_cpu_seconds if pool is not None else 0.0
     due = [0]
     if cameras:
         for name in world.robots:
@@ -71,7 +71,8 @@ def measure(robots: int, cameras: bool, sim_seconds: float, mode: str = "paralle
     rendered0, started, cpu, t0 = frames_rendered(), time.perf_counter(), time.process_time(), world.time
     world.run(sim_seconds)
     wall = time.perf_counter() - started
-    return (world.time - t0) / wall, frames_rendered() - rendered0, due[0], time.process_time() - cpu
+    workers_cpu = (pool.worker_cpu_seconds if pool is not None else 0.0) - workers_cpu
+    return (world.time - t0) / wall, frames_rendered() - rendered0, due[0], time.process_time() - cpu + workers_cpu
 
 
 def run(quick: bool) -> str:
@@ -104,8 +105,8 @@ def run(quick: bool) -> str:
         cv2.setNumThreads(threads)
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     lines.append(f"(simulated seconds per wall second, dt = 0.02 s, 10 Hz cameras; 'fr' = 640x480 RGB-D frames "
-                 f"rendered / due in the run, 'fr/s' = frames rendered per wall second, 'ms CPU/fr' = process CPU "
-                 f"time (physics included) per frame rendered, less sensitive than wall time to other loads on the "
+                 f"rendered / due in the run, 'fr/s' = frames rendered per wall second, 'ms CPU/fr' = CPU time of this "
+                 f"process (physics included) and of its render workers per frame rendered, less sensitive than wall time to other loads on the "
                  f"machine; reads_pixels: {_renderers()}; one OpenCV thread each; "
                  f"'met' judges the every-frame column; machine load average (1 min) at the end: {load:.1f} "
                  f"on {os.cpu_count()} cores)")

@@ -258,9 +258,10 @@ class RenderProcesses:
                 frame._render()
             return
         todo = deque(frames)
+        share = max(1, len(todo) // (self.size + 1))    # a small batch: this process keeps its part
         try:
             for worker in self._workers:
-                self._feed(worker, todo)
+                self._feed(worker, todo, share)
             while todo:
                 for worker in self._workers:
                     while worker.in_flight and worker.recv_conn.poll():
@@ -283,9 +284,10 @@ class RenderProcesses:
             for frame in todo:
                 frame._render()
 
-    def _feed(self, worker: _Worker, todo: deque) -> None:
-        """Send ``worker`` frames from the front of ``todo`` while it holds fewer than ``IN_FLIGHT``."""
-        while todo and len(worker.in_flight) < IN_FLIGHT:
+    def _feed(self, worker: _Worker, todo: deque, most: int = IN_FLIGHT) -> None:
+        """Send ``worker`` frames from the front of ``todo`` while it holds fewer than ``IN_FLIGHT``
+        (and than ``most``)."""
+        while todo and len(worker.in_flight) < min(most, IN_FLIGHT):
             frame = todo.popleft()
             rig, pose, robots, scene, seed = job = frame.job
             slot = worker.take_slot(sum(frame_bytes(job)))
