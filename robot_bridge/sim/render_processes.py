@@ -193,6 +193,7 @@ class RenderProcesses:
         self.frames_by_workers = 0
         self.worker_cpu_seconds = 0.0             # CPU time the workers spent rendering
         self._pid = os.getpid()
+        self._busy = threading.Lock()             # one thread at a time talks to the workers
 
     # -- life
     def start(self) -> None:
@@ -247,16 +248,22 @@ class RenderProcesses:
     # -- work
     def render(self, frames: Sequence[Any]) -> None:
         """Render ``frames`` (``DeferredFrame``s not rendered yet) here and in the workers at the same
-        time. Workers are fed a frame whenever one of their ``SLOTS`` frees up, and this process takes
+        time. A worker is fed a frame whenever one of its ``IN_FLIGHT`` is done, and this process takes
         frames from the other end of the queue in between, so the work balances itself (this process
-        also copies the workers' pixels out, and runs the world between steps). Frames a worker could
-        not render are rendered here."""
+        also runs the world between steps). Frames a worker could not render are rendered here, and so
+        are all frames of a call made while another thread is using the workers."""
         if os.getpid() != self._pid:        # a forked child must not share the parent's pipes
             self.broken = "a forked process"
-        if self.broken is not None or not self.ready():
+        if self.broken is not None or not self.ready() or not self._busy.acquire(blocking=False):
             for frame in frames:
                 frame._render()
             return
+        try:
+            self._render(frames)
+        finally:
+            self._busy.release()
+
+    def _render(self, frames: Sequence[Any]) -> None:
         todo = deque(frames)
         share = max(1, len(todo) // (self.size + 1))    # a small batch: this process keeps its part
         try:
@@ -297,7 +304,7 @@ class RenderProcesses:
             worker.send_conn.send(("frame", slot[0], slot[1], rig_key, pose, robots, scene_key, seed))
 
     def _take(self, worker: _Worker) -> None:
-        """Receive one finished frame from ``worker`` and hand its pixels (copied) to the frame."""
+        """Receive one finished frame from ``worker`` and hand its pixels (views of its slot) to the frame."""
         reply = worker.recv_conn.recv()
         if reply[0] != "done" or tuple(reply[1:3]) not in worker.in_flight:
             raise ValueError(f"unexpected answer {reply[:2]!r} from render process {worker.index}")

@@ -147,3 +147,13 @@ def test_a_malformed_number_of_workers_means_none_and_says_so(monkeypatch, caplo
     with caplog.at_level(logging.WARNING, logger="robot_bridge.sim.render_processes"):
         assert default_workers() == 0
     assert "'many' is not a whole number" in caplog.text
+
+
+def test_two_threads_rendering_at_once_get_every_frame_right(pool):
+    from concurrent.futures import ThreadPoolExecutor
+
+    batches = [_unread_frames(3, 0.25), _unread_frames(3, 0.25)]
+    with ThreadPoolExecutor(2) as threads:
+        list(threads.map(pool.render, batches))
+    assert pool.broken is None
+    assert all(f.rendered and _same_as_rendered_here(f) for batch in batches for f in batch)
