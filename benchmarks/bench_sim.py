@@ -55,10 +55,9 @@ def measure(robots: int, cameras: bool, sim_seconds: float, mode: str = "paralle
     """(simulated seconds per wall second, frames rendered, frames due, CPU seconds of this process and
     of its render workers) stepping flat out."""
     from robot_bridge.sim.camera import frames_rendered
-
-    world = build(robots, cameras, mode=mode)
     from robot_bridge.sim.render_processes import shared_pool
 
+    world = build(robots, cameras, mode=mode)
     world.run(0.1)                      # warm-up: renderer constants, noise banks, render threads
     pool = shared_pool() if cameras and mode == "parallel" else None
     if pool is not None:

@@ -606,7 +606,7 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
             ) -> tuple[np.ndarray, np.ndarray, list[MarkerPixels]]:
     """The frame's colour and depth images and, with ``count``, each robot's marker pixels. With ``out``
     (an H x W x 3 uint8 image and a flat float32 array of at least H * W + ``registration_px`` values,
-    see ``frame_layout``) the pixels are written there (a render worker's shared memory) instead of
+    see ``render_processes.frame_views``) the pixels are written there (a render worker's shared memory) instead of
     into new arrays."""
     import cv2
 
@@ -634,10 +634,10 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     # rows above the first that can read anything (floor, walls or objects in range) read 0 whatever the noise
     far = r.z_readable[1]
     readable = min([r.first_readable_floor_row, wall_readable] + [sh[1] for sh in shadows if sh[4] <= far])
+    image = np.empty((h, w, 3), np.uint8) if out is None else out[0]
     if scene.rgb_noise > 0:
         pos, neg = r.colour_noise(float(scene.rgb_noise))
         off = int(rng.integers(0, r.extra))
-        image = np.empty((h, w, 3), np.uint8) if out is None else out[0]
         top = image[:floor]
         cv2.add(canvas[:floor], pos[off:off + floor], dst=top)
         cv2.subtract(top, neg[off:off + floor], dst=top)
@@ -645,10 +645,7 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
             col = int(rng.integers(0, r.extra))
             bank = r.floor_colour_bank(scene.floor_rgb, gain, float(scene.rgb_noise))
             image[floor:] = bank[floor - r.first_floor_row:, col:col + w]
-    elif out is None:
-        image = canvas.copy()
     else:
-        image = out[0]
         np.copyto(image, canvas)
 
     noisy = _depth_noise(r, depth, shadows, rng, min(readable, floor), floor, None if out is None else out[1])

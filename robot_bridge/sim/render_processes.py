@@ -156,13 +156,11 @@ class _Worker:
         return key, 0, size
 
     def stop(self) -> None:
-        for conn in (self.send_conn, self.recv_conn):
-            if conn is not None:
-                try:
-                    if conn is self.send_conn:
-                        conn.send(("stop",))
-                except (OSError, ValueError):
-                    pass
+        if self.send_conn is not None:
+            try:
+                self.send_conn.send(("stop",))
+            except (OSError, ValueError):   # already gone
+                pass
         if self.process is not None:
             try:
                 self.process.wait(timeout=2.0)
@@ -174,10 +172,7 @@ class _Worker:
                 conn.close()
         self.send_conn = self.recv_conn = None
         for name in self.segment_names:     # the worker unlinks each once mapped, unless it died first
-            try:
-                (_SHM_DIR / name).unlink()
-            except FileNotFoundError:
-                pass
+            (_SHM_DIR / name).unlink(missing_ok=True)
         self.segments.clear()               # each is unmapped once no frame uses its pixels any more
         self.free.clear()
 
@@ -326,12 +321,10 @@ def _pixels_in(segment: mmap.mmap, slot: Slot, job: tuple, release: Callable[[Sl
     """A frame's colour and depth images where a worker rendered them, without a copy: both are views
     of one array over the slot, and ``release(slot)`` is called once neither is used any more (the
     frame and everyone who kept its pixels let go), so the slot can take another frame."""
-    rig = job[0]
-    h, w = rig.camera.height, rig.camera.width
-    image_bytes, _ = frame_bytes(job)
     whole = np.frombuffer(segment, np.uint8, slot[2], slot[1])
     weakref.finalize(whole, release, slot).atexit = False
-    return whole[:h * w * 3].reshape(h, w, 3), whole[image_bytes:image_bytes + 4 * h * w].view(np.float32).reshape(h, w)
+    image, flat = frame_views(whole, 0, job)          # views whose base is ``whole``
+    return image, flat[:image.shape[0] * image.shape[1]].reshape(image.shape[:2])
 
 
 _shared: list[RenderProcesses] = []

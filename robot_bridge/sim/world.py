@@ -11,7 +11,6 @@ trajectories (each robot draws its noise from its own generator, seeded by the w
 from __future__ import annotations
 
 import functools
-
 import math
 import threading
 import zlib
