@@ -4,7 +4,8 @@ Each ``cycle()`` is Jason's: **sense** (perceive and update beliefs, action feed
 message), **deliberate** (select ONE event, find its relevant then applicable plans, first applicable
 in source order, push the intended means), **act** (select ONE intention round-robin, execute ONE
 body formula, then clear finished intended means). Method names follow the rules of the formal
-semantics (``sel_ev``, ``appl_pl``, ``exec_int``, ``clr_int``).
+semantics (``sel_ev``, ``appl_pl``, ``clr_int``; rule ExecInt is ``act``'s body, inlined because
+it runs once per cycle).
 
 The agent does no I/O of its own: perception, actions, messages and printing go through its
 architecture (``agentspeak.arch.AgentArch``), so the same agent runs in-process, over Zenoh, or on a
@@ -450,7 +451,7 @@ class Agent:
         if intention is None or intention.dropped or not intention.stack:
             return
         intention.suspended = None
-        # exec_int, inlined (this runs once per reasoning cycle)
+        # rule ExecInt (this runs once per reasoning cycle)
         im = intention.stack[-1]
         frame = im.frames[-1]
         if frame.pc >= len(frame.body):
@@ -502,32 +503,7 @@ class Agent:
         intention.suspended = reason
         self.suspended[intention.id] = intention
 
-    # ------------------------------------------------------------------ executing one formula
-    def exec_int(self, intention: Intention) -> None:
-        """Rule ExecInt: execute one formula of the top intended means, then ClrInt."""
-        im = intention.stack[-1]
-        frame = im.frames[-1]
-        if frame.pc >= len(frame.body):
-            if frame.kind != "body":
-                self._loop_step(intention, im, frame)
-            self.clr_int(intention)
-            return
-        instr = frame.body[frame.pc]
-        handler = _DISPATCH.get(type(instr))
-        try:
-            handler(self, intention, im, frame, instr)
-        except IAError as exc:
-            self._fail(intention, exc.error, exc.message, instr, extra=exc.annots)
-            return
-        except SolveError as exc:
-            self._fail(intention, exc.error, exc.message, instr)
-            return
-        except ArithmeticError_ as exc:
-            self._fail(intention, "wrong_arguments", str(exc), instr)
-            return
-        if intention.suspended is None and not intention.dropped:
-            self.clr_int(intention)
-
+    # ------------------------------------------------------------------ clearing finished plans
     def clr_int(self, intention: Intention) -> None:
         """Rule ClrInt: pop finished intended means, and let the caller go on after its ``!g``."""
         stack = intention.stack
