@@ -369,13 +369,14 @@ class _Renderer:
         return limits
 
     def static_layers(self, pose: Pose, scene: Scene, canvas: np.ndarray, disparity: np.ndarray
-                      ) -> tuple[list[tuple], int, int]:
-        """Floor, walls and props seen from ``pose`` into ``canvas`` and ``disparity``; what
-        ``_static_layers`` returns.
+                      ) -> tuple[list[tuple], int, int, bool]:
+        """Floor and walls, and maybe the props, seen from ``pose`` into ``canvas`` and ``disparity``;
+        what ``_static_layers`` returns, and whether the props are drawn.
 
-        A pose asked for a second time is a camera standing still: its layers are kept (a few dozen
-        poses, least recently used dropped) and later frames copy them instead of drawing them.
-        A moving camera never pays for the copies.
+        A pose asked for a second time is a camera standing still: its layers, props included, are kept
+        (a few dozen poses, least recently used dropped) and later frames copy them instead of drawing
+        them. A moving camera never pays for the copies, and its props are left to be drawn with the
+        robots (one batch of cylinders instead of two).
         """
         key = (pose, id(scene))
         with self._static_lock:
@@ -392,15 +393,15 @@ class _Renderer:
         if kept is not None:
             np.copyto(canvas, kept[1])
             np.copyto(disparity, kept[2])
-            return list(kept[3]), kept[4], kept[5]
-        shadows, floor_from, wall_readable = _static_layers(self, pose, scene, canvas, disparity)
+            return list(kept[3]), kept[4], kept[5], True
+        shadows, floor_from, wall_readable = _static_layers(self, pose, scene, canvas, disparity, props=again)
         if again:
             with self._static_lock:
                 self._static[key] = (scene, canvas.copy(), disparity.copy(), tuple(shadows), floor_from,
                                      wall_readable)
                 if len(self._static) > 32:
                     self._static.popitem(last=False)
-        return shadows, floor_from, wall_readable
+        return shadows, floor_from, wall_readable, again
 
     def scratch(self) -> tuple[np.ndarray, np.ndarray]:
         """This thread's colour and depth buffers (re-used frame after frame)."""
@@ -618,14 +619,14 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     gain = float(scene.gain)
     canvas, depth = r.scratch()
 
-    # what does not move: floor, walls and props, kept for a camera that stands still
-    shadows, floor_from, wall_readable = r.static_layers(camera_pose, scene, canvas, depth)
-    # the robots, with a depth test per pixel
+    # what does not move: floor, walls and (for a camera standing still) props
+    shadows, floor_from, wall_readable, props_drawn = r.static_layers(camera_pose, scene, canvas, depth)
+    # the robots (and the props if not drawn yet), with a depth test per pixel
     n_labels = 2 * len(robots)
     labels = np.zeros((h, w), np.int16) if count and n_labels else None
     full = np.zeros(n_labels + 1, np.int64)
     bands: dict[int, tuple[int, int, int, int]] = {}
-    _draw(r, _prisms(r, camera_pose, robots, scene, count, props=False), depth, canvas, labels,
+    _draw(r, _prisms(r, camera_pose, robots, scene, count, props=not props_drawn), depth, canvas, labels,
           full if labels is not None else None, shadows,
           gain, bands)
 
@@ -663,11 +664,11 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
     return image, noisy, pixels
 
 
-def _static_layers(r: _Renderer, pose: Pose, scene: Scene, canvas: np.ndarray, disparity: np.ndarray
-                   ) -> tuple[list[tuple], int, int]:
-    """Draw what does not move (floor, walls, props) into ``canvas`` and ``disparity``; returns the
-    props' projector shadows, the row below which the walls leave only floor and the first row where
-    a wall is near enough for the depth sensor to read it."""
+def _static_layers(r: _Renderer, pose: Pose, scene: Scene, canvas: np.ndarray, disparity: np.ndarray,
+                   props: bool = True) -> tuple[list[tuple], int, int]:
+    """Draw what does not move (floor, walls and, with ``props``, the props) into ``canvas`` and
+    ``disparity``; returns the props' projector shadows, the row below which the walls leave only floor
+    and the first row where a wall is near enough for the depth sensor to read it."""
     cam, hc, h = r.cam, r.rig.height_m, r.cam.height
     gain = float(scene.gain)
     # background: per column the backdrop above the wall's top, the wall, then the floor below the
@@ -687,7 +688,8 @@ def _static_layers(r: _Renderer, pose: Pose, scene: Scene, canvas: np.ndarray, d
     _background(r, v_top, v_bottom, (wall_rgb, wall_d),
                 (r.floor_image(scene.floor_rgb, scene.backdrop_rgb, gain), r.floor_d_image), (canvas, disparity))
     shadows: list[tuple] = []
-    _draw(r, _prisms(r, pose, (), scene, False), disparity, canvas, None, None, shadows, gain, {})
+    if props:
+        _draw(r, _prisms(r, pose, (), scene, False), disparity, canvas, None, None, shadows, gain, {})
     wall = v_bottom > v_top
     readable = wall & (wall_z <= r.z_readable[1])
     first_readable = int(v_top[readable].min()) if readable.any() else h
@@ -1059,15 +1061,16 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, ima
     # the rows each can cover (a <= k z <= b inside its height range), as ``_zbuffer_band`` finds them
     a, b = hc - top, hc - bottom
     ks = np.stack((a / zmin, a / zmax, b / zmin, b / zmax))
-    v0s = np.maximum(0, np.floor(ks.min(axis=0) * cam.fy + cam.cy)).astype(np.intp).tolist()
-    v1s = np.minimum(cam.height, np.ceil(ks.max(axis=0) * cam.fy + cam.cy) + 1).astype(np.intp).tolist()
+    v0a = np.maximum(0, np.floor(ks.min(axis=0) * cam.fy + cam.cy)).astype(np.intp)
+    v1a = np.minimum(cam.height, np.ceil(ks.max(axis=0) * cam.fy + cam.cy) + 1).astype(np.intp)
+    rows = np.maximum(v1a - v0a, 0)
+    small = rows * lens <= _BATCH_PX
     side_only = ((a < 0) & (b > 0)).tolist()       # camera between bottom and top: no cap in sight
     limits = {key: r.height_limits(*key) for key in {(p.bottom, p.top) for p in drawn}}
     fb32 = r.fb32
-    for i, (s, e, c0, c1, v0, v1) in enumerate(zip(starts.tolist(), ends.tolist(), u0.tolist(), u1.tolist(),
-                                                    v0s, v1s)):
-        if v1 <= v0:
-            continue
+    starts_, ends_, u0_, u1_, v0s, v1s = (x.tolist() for x in (starts, ends, u0, u1, v0a, v1a))
+    for i in np.flatnonzero(~small & (rows > 0)).tolist():        # big ones one by one, near to far
+        s, e, c0, c1, v0, v1 = starts_[i], ends_[i], u0_[i], u1_[i], v0s[i], v1s[i]
         p = drawn[i]
         lo, hi = limits[(p.bottom, p.top)]
         lo, hi = lo[v0:v1], hi[v0:v1]
@@ -1099,6 +1102,80 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, ima
         if labels is not None:
             cv2.copyTo(np.full(mask.shape, p.label, np.int16), mask, labels[v0:v1, c0:c1])
         shadows.append((c0, v0, v1, float(t1[s]), float(zmin[i])))
+    batch = np.flatnonzero(small & (rows > 0))
+    if batch.size:
+        _draw_small_cylinders(r, drawn, batch, starts, u0, v0a, rows[batch], lens[batch], t1, t1_32, t2_32, face,
+                              zmin, limits, disparity, image, labels, full, shadows, gain, bands)
+
+
+_BATCH_PX = 1500
+"""Cylinders whose band (rows x columns) has at most this many pixels are z-buffered all at once, pixel
+by pixel in flat arrays; bigger ones one by one in their band. Most cylinders in a crowded view are far
+and small, and one by one each would cost a dozen numpy calls' overhead for a few hundred pixels."""
+
+
+def _draw_small_cylinders(r: _Renderer, drawn: list[_Prism], batch: np.ndarray, starts: np.ndarray,
+                          u0: np.ndarray, v0: np.ndarray, rows: np.ndarray, cols: np.ndarray, t1: np.ndarray,
+                          t1_32: np.ndarray, t2_32: np.ndarray, face: np.ndarray, zmin: np.ndarray,
+                          limits: dict, disparity: np.ndarray, image: np.ndarray, labels: np.ndarray | None,
+                          full: np.ndarray | None, shadows: list, gain: float, bands: dict) -> None:
+    """The loop of ``_draw_circles`` for the cylinders ``batch`` (indices into ``drawn``, near to far) in one
+    go: every pixel of their bands is a candidate, the nearest hit per pixel wins (the first, nearest
+    cylinder on a tie, as one by one), and only pixels nearer than what is drawn already are written.
+    Per-column values (``t1_32``, ``t2_32``, ``face``) are indexed from ``starts`` as in ``_draw_circles``."""
+    h, w = disparity.shape
+    hc = r.rig.height_m
+    # one segment per (cylinder, row), ``cols`` pixels long
+    keys = list(limits)
+    lo_tab = np.concatenate([limits[k][0].ravel() for k in keys])
+    hi_tab = np.concatenate([limits[k][1].ravel() for k in keys])
+    key_of = np.array([keys.index((drawn[i].bottom, drawn[i].top)) for i in batch.tolist()]) * h
+    seg_cyl = np.repeat(np.arange(batch.size), rows)                  # position in ``batch``
+    first = np.cumsum(rows) - rows
+    seg_row = np.arange(seg_cyl.size) - np.repeat(first - v0[batch], rows)
+    seg_len = cols[seg_cyl]
+    seg_lo, seg_hi = lo_tab[key_of[seg_cyl] + seg_row], hi_tab[key_of[seg_cyl] + seg_row]
+    px_first = np.cumsum(seg_len) - seg_len
+    col = np.arange(int(px_first[-1] + seg_len[-1])) - np.repeat(px_first, seg_len)   # column in the band
+    colidx = np.repeat(starts[batch][seg_cyl], seg_len) + col          # into the per-column arrays
+    pix = np.repeat(seg_row * w + u0[batch][seg_cyl], seg_len) + col   # into the flat image
+    cyl = np.repeat(seg_cyl, seg_len)
+    t1p = t1_32[colidx]
+    lop = np.repeat(seg_lo, seg_len)
+    zhit = np.maximum(t1p, lop)
+    hit = zhit <= np.minimum(t2_32[colidx], np.repeat(seg_hi, seg_len))
+    dhit = r.fb32 / zhit
+    flat = disparity.reshape(-1)
+    valid = hit & (dhit > flat[pix])
+    if full is not None:
+        hits = np.bincount(cyl[hit], minlength=batch.size).tolist()
+        for j, i in enumerate(batch.tolist()):
+            p = drawn[i]
+            if p.label:
+                full[p.label] += hits[j]
+                c0 = int(u0[i])
+                bands[p.label] = (int(v0[i]), int(v0[i] + rows[j]), c0, c0 + int(cols[j]))
+    sel = np.flatnonzero(valid)
+    if not sel.size:
+        return
+    pix, dhit, cyl, colidx = pix[sel], dhit[sel], cyl[sel], colidx[sel]
+    np.maximum.at(flat, pix, dhit)
+    win = np.flatnonzero(flat[pix] == dhit)[::-1]       # far to near: on a tie the nearer is written last
+    pix, cyl = pix[win], cyl[win]
+    # pixels moved as 3-byte items (numpy copies rows of 3 uint8 a few times slower)
+    colours = np.ascontiguousarray(face).view("V3").ravel()[colidx[win]]
+    cap = t1p[sel][win] < lop[sel][win]                 # the ray meets the top or bottom, not the side
+    if cap.any():
+        cap_rgb = np.array([_cap_colour(drawn[i].rgb, (0.9 if drawn[i].top < hc else 0.45) * gain)
+                            for i in batch.tolist()], np.uint8)
+        colours[cap] = cap_rgb.view("V3").ravel()[cyl[cap]]
+    image.reshape(-1).view("V3")[pix] = colours
+    if labels is not None:
+        labels.reshape(-1)[pix] = np.array([drawn[i].label for i in batch.tolist()], np.int16)[cyl]
+    for j in np.flatnonzero(np.bincount(cyl, minlength=batch.size)).tolist():
+        i = int(batch[j])
+        s, c0, top_row = int(starts[i]), int(u0[i]), int(v0[i])
+        shadows.append((c0, top_row, top_row + int(rows[j]), float(t1[s]), float(zmin[i])))
 
 
 def _depth_noise(r: _Renderer, disparity: np.ndarray, shadows: list, rng: np.random.Generator,

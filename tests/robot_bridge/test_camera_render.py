@@ -205,3 +205,40 @@ def test_rows_with_nothing_in_depth_range_read_zero_as_if_measured(monkeypatch):
             assert not a[:100].any() and a[300:].any()    # nothing reads high up; the floor in range does
     u = round(RIG.camera.cx - RIG.camera.fx * 1.0 / 4.4)
     assert np.count_nonzero(skipping[0][150:250, u - 2:u + 3]) > 100      # the pole reads
+
+
+def _crowd() -> tuple[list, Scene]:
+    """Robots on a grid in front of the camera (near ones big, far ones a few pixels, many overlapping)
+    between two poles, in a room."""
+    robots = [(1.2 + 0.9 * i, -2.4 + 0.8 * j + 0.3 * (i % 2), math.radians(37.0 * (i * 7 + j)))
+              for i in range(9) for j in range(7)]
+    room = (Wall(-1, -6, 12, -6), Wall(12, -6, 12, 6), Wall(12, 6, -1, 6))
+    poles = (CylinderProp(3.0, 0.5, 0.2, 0.0, 1.0, (200, 30, 35)), CylinderProp(6.5, -1.0, 0.3, 0.0, 0.8, (90, 90, 200)))
+    # low pucks (their tops in sight) and cylinders hanging above the camera (their undersides in sight)
+    caps = tuple(CylinderProp(1.5 + 1.1 * i, -2.0 + 0.9 * i, 0.06, 0.0 if i % 2 else 0.5, 0.1 if i % 2 else 0.7,
+                              (60, 160, 60)) for i in range(6))
+    return robots, Scene(walls=room, props=poles + caps)
+
+
+@pytest.mark.parametrize("count", [False, True])
+def test_small_cylinders_drawn_together_give_the_pixels_of_drawing_each_in_its_band(monkeypatch, count):
+    """Far, small cylinders are z-buffered all at once (``_draw_small_cylinders``); the frame, the marker
+    pixel counts and the projector shadows must be exactly what drawing them one by one gives."""
+    from robot_bridge.sim import camera
+
+    batched = []
+    spy = camera._draw_small_cylinders
+    monkeypatch.setattr(camera, "_draw_small_cylinders", lambda r, drawn, batch, *a: (batched.append(len(batch)),
+                                                                                      spy(r, drawn, batch, *a)))
+    robots, scene = _crowd()
+    samples = [(RIG, CAMERA, robots, scene)] + [(s.rig, s.camera_pose, s.robots, s.scene)
+                                                for s in map(random_scene, range(12))]
+    for rig, pose, robots, scene in samples:
+        frames = []
+        for limit in (0, camera._BATCH_PX, 10 ** 9):          # one by one, as shipped, all together
+            monkeypatch.setattr(camera, "_BATCH_PX", limit)
+            frames.append(camera._render(rig, pose, robots, scene, np.random.default_rng(3), count=count))
+        for rgb, depth, pixels in frames[1:]:
+            assert np.array_equal(rgb, frames[0][0]) and np.array_equal(depth, frames[0][1])
+            assert pixels == frames[0][2]
+    assert max(batched) >= 40          # the crowd's far cylinders went through the batch
