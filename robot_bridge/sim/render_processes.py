@@ -14,7 +14,9 @@ Why it is built this way:
   0.4 ms a frame, a tenth of a render). Readers keep frames as long as they like; more segments are
   made as needed.
 - Workers are fed a frame each time one of theirs is done, and this process renders from the other end
-  of the queue in between: the work balances itself, whatever else this process has to do.
+  of the queue in between: the work balances itself, whatever else this process has to do. Once the
+  queue is empty, this process takes back the frames a worker holds but has not started, instead of
+  waiting for them (50 cameras: that wait was about 7% of the wall time).
 - Pixels do not depend on which process renders a frame: only on the scene and the frame's seed.
 - Anything wrong with a worker (it dies, stalls or fails a frame) ends the pool with a warning and the
   frames are rendered here instead: nothing is lost and nothing hangs.
@@ -105,6 +107,7 @@ class _Worker:
         self.free: list[Slot] = []                          # slots no frame uses
         self.released: deque[Slot] = deque()                # slots freed by the garbage collector (any thread)
         self.in_flight: dict[tuple[int, int], tuple[Any, Slot]] = {}   # (segment, offset) -> frame, slot
+        self.recalled: set[tuple[int, int]] = set()         # in flight, asked back (see ``_take_back``)
         self.sent: OrderedDict[Any, int] = OrderedDict()     # rig or scene (frozen, hashable) -> its key there
         self.keys = 0
 
@@ -186,6 +189,7 @@ class RenderProcesses:
         self._started_at: float | None = None
         self.broken: str | None = None            # why the pool was given up
         self.frames_by_workers = 0
+        self.frames_taken_back = 0                # asked back from a worker to render here (see ``_take_back``)
         self.worker_cpu_seconds = 0.0             # CPU time the workers spent rendering
         self._pid = os.getpid()
         self._busy = threading.Lock()             # one thread at a time talks to the workers
@@ -271,6 +275,16 @@ class RenderProcesses:
                         self._feed(worker, todo)
                 if todo:
                     todo.pop()._render()
+            # nothing left here: rather than wait for frames a worker has queued but not started, take
+            # them back and render them here, while the workers finish the ones they are on
+            while True:
+                for worker in self._workers:
+                    while worker.in_flight and worker.recv_conn.poll():
+                        self._take(worker)
+                queued = max(self._workers, key=lambda w: len(w.in_flight) - len(w.recalled))
+                if len(queued.in_flight) - len(queued.recalled) < 2:
+                    break
+                self._take_back(queued)._render()
             for worker in self._workers:
                 while worker.in_flight:
                     if not worker.recv_conn.poll(_FRAME_SECONDS + 30.0):
@@ -283,6 +297,7 @@ class RenderProcesses:
             for worker in self._workers:
                 todo.extend(frame for frame, _ in worker.in_flight.values())
                 worker.in_flight.clear()
+                worker.recalled.clear()
             for frame in todo:
                 frame._render()
 
@@ -298,14 +313,35 @@ class RenderProcesses:
             scene_key = worker.key_of(scene)
             worker.send_conn.send(("frame", slot[0], slot[1], rig_key, pose, robots, scene_key, seed))
 
+    def _take_back(self, worker: _Worker) -> Any:
+        """Ask ``worker`` to give back the frame it was sent last (not started yet, most likely), and
+        return that frame to render here. The worker answers "given back", or "done" if it had already
+        started it; either way ``_take`` settles it."""
+        for key in reversed(worker.in_flight):
+            if key not in worker.recalled:
+                worker.recalled.add(key)
+                worker.send_conn.send(("give back", *key))
+                self.frames_taken_back += 1
+                return worker.in_flight[key][0]
+        raise ValueError(f"render process {worker.index} has no frame to give back")
+
     def _take(self, worker: _Worker) -> None:
-        """Receive one finished frame from ``worker`` and hand its pixels (views of its slot) to the frame."""
+        """Receive one answer from ``worker``: a finished frame, whose pixels (views of its slot) go to the
+        frame, or a frame given back."""
         reply = worker.recv_conn.recv()
-        if reply[0] != "done" or tuple(reply[1:3]) not in worker.in_flight:
+        if reply[0] not in ("done", "given back") or tuple(reply[1:3]) not in worker.in_flight:
             raise ValueError(f"unexpected answer {reply[:2]!r} from render process {worker.index}")
-        _, key, offset, error, cpu = reply
+        key, offset = reply[1:3]
         frame, slot = worker.in_flight.pop((key, offset))
+        worker.recalled.discard((key, offset))
+        if reply[0] == "given back":
+            worker.free.append(slot)
+            return
+        _, _, _, error, cpu = reply
         self.worker_cpu_seconds += cpu
+        if frame.rendered:                  # taken back and rendered here meanwhile: the slot is free again
+            worker.free.append(slot)
+            return
         if error is not None:
             worker.free.append(slot)
             log.warning("render process %d failed a frame of %s, rendered here instead: %s",
@@ -379,8 +415,9 @@ def _render_into(segment: mmap.mmap, offset: int, job: tuple) -> None:
 
 
 def serve(recv_conn: Connection, send_conn: Connection) -> None:
-    """A render worker's loop: objects, segments and frames in, ``("done", offset, error, cpu)`` out, until
-    ``("stop",)`` or the pipe closes."""
+    """A render worker's loop: objects, segments, frames and requests to give a frame back in;
+    ``("done", key, offset, error, cpu)`` or ``("given back", key, offset)`` out; until ``("stop",)`` or
+    the pipe closes."""
     import traceback
 
     import cv2
@@ -390,30 +427,37 @@ def serve(recv_conn: Connection, send_conn: Connection) -> None:
     cv2.setNumThreads(1)                    # one core per process: threads would only contend
     objects: dict[int, Any] = {}
     segments: dict[int, mmap.mmap] = {}
+    queued: OrderedDict[tuple[int, int], tuple] = OrderedDict()    # frames received and not started
     send_conn.send(("ready", os.getpid()))
     while True:
+        # read everything sent so far before starting a frame: a frame may have been asked back
         try:
-            message = recv_conn.recv()
+            while not queued or recv_conn.poll():
+                message = recv_conn.recv()
+                kind = message[0]
+                if kind == "stop":
+                    return
+                if kind == "object":
+                    objects[message[1]] = message[2]
+                elif kind == "forget":
+                    objects.pop(message[1], None)
+                elif kind == "segment":
+                    segments[message[1]] = _attach(message[2], message[3])
+                elif kind == "frame":
+                    queued[message[1], message[2]] = message
+                elif kind == "give back" and queued.pop((message[1], message[2]), None) is not None:
+                    send_conn.send(("given back", message[1], message[2]))
+                # a frame asked back after it was started is answered "done" as usual
         except (EOFError, OSError):
             return
-        kind = message[0]
-        if kind == "stop":
-            return
-        if kind == "object":
-            objects[message[1]] = message[2]
-        elif kind == "forget":
-            objects.pop(message[1], None)
-        elif kind == "segment":
-            segments[message[1]] = _attach(message[2], message[3])
-        elif kind == "frame":
-            started = time.process_time()
-            _, key, offset, rig_key, pose, robots, scene_key, seed = message
-            try:
-                _render_into(segments[key], offset, (objects[rig_key], pose, robots, objects[scene_key], seed))
-                error = None
-            except Exception:               # reported, and that frame is rendered by the other side
-                error = traceback.format_exc(limit=4)
-            send_conn.send(("done", key, offset, error, time.process_time() - started))
+        _, (_, key, offset, rig_key, pose, robots, scene_key, seed) = queued.popitem(last=False)
+        started = time.process_time()
+        try:
+            _render_into(segments[key], offset, (objects[rig_key], pose, robots, objects[scene_key], seed))
+            error = None
+        except Exception:               # reported, and that frame is rendered by the other side
+            error = traceback.format_exc(limit=4)
+        send_conn.send(("done", key, offset, error, time.process_time() - started))
 
 if __name__ == "__main__":
     serve(Connection(int(sys.argv[1]), writable=False), Connection(int(sys.argv[2]), readable=False))

@@ -157,3 +157,29 @@ def test_two_threads_rendering_at_once_get_every_frame_right(pool):
         list(threads.map(pool.render, batches))
     assert pool.broken is None
     assert all(f.rendered and _same_as_rendered_here(f) for batch in batches for f in batch)
+
+
+def test_frames_a_worker_holds_are_taken_back_and_rendered_here_once(pool):
+    """Frames taken back (``_take_back``) whether or not the worker has started them: each frame rendered
+    and counted once, with the worker's pixels or this process's, and every slot free again."""
+    from collections import deque
+
+    worker = pool._workers[0]
+    frames = _unread_frames(3)
+    before, back = camera.frames_rendered(), pool.frames_taken_back
+    pool._feed(worker, deque(frames))
+    assert len(worker.in_flight) == 3
+    slots = [slot for _, slot in worker.in_flight.values()]
+    for _ in range(3):                          # the last sent first; the first is likely being rendered
+        pool._take_back(worker)._render()
+    with pytest.raises(ValueError, match="no frame to give back"):
+        pool._take_back(worker)
+    while worker.in_flight:
+        assert worker.recv_conn.poll(30.0), "the worker did not answer"
+        pool._take(worker)
+    assert not worker.recalled and pool.frames_taken_back - back == 3
+    assert camera.frames_rendered() - before == 3                       # rendered here, once each
+    assert all(_same_as_rendered_here(f) for f in frames)
+    assert all(slot in worker.free for slot in slots)
+    pool.render(_unread_frames(4))                                      # and the worker goes on working
+    assert pool.broken is None
