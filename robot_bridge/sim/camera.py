@@ -665,7 +665,7 @@ def _render(rig: CameraRig, camera_pose: Pose, robots: Sequence[Pose], scene: Sc
 
 
 def _static_layers(r: _Renderer, pose: Pose, scene: Scene, canvas: np.ndarray, disparity: np.ndarray,
-                   props: bool = True) -> tuple[list[tuple], int, int]:
+                   props: bool) -> tuple[list[tuple], int, int]:
     """Draw what does not move (floor, walls and, with ``props``, the props) into ``canvas`` and
     ``disparity``; returns the props' projector shadows, the row below which the walls leave only floor
     and the first row where a wall is near enough for the depth sensor to read it."""
@@ -913,6 +913,12 @@ def _cap_colour(rgb: RGB, factor: float) -> np.ndarray:
     return _rgb8(np.asarray(rgb) * factor)
 
 
+def _cap_factor(p: _Prism, camera_height: float, gain: float) -> float:
+    """Brightness of a prism's flat cap as the camera sees it: a lit top below the camera, a dark
+    underside above it."""
+    return (0.9 if p.top < camera_height else 0.45) * gain
+
+
 @lru_cache(maxsize=64)
 def _face_palettes(rgbs: tuple[RGB, ...], gain: float) -> np.ndarray:
     """``_face_palette`` of each colour, one after the other (index: colour * 256 + level)."""
@@ -990,7 +996,7 @@ def _draw_prism(r: _Renderer, p: _Prism, disparity: np.ndarray, image: np.ndarra
     view = -(nx * tau + nz) / np.sqrt(1 + tau * tau)
     level = np.rint(np.clip(view, 0.0, 1.0) * (_SHADE_LEVELS - 1)).astype(np.intp)
     face_col = _face_palette(p.rgb, gain)[level]
-    cap_col = _cap_colour(p.rgb, (0.9 if p.top < hc else 0.45) * gain)   # lit top / dark underside
+    cap_col = _cap_colour(p.rgb, _cap_factor(p, hc, gain))
     mask = closer.view(np.uint8)
     cv2.copyTo(cv2.repeat(dhit, v1 - v0, 1) if len(dhit) == 1 else dhit, mask, region)
     colours = np.where((t1c >= lo)[..., None], face_col[None, :], cap_col)
@@ -1096,7 +1102,7 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, ima
             cv2.copyTo(cv2.repeat(dhit, v1 - v0, 1), mask, region)
         else:
             cv2.copyTo(dhit, mask, region)
-            cap = r.cap_block(p.rgb, (0.9 if p.top < hc else 0.45) * gain, v1 - v0, c1 - c0)  # lit top / dark underside
+            cap = r.cap_block(p.rgb, _cap_factor(p, hc, gain), v1 - v0, c1 - c0)
             cv2.copyTo(cap, (t1c < lo).view(np.uint8), colours)
         cv2.copyTo(colours, mask, image[v0:v1, c0:c1])
         if labels is not None:
@@ -1126,10 +1132,11 @@ def _draw_small_cylinders(r: _Renderer, drawn: list[_Prism], batch: np.ndarray, 
     h, w = disparity.shape
     hc = r.rig.height_m
     # one segment per (cylinder, row), ``cols`` pixels long
+    members = [drawn[i] for i in batch.tolist()]
     keys = list(limits)
     lo_tab = np.concatenate([limits[k][0].ravel() for k in keys])
     hi_tab = np.concatenate([limits[k][1].ravel() for k in keys])
-    key_of = np.array([keys.index((drawn[i].bottom, drawn[i].top)) for i in batch.tolist()]) * h
+    key_of = np.array([keys.index((p.bottom, p.top)) for p in members]) * h
     seg_cyl = np.repeat(np.arange(batch.size), rows)                  # position in ``batch``
     first = np.cumsum(rows) - rows
     seg_row = np.arange(seg_cyl.size) - np.repeat(first - v0[batch], rows)
@@ -1149,8 +1156,7 @@ def _draw_small_cylinders(r: _Renderer, drawn: list[_Prism], batch: np.ndarray, 
     valid = hit & (dhit > flat[pix])
     if full is not None:
         hits = np.bincount(cyl[hit], minlength=batch.size).tolist()
-        for j, i in enumerate(batch.tolist()):
-            p = drawn[i]
+        for j, (i, p) in enumerate(zip(batch.tolist(), members)):
             if p.label:
                 full[p.label] += hits[j]
                 c0 = int(u0[i])
@@ -1166,12 +1172,11 @@ def _draw_small_cylinders(r: _Renderer, drawn: list[_Prism], batch: np.ndarray, 
     colours = np.ascontiguousarray(face).view("V3").ravel()[colidx[win]]
     cap = t1p[sel][win] < lop[sel][win]                 # the ray meets the top or bottom, not the side
     if cap.any():
-        cap_rgb = np.array([_cap_colour(drawn[i].rgb, (0.9 if drawn[i].top < hc else 0.45) * gain)
-                            for i in batch.tolist()], np.uint8)
+        cap_rgb = np.array([_cap_colour(p.rgb, _cap_factor(p, hc, gain)) for p in members], np.uint8)
         colours[cap] = cap_rgb.view("V3").ravel()[cyl[cap]]
     image.reshape(-1).view("V3")[pix] = colours
     if labels is not None:
-        labels.reshape(-1)[pix] = np.array([drawn[i].label for i in batch.tolist()], np.int16)[cyl]
+        labels.reshape(-1)[pix] = np.array([p.label for p in members], np.int16)[cyl]
     for j in np.flatnonzero(np.bincount(cyl, minlength=batch.size)).tolist():
         i = int(batch[j])
         s, c0, top_row = int(starts[i]), int(u0[i]), int(v0[i])

@@ -334,14 +334,12 @@ class RenderProcesses:
         key, offset = reply[1:3]
         frame, slot = worker.in_flight.pop((key, offset))
         worker.recalled.discard((key, offset))
-        if reply[0] == "given back":
+        if reply[0] == "done":
+            self.worker_cpu_seconds += reply[4]
+        if reply[0] == "given back" or frame.rendered:     # taken back (and rendered here): the slot is free
             worker.free.append(slot)
             return
-        _, _, _, error, cpu = reply
-        self.worker_cpu_seconds += cpu
-        if frame.rendered:                  # taken back and rendered here meanwhile: the slot is free again
-            worker.free.append(slot)
-            return
+        error = reply[3]
         if error is not None:
             worker.free.append(slot)
             log.warning("render process %d failed a frame of %s, rendered here instead: %s",
