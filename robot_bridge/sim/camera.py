@@ -33,7 +33,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import lru_cache
 from time import perf_counter
-from typing import Callable, Sequence, TypeVar
+from typing import Sequence
 
 import numpy as np
 
@@ -43,7 +43,6 @@ from robot_bridge.sim.world import CameraFrame
 
 Pose = tuple[float, float, float]      # x, y, yaw (radians) in the world frame
 RGB = tuple[int, int, int]
-T = TypeVar("T")
 
 _NEAR_M = 0.05          # objects closer than this to the camera plane are not drawn
 _FAR = np.float32(np.inf)
@@ -551,11 +550,10 @@ class _Pace:
 _pace = _Pace()
 
 
-def render_all(frames: Sequence[CameraFrame], meanwhile: Callable[[], T] | None = None) -> T | None:
+def render_all(frames: Sequence[CameraFrame]) -> None:
     """Render the pixels of the deferred ``frames`` not rendered yet: shared with render worker
     processes once they have started (``render_processes``), else side by side in threads when that is
-    faster (see ``_Pace``). ``meanwhile`` (the world's physics step) runs in this thread once the workers
-    have their first frames, so that they render while it runs; its result is returned.
+    faster (see ``_Pace``).
 
     Frames due at the same step (one per camera) are independent, and most of a frame's time is in
     OpenCV calls and whole-image numpy loops, which release the GIL. The calling thread renders too;
@@ -568,8 +566,8 @@ def render_all(frames: Sequence[CameraFrame], meanwhile: Callable[[], T] | None 
 
         processes = shared_pool()
         if processes is not None and processes.ready():
-            return processes.render(todo, meanwhile)
-    result = meanwhile() if meanwhile is not None else None
+            processes.render(todo)
+            return
     helpers = min(count - 1, render_threads() - 1)
 
     def work() -> None:
@@ -582,7 +580,7 @@ def render_all(frames: Sequence[CameraFrame], meanwhile: Callable[[], T] | None 
 
     if helpers <= 0:
         work()
-        return result
+        return
     side_by_side = _pace.side_by_side()
     started = perf_counter()
     if side_by_side:
@@ -596,7 +594,6 @@ def render_all(frames: Sequence[CameraFrame], meanwhile: Callable[[], T] | None 
     else:
         work()
     _pace.record(side_by_side, (perf_counter() - started) / count)
-    return result
 
 
 def deferred_frame(robot: str, time: float, pose: Pose, rig: CameraRig, robots: Sequence[Pose], scene: Scene,

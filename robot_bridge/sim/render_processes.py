@@ -245,47 +245,29 @@ class RenderProcesses:
         self.close()
 
     # -- work
-    def render(self, frames: Sequence[Any], meanwhile: Callable[[], Any] | None = None) -> Any:
+    def render(self, frames: Sequence[Any]) -> None:
         """Render ``frames`` (``DeferredFrame``s not rendered yet) here and in the workers at the same
         time. A worker is fed a frame whenever one of its ``IN_FLIGHT`` is done, and this process takes
         frames from the other end of the queue in between, so the work balances itself (this process
         also runs the world between steps). Frames a worker could not render are rendered here, and so
-        are all frames of a call made while another thread is using the workers.
-
-        ``meanwhile`` runs in this thread once the workers have their first frames (the world's physics
-        step: the workers render while it runs); its result is returned, and if it raises, the frames
-        are still rendered before the exception goes on."""
+        are all frames of a call made while another thread is using the workers."""
         if os.getpid() != self._pid:        # a forked child must not share the parent's pipes
             self.broken = "a forked process"
         if self.broken is not None or not self.ready() or not self._busy.acquire(blocking=False):
-            result = meanwhile() if meanwhile is not None else None
             for frame in frames:
                 frame._render()
-            return result
+            return
         try:
-            return self._render(frames, meanwhile)
+            self._render(frames)
         finally:
             self._busy.release()
 
-    def _render(self, frames: Sequence[Any], meanwhile: Callable[[], Any] | None) -> Any:
+    def _render(self, frames: Sequence[Any]) -> None:
         todo = deque(frames)
         share = max(1, len(todo) // (self.size + 1))    # a small batch: this process keeps its part
-        result = failure = None
-        pending = meanwhile
-
-        def run_meanwhile() -> None:         # exactly once, whatever happens to the workers
-            nonlocal pending, result, failure
-            if pending is not None:
-                call, pending = pending, None
-                try:
-                    result = call()
-                except Exception as exc:    # raised once the frames are rendered
-                    failure = exc
-
         try:
             for worker in self._workers:
                 self._feed(worker, todo, share)
-            run_meanwhile()
             while todo:
                 for worker in self._workers:
                     while worker.in_flight and worker.recv_conn.poll():
@@ -312,16 +294,12 @@ class RenderProcesses:
             codes = ", ".join(f"render process {w.index} exit code {w.process.poll()}"
                               for w in self._workers if w.process is not None)
             self._give_up(f"{exc!r} ({codes}; None: still running)")
-            run_meanwhile()
             for worker in self._workers:
                 todo.extend(frame for frame, _ in worker.in_flight.values())
                 worker.in_flight.clear()
                 worker.recalled.clear()
             for frame in todo:
                 frame._render()
-        if failure is not None:
-            raise failure
-        return result
 
     def _feed(self, worker: _Worker, todo: deque, most: int = IN_FLIGHT) -> None:
         """Send ``worker`` frames from the front of ``todo`` while it holds fewer than ``IN_FLIGHT``

@@ -10,7 +10,6 @@ trajectories (each robot draws its noise from its own generator, seeded by the w
 """
 from __future__ import annotations
 
-import bisect
 import functools
 import math
 import threading
@@ -216,15 +215,14 @@ class World:
         for _ in range(steps):
             with self._lock:
                 frames = self._due_frames()      # what the cameras see at the start of the step
-            read = [frame for _, frame, reads in frames if reads]
-            if read:                             # render processes start on them while the physics runs
-                from robot_bridge.sim import camera
-                done = camera.render_all(read, meanwhile=self._physics)
-            else:
-                done = self._physics()
+                done = self._step_locked()
+                self.changed.notify_all()
             for future, completion in done:
                 if not future.done():
                     future.set_result(completion)
+            if any(read for _, _, read in frames):
+                from robot_bridge.sim import camera
+                camera.render_all([frame for _, frame, read in frames if read])
             for listeners, frame, _ in frames:
                 for listener in listeners:
                     listener(frame)
@@ -244,17 +242,9 @@ class World:
         """Step until no robot moves or has a motion; returns whether that happened."""
         return self.run_until(lambda: not self.busy(), max_seconds)
 
-    def _physics(self) -> list[tuple[Future, Completion]]:
-        """One step of every robot, under the lock; the motions that ended, to resolve outside it."""
-        with self._lock:
-            done = self._step_locked()
-            self.changed.notify_all()
-        return done
-
     def _step_locked(self) -> list[tuple[Future, Completion]]:
         dt, done = self.dt, []
         now = self.time
-        near = _Nearby(self._robots.values())
         for robot in self._robots.values():
             if robot.motion is not None:
                 robot.motion, wheels, completion = motion.control(
@@ -267,8 +257,7 @@ class World:
             sent, robot.command = robot.command, None
             base = faults.apply_to_base(robot.fault, robot.base)
             moved = kobuki.step(base, faults.inject_command(robot.fault, sent), dt, robot.rng, self.params)
-            robot.base = self._collide(robot, base, moved, near)
-            near.moved(base.x, robot.base.x)
+            robot.base = self._collide(robot, base, moved)
             robot.ticks = faults.inject_encoders(robot.fault, kobuki.encoder_ticks(robot.base), robot.ticks)
             robot.odom = odometry.update(robot.odom, robot.ticks, dt, self.params)
             for side, flag in enumerate(kobuki.over_current(robot.base, self.params)):
@@ -282,13 +271,12 @@ class World:
                     self._log(robot)
         return done
 
-    def _collide(self, robot: _Robot, before: kobuki.BaseState, after: kobuki.BaseState, near: "_Nearby"
-                 ) -> kobuki.BaseState:
+    def _collide(self, robot: _Robot, before: kobuki.BaseState, after: kobuki.BaseState) -> kobuki.BaseState:
         """Keep the robot out of walls, obstacles and other robots; wheels slip, the bumper reports."""
         robot.bumper = None
         if after.x == before.x and after.y == before.y:
             return after           # turning in place or at rest: nothing new to bump into
-        contact = self._contact(robot.name, after.x, after.y, near)
+        contact = self._contact(robot.name, after.x, after.y)
         if contact is None:
             return after
         # Bumpers are at the front: report the side of the contact direction relative to the heading.
@@ -296,13 +284,12 @@ class World:
         bearing = vocabulary.normalize_degrees(bearing)
         if abs(bearing) < 90.0:
             robot.bumper = "left" if bearing > 25.0 else "right" if bearing < -25.0 else "centre"
-        if self._contact(robot.name, before.x, before.y, near) is None:
+        if self._contact(robot.name, before.x, before.y) is None:
             return replace(after, x=before.x, y=before.y)
         return after  # already overlapping (placed so): let it move out
 
-    def _contact(self, name: str, x: float, y: float, near: "_Nearby") -> tuple[float, float] | None:
-        """Direction (dx, dy) towards the first thing a robot at (x, y) would overlap, or None: walls,
-        then obstacles, then robots in the order they were added."""
+    def _contact(self, name: str, x: float, y: float) -> tuple[float, float] | None:
+        """Direction (dx, dy) towards the first thing a robot at (x, y) would overlap, or None."""
         r = kobuki.ROBOT_RADIUS
         xmin, ymin, xmax, ymax = self.arena
         if x - r < xmin:
@@ -317,14 +304,13 @@ class World:
             if math.hypot(o.x - x, o.y - y) < o.radius + r:
                 return (o.x - x, o.y - y)
         reach = 2 * r
-        first: tuple[int, tuple[float, float]] | None = None
-        for index, other in near.around(x, reach):    # plain loop with cheap rejection: this runs every step
+        for other in self._robots.values():   # plain loop with cheap rejection: this runs every step
             dx = other.base.x - x
             if -reach < dx < reach and other.name != name:
                 dy = other.base.y - y
-                if dx * dx + dy * dy < reach * reach and (first is None or index < first[0]):
-                    first = (index, (dx, dy))
-        return None if first is None else first[1]
+                if dx * dx + dy * dy < reach * reach:
+                    return (dx, dy)
+        return None
 
     def _log(self, robot: _Robot) -> None:
         b, o = robot.base, robot.odom
@@ -434,32 +420,6 @@ class World:
             props = tuple(camera.CylinderProp(o.x, o.y, o.radius, 0.0, o.height, o.rgb) for o in self.obstacles)
             self._scene = camera.Scene(walls=walls, props=props, gain=self.lighting)
         return self._scene
-
-
-class _Nearby:
-    """The robots that may be within reach of a point during one step, without looking at every robot.
-
-    Robots are sorted once per step by where they started it (x); a search widens its x window by the
-    farthest any robot has moved since. That bound is measured, not assumed, so the candidates always
-    include every robot within reach: contacts are exactly those of checking all robots (50 robots:
-    about 8 candidates instead of 49).
-    """
-
-    def __init__(self, robots) -> None:
-        start = sorted((robot.base.x, index, robot) for index, robot in enumerate(robots))
-        self.xs = [x for x, _, _ in start]
-        self.robots = [(index, robot) for _, index, robot in start]
-        self.slack = 0.0
-
-    def moved(self, x_before: float, x_after: float) -> None:
-        """A robot went from ``x_before`` (its start of the step) to ``x_after``."""
-        if abs(x_after - x_before) > self.slack:
-            self.slack = abs(x_after - x_before)
-
-    def around(self, x: float, reach: float) -> list[tuple[int, "_Robot"]]:
-        """(order of addition, robot) of every robot whose x may now be within ``reach`` of ``x``."""
-        wide = reach + self.slack + 1e-9          # the margin absorbs rounding of the window's ends
-        return self.robots[bisect.bisect_left(self.xs, x - wide):bisect.bisect_right(self.xs, x + wide)]
 
 
 @functools.lru_cache(maxsize=1)

@@ -113,10 +113,8 @@ def test_a_dead_worker_ends_the_pool_with_a_warning_and_its_frames_are_rendered_
     worker.process.wait()
     frames = _unread_frames(4)
     before = camera.frames_rendered()
-    steps = []
     with caplog.at_level(logging.WARNING, logger="robot_bridge.sim.render_processes"):
-        assert processes.render(frames, meanwhile=lambda: steps.append("physics") or 7) == 7
-    assert steps == ["physics"]                                         # once, though the pool broke
+        processes.render(frames)
     assert all(f.rendered for f in frames) and camera.frames_rendered() - before == len(frames)
     assert processes.broken and "render process 1 exit code -9" in processes.broken
     assert any("in this process from now on" in r.getMessage() for r in caplog.records)
@@ -185,24 +183,3 @@ def test_frames_a_worker_holds_are_taken_back_and_rendered_here_once(pool):
     assert all(slot in worker.free for slot in slots)
     pool.render(_unread_frames(4))                                      # and the worker goes on working
     assert pool.broken is None
-
-
-def test_meanwhile_runs_once_while_the_worker_holds_frames_and_its_result_is_returned(pool):
-    """The world's physics step runs while the worker renders (it holds frames then), not after."""
-    worker = pool._workers[0]
-    frames = _unread_frames(4)
-    held = []
-    assert pool.render(frames, meanwhile=lambda: held.append(len(worker.in_flight)) or "stepped") == "stepped"
-    assert len(held) == 1 and held[0] > 0
-    assert all(_same_as_rendered_here(f) for f in frames) and not worker.in_flight
-
-
-def test_a_failing_meanwhile_is_raised_once_every_frame_is_rendered(pool):
-    def physics():
-        raise RuntimeError("physics failed")
-
-    frames = _unread_frames(4)
-    with pytest.raises(RuntimeError, match="physics failed"):
-        pool.render(frames, meanwhile=physics)
-    assert all(_same_as_rendered_here(f) for f in frames)
-    assert not pool._workers[0].in_flight and pool.broken is None

@@ -2,7 +2,7 @@
 import pytest
 
 from robot_bridge import percepts
-from robot_bridge.sim.world import Obstacle, World
+from robot_bridge.sim.world import World
 
 
 def scripted_run(seed):
@@ -71,38 +71,3 @@ def test_bad_input_is_named():
         world.camera_frame("a")
     with pytest.raises(ValueError, match="dt"):
         World(dt=0)
-
-
-def _crowd_driving_into_each_other() -> tuple[list, int]:
-    """30 robots, some curving (actuator faults), driving and rotating in a small arena with obstacles:
-    every pose and percept of the run, and how many steps some robot's bumper was pressed."""
-    world = World(seed=5, arena=(-2, -2, 2, 2), obstacles=(Obstacle(0.5, 0.5), Obstacle(-1.0, 0.3, radius=0.3)))
-    names = [f"r{i}" for i in range(30)]
-    for i, name in enumerate(names):
-        world.add_robot(name, x=-1.7 + (i % 6) * 0.62, y=-1.7 + (i // 6) * 0.7, yaw_deg=(i * 53) % 360,
-                        fault=("none", "left_actuator", "none", "right_actuator")[i % 4])
-    record, pressed = [], 0
-    for k in range(6):
-        for i, name in enumerate(names):
-            if (k + i) % 3:
-                world.command(name, "move", (2.0, 0.5))
-            else:
-                world.command(name, "rotate", (60.0 + i,))
-        for _ in range(50):
-            world.step()
-            bumpers = [p for name in names for p in world.percepts(name) if p.name == "bumper"]
-            pressed += bool(bumpers)
-            record.append([world.pose(name) for name in names] + bumpers)
-    return record, pressed
-
-
-def test_contacts_between_robots_are_those_of_checking_every_robot(monkeypatch):
-    """The world looks only at robots near in x for contacts (``_Nearby``); a crowd bumping into each
-    other must move exactly as when every robot is checked against every other."""
-    from robot_bridge.sim import world as world_module
-
-    nearby, pressed = _crowd_driving_into_each_other()
-    assert pressed > 50                           # the robots do bump into each other and the walls
-    monkeypatch.setattr(world_module._Nearby, "around", lambda self, x, reach: self.robots)
-    everyone, _ = _crowd_driving_into_each_other()
-    assert nearby == everyone
