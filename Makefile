@@ -4,10 +4,11 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.faultmas-installed
+PURE_PYTHON := FAULTMAS_PURE_PYTHON=1
 
-.PHONY: run test bench install clean
+.PHONY: run test bench install speedups clean
 
-$(STAMP): pyproject.toml Makefile
+$(STAMP): pyproject.toml Makefile setup.py
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	# The ROS 2 wheels first: they bring lark-parser 0.12, which overwrites Lark 1.x ...
@@ -19,14 +20,22 @@ $(STAMP): pyproject.toml Makefile
 
 install: $(STAMP)
 
-run: $(STAMP)
+# The compiled interpreter (agentspeak/_speedups.py), rebuilt in place for sources edited since the last
+# build; a no-op when nothing changed. Without it an edited module runs from source, with a warning.
+speedups: $(STAMP)
+	$(PY) setup.py -q build_ext --inplace
+
+run: speedups
 	$(VENV)/bin/faultmas run
 
-test: $(STAMP)
+test: speedups
 	$(PY) -m pytest -q -p no:cacheprovider
+	# the language suite again on the interpreter run from source (what runs without a C compiler)
+	$(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider tests/agentspeak
 
-bench: $(STAMP)
+bench: speedups
 	$(PY) -m benchmarks
 
 clean:
-	rm -rf $(VENV) build *.egg-info
+	rm -rf $(VENV) build *.egg-info agentspeak/_speedups.json
+	find agentspeak -name '*.so' -delete

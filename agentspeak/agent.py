@@ -19,7 +19,6 @@ import logging
 import time
 from collections import deque
 from concurrent.futures import Future
-from types import GeneratorType
 from typing import Any, Callable, Iterator
 
 from agentspeak import program as P
@@ -28,7 +27,7 @@ from agentspeak.communication import receive_message
 from agentspeak.intentions import Event, Frame, IntendedMeans, Intention, PlanLibrary, _intention_ids
 from agentspeak.program import ACHIEVE, ADD, BEL, DEL, TEST, Plan, PlanTerm, Program, Trigger, plan_matcher
 from agentspeak.solver import _COMPILED, SolveError, _true_k, compiled, solve, solve_first
-from agentspeak.stdlib.registry import STDLIB, IAError, Registry, Suspend
+from agentspeak.stdlib.registry import STDLIB, IAError, Registry, Suspend, yields_solutions
 from agentspeak.terms import (
     _EXACT, INT_OPS, Arith, ArithmeticError_, Literal, Term, Var, is_ground, rename, resolve, to_str, variables,
 )
@@ -153,7 +152,7 @@ class Agent:
             result = spec.function(ctx, *args)
         except IAError as exc:
             raise SolveError(exc.error, exc.message) from None
-        if isinstance(result, GeneratorType):
+        if yields_solutions(result):
             return result
         if isinstance(result, Suspend):
             raise SolveError("ia_failed", f"{lit.functor} cannot be used in a formula (it suspends)")
@@ -1056,7 +1055,7 @@ def _exec_internal(ag: Agent, intention, im, frame, instr) -> None:
         return
     if result is False:
         raise IAError("ia_failed", f"internal action {to_str(resolve(lit, b))} failed")
-    if isinstance(result, GeneratorType):
+    if yields_solutions(result):
         for _ in result:
             frame.pc += 1
             return

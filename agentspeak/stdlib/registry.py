@@ -6,7 +6,7 @@ An internal action is a plain function ``f(ctx, *args)`` decorated with ``@inter
 unbound stay ``Var``). The function may:
 
 * return ``True``/``None`` (success) or ``False`` (failure, error ``ia_failed``);
-* be a generator: each ``yield`` is one solution (bind with ``ctx.unify``), used for backtracking
+* be a generator (or return an iterator): each ``yield`` is one solution (bind with ``ctx.unify``), used for backtracking
   in contexts and ``for`` loops; in a plan body the first solution is taken;
 * return ``Suspend(...)`` to suspend only the calling intention until a result arrives (an awaited
   ``concurrent.futures.Future``, a timer, an event) - the agent's other intentions go on;
@@ -35,6 +35,13 @@ class IAError(FaultmasError):
         self.error = error
         self.message = message
         self.annots = annots  # further annotations for the failure event (``.fail(why(x))``)
+
+
+def yields_solutions(result: Any) -> bool:
+    """Did the action return solutions (a generator, or any iterator)? Not ``isinstance(result,
+    types.GeneratorType)``: a generator of a compiled module (agentspeak/_speedups.py) is Cython's own
+    type, and taking it for a plain success would never bind ``X`` in ``.member(X, L)``."""
+    return hasattr(type(result), "__next__")
 
 
 def wrong_arguments(message: str) -> IAError:

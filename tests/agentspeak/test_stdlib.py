@@ -16,6 +16,8 @@ def body(text: str, extra: str = "") -> list[str]:
     ('.length([1,2,3], N); .length("hello", M); .print(N, M)', "35"),
     ('.nth(1, [a,b,c], X); .print(X)', "b"),
     ('.member(b, [a,b]); .print(yes)', "yes"),
+    ('.member(X, [a,b]); .print(X)', "a"),           # a generator action binds (compiled build too)
+    ('.member(z, [a,b])', "failedia_failed"),        # ... and fails when it has no solution
     ('.reverse([1,2,3], R); .print(R)', "[3,2,1]"),
     ('.delete(a, [a,b,a], R); .print(R)', "[b]"),
     ('.delete(0, [a,b], R); .print(R)', "[b]"),

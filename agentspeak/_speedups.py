@@ -1,0 +1,118 @@
+"""The optional compiled interpreter: which modules ``setup.py`` compiles with Cython, and the guard that
+makes sure a compiled module is only used while it matches its source.
+
+Why: the reasoning cycle is pure Python, and CPython spends much of a cycle dispatching bytecode. The
+same ``.py`` files, compiled unchanged by Cython into extension modules, run the ring benchmark about a
+third faster. Nothing is written twice: the sources stay plain Python, and every module also runs
+from source (no compiler, ``FAULTMAS_PURE_PYTHON=1`` at build or run time, or a stale build).
+
+A compiled file sits next to its source and Python prefers it, so an edited ``agent.py`` would be
+silently ignored until the next build. The build therefore records each source's SHA-256 in
+``_speedups.json``; at import, a module whose source has changed since is loaded from the ``.py``
+instead, with one warning that says how to rebuild. ``FAULTMAS_PURE_PYTHON=1`` at run time loads every
+module from source (for cProfile, a debugger, or to compare the two).
+
+This module must import only the standard library: ``setup.py`` reads it before anything is built.
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib.abc
+import importlib.machinery
+import importlib.util
+import json
+import logging
+import os
+import sys
+from pathlib import Path
+
+# The interpreter's modules, compiled when a C compiler and Cython are at hand. Left out: the parser (a
+# Lark transformer, already served by lark-cython), the command line and the project-file reader (cold
+# code), and this module (it decides what is imported from where).
+COMPILED_MODULES = (
+    "agentspeak.agent", "agentspeak.arch", "agentspeak.beliefs", "agentspeak.communication",
+    "agentspeak.copier", "agentspeak.errors", "agentspeak.fork", "agentspeak.ground_terms",
+    "agentspeak.intentions", "agentspeak.program", "agentspeak.runtime", "agentspeak.solver",
+    "agentspeak.terms", "agentspeak.unify",
+    "agentspeak.stdlib.bdi", "agentspeak.stdlib.beliefs", "agentspeak.stdlib.communication",
+    "agentspeak.stdlib.functions", "agentspeak.stdlib.lists", "agentspeak.stdlib.output",
+    "agentspeak.stdlib.plans", "agentspeak.stdlib.registry", "agentspeak.stdlib.strings",
+    "agentspeak.stdlib.system",
+)
+MANIFEST = "_speedups.json"
+PURE_ENV = "FAULTMAS_PURE_PYTHON"
+REBUILD = "make speedups (or: python setup.py build_ext --inplace)"
+
+log = logging.getLogger("faultmas.speedups")
+_PACKAGE_DIR = Path(__file__).resolve().parent
+
+
+def source_path(module: str, package_dir: Path = _PACKAGE_DIR) -> Path:
+    """``agentspeak.stdlib.lists`` -> ``<package_dir>/stdlib/lists.py``."""
+    return package_dir.joinpath(*module.split(".")[1:]).with_suffix(".py")
+
+
+def source_digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def pure_requested() -> bool:
+    return os.environ.get(PURE_ENV, "") not in ("", "0")
+
+
+def _compiled_file(source: Path) -> Path | None:
+    for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+        candidate = source.with_suffix(suffix)
+        if candidate.exists():
+            return candidate
+    return None
+
+
+def modules_to_load_from_source(package_dir: Path = _PACKAGE_DIR) -> tuple[dict[str, Path], list[str]]:
+    """Which compiled modules must not be used: ``{module: its .py}``, and those of them that are stale."""
+    present = {m: source_path(m, package_dir) for m in COMPILED_MODULES}
+    present = {m: src for m, src in present.items() if _compiled_file(src) is not None}
+    if not present:
+        return {}, []
+    if pure_requested():
+        return present, []
+    try:
+        built = json.loads((package_dir / MANIFEST).read_text())
+    except (OSError, ValueError):
+        built = {}
+    stale = [m for m, src in present.items() if built.get(m) != source_digest(src)]
+    return {m: present[m] for m in stale}, stale
+
+
+class _FromSource(importlib.abc.MetaPathFinder):
+    """Imports the listed modules from their ``.py`` file, ahead of the compiled file beside it."""
+
+    def __init__(self, sources: dict[str, Path]) -> None:
+        self.sources = sources
+
+    def find_spec(self, fullname, path=None, target=None):
+        source = self.sources.get(fullname)
+        return None if source is None else importlib.util.spec_from_file_location(fullname, source)
+
+
+def install() -> None:
+    """Called once by ``agentspeak/__init__.py``, before any compiled module can be imported."""
+    sources, stale = modules_to_load_from_source()
+    if stale:
+        log.warning("compiled %s older than %s source; running %s from source until you run %s",
+                    "module is" if len(stale) == 1 else "modules are", "its" if len(stale) == 1 else "their",
+                    ", ".join(stale), REBUILD)
+    if sources:
+        sys.meta_path.insert(0, _FromSource(sources))
+
+
+def describe() -> str:
+    """How the interpreter runs, for benchmark tables and bug reports: compiled, from source, or mixed."""
+    compiled = [m for m in COMPILED_MODULES
+                if m in sys.modules and not str(getattr(sys.modules[m], "__file__", "")).endswith(".py")]
+    loaded = [m for m in COMPILED_MODULES if m in sys.modules]
+    if not compiled:
+        return "pure Python"
+    if len(compiled) == len(loaded):
+        return f"compiled (Cython, {len(compiled)} modules)"
+    return f"mixed ({len(compiled)} of {len(loaded)} loaded modules compiled)"

@@ -1,0 +1,58 @@
+"""Builds the optional compiled interpreter (agentspeak/_speedups.py says what and why); pyproject.toml
+holds everything else.
+
+The listed modules are compiled unchanged by Cython. Every extension is optional: with no C compiler, or
+with FAULTMAS_PURE_PYTHON=1 at build time, the package installs and runs from source. Each built module's
+source digest goes into agentspeak/_speedups.json, so a module edited later runs from source (with a
+warning) until it is rebuilt: ``make speedups`` or ``python setup.py build_ext --inplace``.
+"""
+from __future__ import annotations
+
+import json
+import os
+import runpy
+from pathlib import Path
+
+from setuptools import Extension, setup
+from setuptools.command.build_ext import build_ext
+
+HERE = Path(__file__).resolve().parent
+SPEEDUPS = runpy.run_path(str(HERE / "agentspeak" / "_speedups.py"))
+
+
+def _extensions() -> list[Extension]:
+    if SPEEDUPS["pure_requested"]():
+        return []
+    try:
+        from Cython.Build import cythonize
+    except ImportError:
+        print("faultmas: Cython is not installed; the interpreter runs from source")
+        return []
+    modules = [Extension(m, [str(SPEEDUPS["source_path"](m, Path("agentspeak")))], optional=True)
+               for m in SPEEDUPS["COMPILED_MODULES"]]
+    # annotation_typing off: annotations are documentation here, and Cython would otherwise enforce
+    # `-> list` on a function that returns a tuple. The C files stay out of the source tree.
+    return cythonize(modules, language_level=3, quiet=True, nthreads=os.cpu_count() or 1,
+                     build_dir="build/cython", compiler_directives={"annotation_typing": False})
+
+
+class BuildWithManifest(build_ext):
+    """build_ext on every core, then record the digest of each source that was compiled."""
+
+    def finalize_options(self) -> None:
+        super().finalize_options()
+        if self.parallel is None:
+            self.parallel = os.cpu_count() or 1
+
+    def run(self) -> None:
+        super().run()
+        if not self.extensions:
+            return
+        built = {ext.name: SPEEDUPS["source_digest"](SPEEDUPS["source_path"](ext.name, HERE / "agentspeak"))
+                 for ext in self.extensions if Path(self.get_ext_fullpath(ext.name)).exists()}
+        package_dir = Path(self.get_ext_fullpath("agentspeak.agent")).parent   # the tree, or the wheel's
+        (package_dir / SPEEDUPS["MANIFEST"]).write_text(json.dumps(built, indent=1, sort_keys=True) + "\n")
+        print(f"faultmas: {len(built)} of {len(self.extensions)} interpreter modules compiled")
+
+
+setup(ext_modules=_extensions(), cmdclass={"build_ext": BuildWithManifest})
