@@ -85,7 +85,9 @@ def run_project(mas2j: str, sets: dict[str, str] | None = None, timeout: float |
         if profiler is not None:
             import pstats
             pstats.Stats(profiler, stream=sys.stderr).sort_stats("tottime").print_stats(profile)
+    from agentspeak._speedups import describe
     return {
+        "interpreter": describe(),          # compiled or from source (agentspeak/_speedups.py)
         "lines": lines,
         "last_line": lines[-1] if lines else None,
         "grammar_cpu": grammar_cpu,

@@ -25,6 +25,12 @@ def test_tiny_count_runs_in_a_child_and_its_line_is_verified():
     assert len(result.seconds) == 1 and result.seconds[0] >= 0.0
     assert result.best == result.seconds[0]
     assert result.peak_rss_kb > 0
+    assert result.detail["interpreter"]                      # compiled or pure Python: said in the table
+
+
+def test_from_source_runs_with_the_compiled_interpreter_switched_off():
+    result = run_faultmas(TINY_COUNT, quick=True, from_source=True)
+    assert result.error == "" and result.detail["interpreter"] == "pure Python"
 
 
 def test_a_wrong_last_line_is_a_failure_not_a_number():
@@ -58,6 +64,17 @@ def test_table_says_baseline_unavailable_and_lists_failures():
     assert "FAILED fib (rules), faultmas: last line None" in table
     count_row = next(line for line in table.splitlines() if line.startswith("count"))
     assert "200,000 (0.500 s)" in count_row and "yes" in count_row
+
+
+def test_table_shows_the_from_source_column_and_judges_the_default_install():
+    results = {name: Result(seconds=[0.5], peak_rss_kb=2048, detail={"interpreter": "compiled (Cython, 20 modules)"})
+               for name in WORKLOADS}
+    source = {name: Result(seconds=[1.0], peak_rss_kb=2048) for name in WORKLOADS}
+    table = render(results, None, "no network", quick=False, source=source)
+    assert "from source (CPU)" in table.splitlines()[0]
+    count_row = next(line for line in table.splitlines() if line.startswith("count"))
+    assert "200,000 (0.500 s)" in count_row and "100,000 (1.000 s)" in count_row and "yes" in count_row
+    assert "faultmas interpreter: compiled (Cython, 20 modules)" in table
 
 
 def test_quick_scaling_keeps_the_fill_run_query_free():
