@@ -12,7 +12,8 @@ $(STAMP): pyproject.toml Makefile setup.py
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	# The ROS 2 wheels first: they bring lark-parser 0.12, which overwrites Lark 1.x ...
-	$(PY) -m pip install -q -e '.[ros2,dev]'
+	# (not compiled here: `speedups` compiles the interpreter in place, once)
+	$(PURE_PYTHON) $(PY) -m pip install -q -e '.[ros2,dev]'
 	# ... so Lark 1.x is reinstalled last (see ../shared/notes/ros2-and-zenoh.md, 1.4).
 	$(PY) -m pip install -q --force-reinstall --no-deps 'lark==1.3.1'
 	$(PY) -c 'import lark, sys; sys.exit(0 if lark.__version__.startswith("1.") else "lark-parser 0.12 shadows Lark 1.x")'
