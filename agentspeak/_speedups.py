@@ -28,9 +28,11 @@ from pathlib import Path
 
 # The interpreter's modules, compiled when a C compiler and Cython are at hand. Left out: the parser (a
 # Lark transformer, already served by lark-cython), the command line and the project-file reader (cold
-# code), and this module (it decides what is imported from where).
+# code), this module (it decides what is imported from where), and agent.py: measured compiled, the
+# reasoning cycle ran count 13% and fib 5% slower (CPython 3.11's specialised attribute stores beat the
+# generic ones compiled code uses on its hot path) and the ring only 5% faster.
 COMPILED_MODULES = (
-    "agentspeak.agent", "agentspeak.arch", "agentspeak.beliefs", "agentspeak.communication",
+    "agentspeak.arch", "agentspeak.beliefs", "agentspeak.communication",
     "agentspeak.copier", "agentspeak.errors", "agentspeak.fork", "agentspeak.ground_terms",
     "agentspeak.intentions", "agentspeak.program", "agentspeak.runtime", "agentspeak.solver",
     "agentspeak.terms", "agentspeak.unify",
@@ -60,18 +62,22 @@ def pure_requested() -> bool:
     return os.environ.get(PURE_ENV, "") not in ("", "0")
 
 
-def _compiled_file(source: Path) -> Path | None:
+def _compiled_modules_on_disk(package_dir: Path) -> dict[str, Path]:
+    """Every module of the package with a compiled file beside its source, listed or not (a file left by an
+    older build must not be imported either): ``{module: its .py}``."""
+    found = {}
     for suffix in importlib.machinery.EXTENSION_SUFFIXES:
-        candidate = source.with_suffix(suffix)
-        if candidate.exists():
-            return candidate
-    return None
+        for compiled in package_dir.rglob(f"*{suffix}"):
+            source = compiled.with_name(compiled.name[:-len(suffix)] + ".py")
+            if source.exists():
+                parts = source.relative_to(package_dir).with_suffix("").parts
+                found[".".join((package_dir.name, *parts))] = source
+    return found
 
 
 def modules_to_load_from_source(package_dir: Path = _PACKAGE_DIR) -> tuple[dict[str, Path], list[str]]:
     """Which compiled modules must not be used: ``{module: its .py}``, and those of them that are stale."""
-    present = {m: source_path(m, package_dir) for m in COMPILED_MODULES}
-    present = {m: src for m, src in present.items() if _compiled_file(src) is not None}
+    present = _compiled_modules_on_disk(package_dir)
     if not present:
         return {}, []
     if pure_requested():
@@ -80,7 +86,7 @@ def modules_to_load_from_source(package_dir: Path = _PACKAGE_DIR) -> tuple[dict[
         built = json.loads((package_dir / MANIFEST).read_text())
     except (OSError, ValueError):
         built = {}
-    stale = [m for m, src in present.items() if built.get(m) != source_digest(src)]
+    stale = sorted(m for m, src in present.items() if built.get(m) != source_digest(src))
     return {m: present[m] for m in stale}, stale
 
 
@@ -99,8 +105,8 @@ def install() -> None:
     """Called once by ``agentspeak/__init__.py``, before any compiled module can be imported."""
     sources, stale = modules_to_load_from_source()
     if stale:
-        log.warning("compiled %s older than %s source; running %s from source until you run %s",
-                    "module is" if len(stale) == 1 else "modules are", "its" if len(stale) == 1 else "their",
+        log.warning("compiled %s not built from the source on disk (edited since, or left by an older "
+                    "build); running %s from source until you run %s", "module" if len(stale) == 1 else "modules",
                     ", ".join(stale), REBUILD)
     if sources:
         sys.meta_path.insert(0, _FromSource(sources))

@@ -42,7 +42,7 @@ def test_a_machine_with_a_compiler_runs_the_compiled_interpreter():
     assert BUILT, f"no {_speedups.MANIFEST}: run {_speedups.REBUILD}"
     files, stderr = _where(list(_speedups.COMPILED_MODULES), PACKAGE.parent)
     assert not [m for m, f in files.items() if f.endswith(".py")], stderr
-    assert "older than" not in stderr
+    assert "not built from the source" not in stderr
 
 
 @pytest.mark.skipif(not BUILT, reason="the compiled interpreter is not built")
@@ -63,8 +63,21 @@ def test_an_edited_module_runs_from_source_with_a_warning(tmp_path):
     assert "agentspeak.fork" in stderr and "make speedups" in stderr
 
 
+@pytest.mark.skipif(not BUILT, reason="the compiled interpreter is not built")
+def test_a_compiled_file_the_last_build_did_not_make_is_not_used(tmp_path):
+    copy = tmp_path / "agentspeak"
+    shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    manifest = json.loads((copy / _speedups.MANIFEST).read_text())
+    del manifest["agentspeak.unify"]                 # as if left by an older build that listed it
+    (copy / _speedups.MANIFEST).write_text(json.dumps(manifest))
+    files, stderr = _where(["agentspeak.unify", "agentspeak.fork"], tmp_path)
+    assert files["agentspeak.unify"] == str(copy / "unify.py")
+    assert not files["agentspeak.fork"].endswith(".py")
+    assert "agentspeak.unify" in stderr
+
+
 def test_describe_names_how_the_interpreter_runs():
-    import agentspeak.agent  # noqa: F401  (a listed module, loaded)
+    import agentspeak.solver  # noqa: F401  (a listed module, loaded)
     text = _speedups.describe()
-    compiled = not agentspeak.agent.__file__.endswith(".py")
+    compiled = not agentspeak.solver.__file__.endswith(".py")
     assert text.startswith("compiled") if compiled else text == "pure Python"
