@@ -50,7 +50,7 @@ class BuildWithManifest(build_ext):
             return
         built = {ext.name: SPEEDUPS["source_digest"](SPEEDUPS["source_path"](ext.name, HERE / "agentspeak"))
                  for ext in self.extensions if Path(self.get_ext_fullpath(ext.name)).exists()}
-        package_dir = Path(self.get_ext_fullpath("agentspeak.agent")).parent   # the tree, or the wheel's
+        package_dir = Path(self.get_ext_fullpath("agentspeak.terms")).parent   # the tree, or the wheel's
         (package_dir / SPEEDUPS["MANIFEST"]).write_text(json.dumps(built, indent=1, sort_keys=True) + "\n")
         print(f"faultmas: {len(built)} of {len(self.extensions)} interpreter modules compiled")
 

@@ -6,7 +6,7 @@ same ``.py`` files, compiled unchanged by Cython into extension modules, run the
 third faster. Nothing is written twice: the sources stay plain Python, and every module also runs
 from source (no compiler, ``FAULTMAS_PURE_PYTHON=1`` at build or run time, or a stale build).
 
-A compiled file sits next to its source and Python prefers it, so an edited ``agent.py`` would be
+A compiled file sits next to its source and Python prefers it, so an edited ``solver.py`` would be
 silently ignored until the next build. The build therefore records each source's SHA-256 in
 ``_speedups.json``; at import, a module whose source has changed since is loaded from the ``.py``
 instead, with one warning that says how to rebuild. ``FAULTMAS_PURE_PYTHON=1`` at run time loads every
