@@ -37,7 +37,8 @@ def _extensions() -> list[Extension]:
 
 
 class BuildWithManifest(build_ext):
-    """build_ext on every core, then record the digest of each source that was compiled."""
+    """build_ext on every core, then record the digest of each source that was compiled (and remove compiled
+    files of modules an older build compiled and this one does not)."""
 
     def finalize_options(self) -> None:
         super().finalize_options()
@@ -52,6 +53,11 @@ class BuildWithManifest(build_ext):
                  for ext in self.extensions if Path(self.get_ext_fullpath(ext.name)).exists()}
         package_dir = Path(self.get_ext_fullpath("agentspeak.terms")).parent   # the tree, or the wheel's
         (package_dir / SPEEDUPS["MANIFEST"]).write_text(json.dumps(built, indent=1, sort_keys=True) + "\n")
+        for module, source in SPEEDUPS["_compiled_modules_on_disk"](package_dir).items():
+            if module not in built:   # left by an older build (a module no longer listed): never imported, so gone
+                for suffix in SPEEDUPS["importlib"].machinery.EXTENSION_SUFFIXES:
+                    source.with_suffix(suffix).unlink(missing_ok=True)
+                print(f"faultmas: removed the compiled {module} of an older build")
         print(f"faultmas: {len(built)} of {len(self.extensions)} interpreter modules compiled")
 
 
