@@ -53,10 +53,9 @@ class BuildWithManifest(build_ext):
                  for ext in self.extensions if Path(self.get_ext_fullpath(ext.name)).exists()}
         package_dir = Path(self.get_ext_fullpath("agentspeak.terms")).parent   # the tree, or the wheel's
         (package_dir / SPEEDUPS["MANIFEST"]).write_text(json.dumps(built, indent=1, sort_keys=True) + "\n")
-        for module, source in SPEEDUPS["_compiled_modules_on_disk"](package_dir).items():
+        for module, compiled in SPEEDUPS["compiled_files"](package_dir).items():
             if module not in built:   # left by an older build (a module no longer listed): never imported, so gone
-                for suffix in SPEEDUPS["importlib"].machinery.EXTENSION_SUFFIXES:
-                    source.with_suffix(suffix).unlink(missing_ok=True)
+                compiled.unlink()
                 print(f"faultmas: removed the compiled {module} of an older build")
         print(f"faultmas: {len(built)} of {len(self.extensions)} interpreter modules compiled")
 

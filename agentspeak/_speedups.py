@@ -3,7 +3,7 @@ makes sure a compiled module is only used while it matches its source.
 
 Why: the reasoning cycle is pure Python, and CPython spends much of a cycle dispatching bytecode. The
 same ``.py`` files, compiled unchanged by Cython into extension modules, run the ring benchmark about a
-third faster. Nothing is written twice: the sources stay plain Python, and every module also runs
+quarter faster. Nothing is written twice: the sources stay plain Python, and every module also runs
 from source (no compiler, ``FAULTMAS_PURE_PYTHON=1`` at build or run time, or a stale build).
 
 A compiled file sits next to its source and Python prefers it, so an edited ``solver.py`` would be
@@ -62,22 +62,22 @@ def pure_requested() -> bool:
     return os.environ.get(PURE_ENV, "") not in ("", "0")
 
 
-def _compiled_modules_on_disk(package_dir: Path) -> dict[str, Path]:
+def compiled_files(package_dir: Path) -> dict[str, Path]:
     """Every module of the package with a compiled file beside its source, listed or not (a file left by an
-    older build must not be imported either): ``{module: its .py}``."""
+    older build must not be imported either): ``{module: its compiled file}``."""
     found = {}
     for suffix in importlib.machinery.EXTENSION_SUFFIXES:
         for compiled in package_dir.rglob(f"*{suffix}"):
             source = compiled.with_name(compiled.name[:-len(suffix)] + ".py")
             if source.exists():
                 parts = source.relative_to(package_dir).with_suffix("").parts
-                found[".".join((package_dir.name, *parts))] = source
+                found[".".join((package_dir.name, *parts))] = compiled
     return found
 
 
 def modules_to_load_from_source(package_dir: Path = _PACKAGE_DIR) -> tuple[dict[str, Path], list[str]]:
     """Which compiled modules must not be used: ``{module: its .py}``, and those of them that are stale."""
-    present = _compiled_modules_on_disk(package_dir)
+    present = {m: source_path(m, package_dir) for m in compiled_files(package_dir)}
     if not present:
         return {}, []
     if pure_requested():
@@ -114,9 +114,8 @@ def install() -> None:
 
 def describe() -> str:
     """How the interpreter runs, for benchmark tables and bug reports: compiled, from source, or mixed."""
-    compiled = [m for m in COMPILED_MODULES
-                if m in sys.modules and not str(getattr(sys.modules[m], "__file__", "")).endswith(".py")]
     loaded = [m for m in COMPILED_MODULES if m in sys.modules]
+    compiled = [m for m in loaded if not str(getattr(sys.modules[m], "__file__", "")).endswith(".py")]
     if not compiled:
         return "pure Python"
     if len(compiled) == len(loaded):
