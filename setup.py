@@ -33,7 +33,7 @@ def _extensions() -> list[Extension]:
     # annotation_typing off: annotations are documentation here, and Cython would otherwise enforce
     # `-> list` on a function that returns a tuple. The C files stay out of the source tree.
     return cythonize(modules, language_level=3, quiet=True, nthreads=os.cpu_count() or 1,
-                     build_dir="build/cython", compiler_directives={"annotation_typing": False})
+                     build_dir="build/cython", compiler_directives={"annotation_typing": False, "nonecheck": True})
 
 
 class BuildWithManifest(build_ext):

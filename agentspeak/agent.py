@@ -37,9 +37,11 @@ log = logging.getLogger("faultmas.agentspeak")
 
 _TRUE = Literal("true")
 _new = object.__new__
-"""Hot paths build objects with ``_new(Class)`` and slot stores: a class call costs ~150 ns more in
-CPython 3.11 (a ring hop makes eight such objects). tests/agentspeak/test_message_path.py checks that
-every slot gets set, so a slot added to one of these classes must be set there too."""
+"""Hot paths build objects with ``_new(Class)`` (or ``Class.__new__(Class)`` for the classes that the
+compiled build makes C types, see agent.pxd: ``object.__new__`` refuses those) and slot stores: a class
+call costs ~150 ns more in CPython 3.11 (a ring hop makes eight such objects).
+tests/agentspeak/test_message_path.py checks that every slot gets set, so a slot added to one of these
+classes must be set there too."""
 _seq = itertools.count()
 
 
@@ -342,11 +344,11 @@ class Agent:
                     continue
             if intention is None and not plan.atomic:
                 # push_im's new intention, Intention(IntendedMeans(plan, b, lit)), without class calls
-                f = _new(Frame)
+                f = Frame.__new__(Frame)
                 f.body, f.pc, f.kind, f.loop, f.solutions, f.index, f.reset = plan.body, 0, "body", None, None, 0, ()
-                im = _new(IntendedMeans)
+                im = IntendedMeans.__new__(IntendedMeans)
                 im.plan, im.b, im.frames, im.result, im.handles, im.event_literal = plan, b, [f], lit, None, lit
-                new = _new(Intention)
+                new = Intention.__new__(Intention)
                 new.id, new.stack, new.suspended, new.atomic = next(_intention_ids), [im], None, 0
                 new.waiting, new.fork, new.dropped = None, None, False
                 self.running.append(new)
@@ -1047,7 +1049,7 @@ def _exec_internal(ag: Agent, intention, im, frame, instr) -> None:
     n = len(args)
     if n < spec.min_args or (spec.max_args is not None and n > spec.max_args):
         ag._check_arity(spec, lit, args)
-    ctx = _new(IAContext)  # IAContext(ag, intention, im, b, []) without the class call
+    ctx = IAContext.__new__(IAContext)  # IAContext(ag, intention, im, b, []) without the class call
     ctx.agent, ctx.intention, ctx.im, ctx.b, ctx.trail = ag, intention, im, b, []
     result = spec.function(ctx, *args)
     if result is None or result is True:

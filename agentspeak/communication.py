@@ -177,11 +177,11 @@ def receive_message(agent: Any, msg: Message) -> None:
             lit = _new(Literal)
             lit.functor, lit.args, lit.annots = content.functor, content.args, annots
             lit.neg, lit.annot_tail, lit._hash = content.neg, None, None
-            trigger = _new(Trigger)
+            trigger = Trigger.__new__(Trigger)
             trigger.op, trigger.kind, trigger.literal = ADD, ACHIEVE, lit
             if agent.event_waiters:
                 agent._notify_waiters(trigger)
-            ev = _new(Event)
+            ev = Event.__new__(Event)
             ev.trigger, ev.intention, ev.handles = trigger, None, None
             agent.events.append(ev)
             return

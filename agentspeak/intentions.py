@@ -5,7 +5,8 @@ copied), its own bindings dict, and a stack of frames (the plan body plus any ``
 ``for`` block being executed). An intention is a stack of intended means.
 
 ``Event``, ``Frame``, ``IntendedMeans`` and ``Intention`` are also built without ``__init__`` on the
-message path (see ``agentspeak.agent._new``): a new slot must be set there too.
+message path (see ``agentspeak.agent._new``): a new slot must be set there too, and declared in
+``intentions.pxd`` (their C types in the compiled build).
 """
 from __future__ import annotations
 

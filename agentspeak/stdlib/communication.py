@@ -37,7 +37,7 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
     if (answer is None and type(receiver) is Literal and not receiver.args and type(performative) is Literal
             and not performative.args and type(content) is not Var):
         # the usual send: one receiver named by an atom, no answer awaited (the checks below pass)
-        msg = _new(Message)  # Message(agent.name, receiver.functor, performative.functor, content)
+        msg = Message.__new__(Message)  # Message(agent.name, receiver.functor, performative.functor, content)
         msg.sender, msg.receiver, msg.performative = agent.name, receiver.functor, performative.functor
         msg.content, msg._msg_id, msg.in_reply_to = content, None, None
         agent.arch.send(agent, msg)

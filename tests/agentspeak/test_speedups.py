@@ -2,7 +2,9 @@
 never with FAULTMAS_PURE_PYTHON=1. Each case imports in a fresh interpreter, as a user's process would."""
 from __future__ import annotations
 
+import importlib
 import json
+import re
 import os
 import shutil
 import subprocess
@@ -51,28 +53,46 @@ def test_pure_python_switch_loads_every_module_from_source():
     assert all(f.endswith(".py") for f in files.values()), files
 
 
-@pytest.mark.skipif(not BUILT, reason="the compiled interpreter is not built")
-def test_an_edited_module_runs_from_source_with_a_warning(tmp_path):
+def _copy_of_the_package(tmp_path: Path) -> Path:
     copy = tmp_path / "agentspeak"
     shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    return copy
+
+
+@pytest.mark.skipif(not BUILT, reason="the compiled interpreter is not built")
+def test_an_edited_module_runs_the_whole_interpreter_from_source_with_a_warning(tmp_path):
+    copy = _copy_of_the_package(tmp_path)
     edited = copy / "fork.py"
     edited.write_text(edited.read_text() + "\nEDITED_AFTER_THE_BUILD = True\n")
-    files, stderr = _where(["agentspeak.fork", "agentspeak.unify"], tmp_path)
+    files, stderr = _where(["agentspeak.fork", "agentspeak.unify", "agentspeak.agent"], tmp_path)
     assert files["agentspeak.fork"] == str(edited)
-    assert not files["agentspeak.unify"].endswith(".py")          # untouched modules stay compiled
+    # all or none: compiled modules share C types, so untouched ones run from source too
+    assert files["agentspeak.unify"] == str(copy / "unify.py")
+    assert files["agentspeak.agent"] == str(copy / "agent.py")
     assert "agentspeak.fork" in stderr and "make speedups" in stderr
+    assert "agentspeak.unify" not in stderr                        # the warning names what changed
+
+
+@pytest.mark.skipif(not BUILT, reason="the compiled interpreter is not built")
+def test_an_edited_declaration_file_counts_as_an_edited_module(tmp_path):
+    copy = _copy_of_the_package(tmp_path)
+    declarations = copy / "intentions.pxd"
+    assert declarations.exists(), "the C types of Frame, Intention ... are declared there"
+    declarations.write_text(declarations.read_text() + "\n# edited after the build\n")
+    files, stderr = _where(["agentspeak.intentions", "agentspeak.agent"], tmp_path)
+    assert all(f.endswith(".py") for f in files.values()), files
+    assert "agentspeak.intentions" in stderr
 
 
 @pytest.mark.skipif(not BUILT, reason="the compiled interpreter is not built")
 def test_a_compiled_file_the_last_build_did_not_make_is_not_used(tmp_path):
-    copy = tmp_path / "agentspeak"
-    shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    copy = _copy_of_the_package(tmp_path)
     manifest = json.loads((copy / _speedups.MANIFEST).read_text())
     del manifest["agentspeak.unify"]                 # as if left by an older build that listed it
     (copy / _speedups.MANIFEST).write_text(json.dumps(manifest))
     files, stderr = _where(["agentspeak.unify", "agentspeak.fork"], tmp_path)
     assert files["agentspeak.unify"] == str(copy / "unify.py")
-    assert not files["agentspeak.fork"].endswith(".py")
+    assert files["agentspeak.fork"] == str(copy / "fork.py")
     assert "agentspeak.unify" in stderr
 
 
@@ -81,3 +101,31 @@ def test_describe_names_how_the_interpreter_runs():
     text = _speedups.describe()
     compiled = not agentspeak.solver.__file__.endswith(".py")
     assert text.startswith("compiled") if compiled else text == "pure Python"
+
+
+def _declared_fields(pxd: Path) -> dict[str, set[str]]:
+    """``cdef class X:`` blocks of a .pxd -> the names of their ``cdef public object`` fields."""
+    fields: dict[str, set[str]] = {}
+    current = None
+    for line in pxd.read_text().splitlines():
+        head = re.match(r"cdef class (\w+):", line)
+        if head:
+            current = fields.setdefault(head.group(1), set())
+        elif not line.startswith((" ", "\t")) and line.strip():
+            current = None
+        elif current is not None and line.strip().startswith("cdef public object "):
+            current.update(n.strip() for n in line.strip()[len("cdef public object "):].split(","))
+    return fields
+
+
+@pytest.mark.parametrize("pxd", sorted(p.name for p in PACKAGE.glob("*.pxd")))
+def test_the_c_types_declare_exactly_the_slots_of_their_classes(pxd):
+    module = importlib.import_module(f"agentspeak.{pxd[:-4]}")
+    for name, declared in _declared_fields(PACKAGE / pxd).items():
+        slots = getattr(getattr(module, name), "__slots__", None)
+        if slots is None:           # a class with a __dict__ (Agent): its declared fields must be set in __init__
+            source = (PACKAGE / f"{pxd[:-4]}.py").read_text()
+            unset = [f for f in declared if not re.search(rf"self\.{f}\b(\s*:[^=\n]*)?\s*=", source)]
+            assert not unset, (name, unset)
+        else:
+            assert declared == set(slots) - {"__weakref__"}, name

@@ -1,0 +1,3 @@
+# C type of Message for the compiled build (see intentions.pxd): the same fields as its __slots__.
+cdef class Message:
+    cdef public object sender, receiver, performative, content, _msg_id, in_reply_to
