@@ -181,7 +181,8 @@ class LocalRuntime:
         ready = self.ready
         ready_set = self._ready_set
         timed = self._timed
-        timed.update(a for a in self.agents.values() if a.timers)
+        timed.update([a for a in self.agents.values() if a.timers])  # a list: a generator is a closure, which
+        # the compiled (cpdef, see runtime.pxd) loop cannot hold
         monotonic = time.monotonic
         turn = range(CYCLES_PER_TURN)
         while True:
@@ -204,10 +205,10 @@ class LocalRuntime:
                 # ready (and the has_work() check after its turn sees the news) or queues it again
                 agent = ready.popleft()
                 ready_set.discard(agent.name)
-                cycle = agent.cycle
                 CURRENT.agent = agent  # whose beliefs functions such as .count(Q) read
                 for _ in turn:
-                    cycle()
+                    agent.cycle()  # called on the agent (not a bound method kept aside): compiled, a C call
+                    # that still honours a cycle() overridden in a Python subclass
                     if not (agent.events or agent.running or agent.mailbox or agent.feedback) \
                             or self._stop_at is not None:
                         break

@@ -129,3 +129,29 @@ def test_the_c_types_declare_exactly_the_slots_of_their_classes(pxd):
             assert not unset, (name, unset)
         else:
             assert declared == set(slots) - {"__weakref__"}, name
+
+
+def test_a_python_subclass_of_agent_overrides_the_compiled_cycle_and_adds_attributes():
+    """Agent is a C type when compiled (agent.pxd); a subclass's methods must still be the ones called."""
+    from agentspeak.agent import Agent
+    from agentspeak.parser import parse_program
+    from agentspeak.runtime import LocalArch, LocalRuntime
+
+    class Counting(Agent):
+        def act(self):
+            self.acts = getattr(self, "acts", 0) + 1      # an attribute Agent does not declare
+            super().act()
+
+        def cycle(self):
+            self.cycles_seen = getattr(self, "cycles_seen", 0) + 1
+            return super().cycle()
+
+    lines = []
+    runtime = LocalRuntime(printer=lambda name, text: lines.append(text))
+    agent = Counting("c", arch=LocalArch(runtime))
+    agent.load(parse_program('!g(3). +!g(0) <- .print(done). +!g(N) <- !g(N - 1).', "<test>"))
+    runtime.agents["c"] = agent
+    runtime.wake(agent)
+    assert runtime.run(timeout=10) == "idle"
+    assert lines == ["done"]
+    assert agent.acts >= 4 and agent.cycles_seen >= agent.acts
