@@ -31,7 +31,8 @@ def _extensions() -> list[Extension]:
     modules = [Extension(m, [str(SPEEDUPS["source_path"](m, Path("agentspeak")))], optional=True)
                for m in SPEEDUPS["COMPILED_MODULES"]]
     # annotation_typing off: annotations are documentation here, and Cython would otherwise enforce
-    # `-> list` on a function that returns a tuple. The C files stay out of the source tree.
+    # `-> list` on a function that returns a tuple. nonecheck on: a None where a .pxd declares a C type is an
+    # AttributeError, as from source, never a crash. The C files stay out of the source tree.
     return cythonize(modules, language_level=3, quiet=True, nthreads=os.cpu_count() or 1,
                      build_dir="build/cython", compiler_directives={"annotation_typing": False, "nonecheck": True})
 
