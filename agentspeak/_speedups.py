@@ -99,6 +99,8 @@ def modules_to_load_from_source(package_dir: Path = _PACKAGE_DIR) -> tuple[dict[
     except (OSError, ValueError):
         built = {}
     stale = sorted(m for m, src in present.items() if built.get(m) != source_digest(src))
+    # a listed module the build did not compile (its C compile failed: the extensions are optional)
+    stale += sorted(m for m in COMPILED_MODULES if m not in present and source_path(m, package_dir).exists())
     # all or none: compiled modules share C types (agent.so reads intentions.Frame's fields directly,
     # see the .pxd files), so one module from source means every module from source
     return (present if stale else {}), stale
@@ -119,19 +121,16 @@ def install() -> None:
     """Called once by ``agentspeak/__init__.py``, before any compiled module can be imported."""
     sources, stale = modules_to_load_from_source()
     if stale:
-        log.warning("compiled %s not built from the source on disk (edited since, or left by an older "
-                    "build): %s; the interpreter runs from source until you run %s",
+        log.warning("compiled %s not built from the source on disk (edited since, left by an older build, or "
+                    "not compiled by the last one): %s; the interpreter runs from source until you run %s",
                     "module" if len(stale) == 1 else "modules", ", ".join(stale), REBUILD)
     if sources:
         sys.meta_path.insert(0, _FromSource(sources))
 
 
 def describe() -> str:
-    """How the interpreter runs, for benchmark tables and bug reports: compiled, from source, or mixed."""
+    """How the interpreter runs, for benchmark tables and bug reports: compiled or from source (never
+    mixed: see ``modules_to_load_from_source``)."""
     loaded = [m for m in COMPILED_MODULES if m in sys.modules]
     compiled = [m for m in loaded if not str(getattr(sys.modules[m], "__file__", "")).endswith(".py")]
-    if not compiled:
-        return "pure Python"
-    if len(compiled) == len(loaded):
-        return f"compiled (Cython, {len(compiled)} modules)"
-    return f"mixed ({len(compiled)} of {len(loaded)} loaded modules compiled)"
+    return f"compiled (Cython, {len(compiled)} modules)" if compiled else "pure Python"

@@ -457,5 +457,6 @@ def serve(recv_conn: Connection, send_conn: Connection) -> None:
             error = traceback.format_exc(limit=4)
         send_conn.send(("done", key, offset, error, time.process_time() - started))
 
+
 if __name__ == "__main__":
     serve(Connection(int(sys.argv[1]), writable=False), Connection(int(sys.argv[2]), readable=False))

@@ -96,6 +96,16 @@ def test_a_compiled_file_the_last_build_did_not_make_is_not_used(tmp_path):
     assert "agentspeak.unify" in stderr
 
 
+@pytest.mark.skipif(not BUILT, reason="the compiled interpreter is not built")
+def test_a_module_the_build_could_not_compile_runs_the_whole_interpreter_from_source(tmp_path):
+    copy = _copy_of_the_package(tmp_path)
+    compiled = _speedups.compiled_files(copy)
+    compiled["agentspeak.intentions"].unlink()       # as if its C compile had failed (extensions are optional)
+    files, stderr = _where(["agentspeak.intentions", "agentspeak.agent"], tmp_path)
+    assert all(f.endswith(".py") for f in files.values()), files   # agent.so needs intentions' C types
+    assert "agentspeak.intentions" in stderr
+
+
 def test_describe_names_how_the_interpreter_runs():
     import agentspeak.solver  # noqa: F401  (a listed module, loaded)
     text = _speedups.describe()
