@@ -39,4 +39,5 @@ bench: speedups
 
 clean:
 	rm -rf $(VENV) build *.egg-info agentspeak/_speedups.json
-	find agentspeak -name '*.so' -delete
+	find agentspeak robot_bridge -name "*.so" -delete
+	rm -f robot_bridge/sim/_zbuffer.json

@@ -8,6 +8,7 @@ warning) until it is rebuilt: ``make speedups`` or ``python setup.py build_ext -
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import runpy
@@ -18,6 +19,9 @@ from setuptools.command.build_ext import build_ext
 
 HERE = Path(__file__).resolve().parent
 SPEEDUPS = runpy.run_path(str(HERE / "agentspeak" / "_speedups.py"))
+# the simulated camera's z-buffer loop, a .pyx of its own (robot_bridge/sim/zbuffer.py says why)
+ZBUFFER = "robot_bridge.sim._zbuffer"
+ZBUFFER_SOURCE = HERE / "robot_bridge" / "sim" / "_zbuffer.pyx"
 
 
 def _extensions() -> list[Extension]:
@@ -30,6 +34,7 @@ def _extensions() -> list[Extension]:
         return []
     modules = [Extension(m, [str(SPEEDUPS["source_path"](m, Path("agentspeak")))], optional=True)
                for m in SPEEDUPS["COMPILED_MODULES"]]
+    modules.append(Extension(ZBUFFER, [str(ZBUFFER_SOURCE.relative_to(HERE))], optional=True))
     # annotation_typing off: annotations are documentation here, and Cython would otherwise enforce
     # `-> list` on a function that returns a tuple. nonecheck on: a None where a .pxd declares a C type is an
     # AttributeError, as from source, never a crash. The C files stay out of the source tree.
@@ -50,15 +55,20 @@ class BuildWithManifest(build_ext):
         super().run()
         if not self.extensions:
             return
+        zbuffer = Path(self.get_ext_fullpath(ZBUFFER))
+        if zbuffer.exists():
+            digest = hashlib.sha256(ZBUFFER_SOURCE.read_bytes()).hexdigest()
+            zbuffer.with_name("_zbuffer.json").write_text(json.dumps({"digest": digest}) + "\n")
         built = {ext.name: SPEEDUPS["source_digest"](SPEEDUPS["source_path"](ext.name, HERE / "agentspeak"))
-                 for ext in self.extensions if Path(self.get_ext_fullpath(ext.name)).exists()}
+                 for ext in self.extensions if ext.name != ZBUFFER and Path(self.get_ext_fullpath(ext.name)).exists()}
         package_dir = Path(self.get_ext_fullpath("agentspeak.terms")).parent   # the tree, or the wheel's
         (package_dir / SPEEDUPS["MANIFEST"]).write_text(json.dumps(built, indent=1, sort_keys=True) + "\n")
         for module, compiled in SPEEDUPS["compiled_files"](package_dir).items():
             if module not in built:   # left by an older build (a module no longer listed): never imported, so gone
                 compiled.unlink()
                 print(f"faultmas: removed the compiled {module} of an older build")
-        print(f"faultmas: {len(built)} of {len(self.extensions)} interpreter modules compiled")
+        print(f"faultmas: {len(built)} of {len(self.extensions) - 1} interpreter modules compiled; camera "
+              f"z-buffer loop {'compiled' if zbuffer.exists() else 'not compiled (numpy draws)'}")
 
 
 setup(ext_modules=_extensions(), cmdclass={"build_ext": BuildWithManifest})

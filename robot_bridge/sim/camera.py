@@ -39,12 +39,14 @@ import numpy as np
 
 from perception import markers
 from perception.camera import CameraModel
+from robot_bridge.sim import zbuffer
 from robot_bridge.sim.world import CameraFrame
 
 Pose = tuple[float, float, float]      # x, y, yaw (radians) in the world frame
 RGB = tuple[int, int, int]
 
 _NEAR_M = 0.05          # objects closer than this to the camera plane are not drawn
+_ZBUFFER = zbuffer.load()   # the compiled cylinder loop, or None: numpy draws (same pixels)
 _FAR = np.float32(np.inf)
 
 
@@ -1073,6 +1075,10 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, ima
     small = rows * lens <= _BATCH_PX
     side_only = ((a < 0) & (b > 0)).tolist()       # camera between bottom and top: no cap in sight
     limits = {key: r.height_limits(*key) for key in {(p.bottom, p.top) for p in drawn}}
+    if _ZBUFFER is not None:
+        _draw_cylinders_compiled(r, drawn, starts, u0, lens, v0a, v1a, t1, t1_32, t2_32, face, zmin, limits,
+                                 disparity, image, labels, full, shadows, gain, bands)
+        return
     fb32 = r.fb32
     starts_, ends_, u0_, u1_, v0s, v1s = (x.tolist() for x in (starts, ends, u0, u1, v0a, v1a))
     for i in np.flatnonzero(~small & (rows > 0)).tolist():        # big ones one by one, near to far
@@ -1112,6 +1118,36 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, ima
     if batch.size:
         _draw_small_cylinders(r, drawn, batch, starts, u0, v0a, rows[batch], lens[batch], t1, t1_32, t2_32, face,
                               zmin, limits, disparity, image, labels, full, shadows, gain, bands)
+
+
+def _draw_cylinders_compiled(r: _Renderer, drawn: list[_Prism], starts: np.ndarray, u0: np.ndarray,
+                             cols: np.ndarray, v0: np.ndarray, v1: np.ndarray, t1: np.ndarray, t1_32: np.ndarray,
+                             t2_32: np.ndarray, face: np.ndarray, zmin: np.ndarray, limits: dict,
+                             disparity: np.ndarray, image: np.ndarray, labels: np.ndarray | None,
+                             full: np.ndarray | None, shadows: list, gain: float, bands: dict) -> None:
+    """The loop of ``_draw_circles`` (and ``_draw_small_cylinders``) for every cylinder in ``drawn``, near to
+    far, by the compiled ``_zbuffer.draw_cylinders``: the same pixels, pixel counts and shadows."""
+    h = disparity.shape[0]
+    keys = list(limits)
+    lo_rows = np.concatenate([limits[k][0].ravel() for k in keys])
+    hi_rows = np.concatenate([limits[k][1].ravel() for k in keys])
+    limit_row0 = np.array([keys.index((p.bottom, p.top)) * h for p in drawn], np.intp)
+    hc = r.rig.height_m
+    cap_rgb = np.array([_cap_colour(p.rgb, _cap_factor(p, hc, gain)) for p in drawn], np.uint8)
+    label = np.array([p.label for p in drawn], np.int16)
+    hits, written = np.zeros(len(drawn), np.int64), np.zeros(len(drawn), np.int64)
+    _ZBUFFER.draw_cylinders(disparity, image, labels, t1_32, t2_32, face, lo_rows, hi_rows, starts, u0, cols,
+                            v0, v1, limit_row0, cap_rgb, label, float(r.fb32), hits, written)
+    if full is not None:
+        for i in np.flatnonzero(v1 > v0).tolist():
+            p = drawn[i]
+            if p.label:
+                full[p.label] += int(hits[i])
+                c0 = int(u0[i])
+                bands[p.label] = (int(v0[i]), int(v1[i]), c0, c0 + int(cols[i]))
+    for i in np.flatnonzero(written).tolist():
+        s, c0 = int(starts[i]), int(u0[i])
+        shadows.append((c0, int(v0[i]), int(v1[i]), float(t1[s]), float(zmin[i])))
 
 
 _BATCH_PX = 1500
