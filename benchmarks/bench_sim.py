@@ -77,7 +77,7 @@ def measure(robots: int, cameras: bool, sim_seconds: float, mode: str = "paralle
 def run(quick: bool) -> str:
     import cv2
 
-    from robot_bridge.sim.camera import render_threads
+    from robot_bridge.sim import camera
 
     sizes = (2, 10) if quick else (2, 10, 50)
     duration = {2: 4.0, 10: 2.0, 50: 1.0} if quick else {2: 20.0, 10: 5.0, 50: 2.0}
@@ -106,7 +106,8 @@ def run(quick: bool) -> str:
     lines.append(f"(simulated seconds per wall second, dt = 0.02 s, 10 Hz cameras; 'fr' = 640x480 RGB-D frames "
                  f"rendered / due in the run, 'fr/s' = frames rendered per wall second, 'ms CPU/fr' = CPU time of this "
                  f"process (physics included) and of its render workers per frame rendered, less sensitive than wall time to other loads on the "
-                 f"machine; reads_pixels: {_renderers()}; one OpenCV thread each; "
+                 f"machine; reads_pixels: {_renderers()}; one OpenCV thread each; cylinders drawn by "
+                 f"{'the compiled loop' if camera._ZBUFFER is not None else 'numpy (compiled loop not built)'}; "
                  f"'met' judges the every-frame column; machine load average (1 min) at the end: {load:.1f} "
                  f"on {os.cpu_count()} cores)")
     return "\n".join(lines)
