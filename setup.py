@@ -1,5 +1,5 @@
-"""Builds the optional compiled interpreter (agentspeak/_speedups.py says what and why); pyproject.toml
-holds everything else.
+"""Builds the optional compiled interpreter (agentspeak/_speedups.py says what and why) and the simulated
+camera's compiled z-buffer loop (robot_bridge/sim/zbuffer.py); pyproject.toml holds everything else.
 
 The listed modules are compiled unchanged by Cython. Every extension is optional: with no C compiler, or
 with FAULTMAS_PURE_PYTHON=1 at build time, the package installs and runs from source. Each built module's
@@ -8,7 +8,6 @@ warning) until it is rebuilt: ``make speedups`` or ``python setup.py build_ext -
 """
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import runpy
@@ -19,9 +18,8 @@ from setuptools.command.build_ext import build_ext
 
 HERE = Path(__file__).resolve().parent
 SPEEDUPS = runpy.run_path(str(HERE / "agentspeak" / "_speedups.py"))
-# the simulated camera's z-buffer loop, a .pyx of its own (robot_bridge/sim/zbuffer.py says why)
-ZBUFFER = "robot_bridge.sim._zbuffer"
-ZBUFFER_SOURCE = HERE / "robot_bridge" / "sim" / "_zbuffer.pyx"
+# the simulated camera's z-buffer loop, a .pyx of its own, and its guard (which says why)
+ZBUFFER = runpy.run_path(str(HERE / "robot_bridge" / "sim" / "zbuffer.py"))
 
 
 def _extensions() -> list[Extension]:
@@ -34,7 +32,7 @@ def _extensions() -> list[Extension]:
         return []
     modules = [Extension(m, [str(SPEEDUPS["source_path"](m, Path("agentspeak")))], optional=True)
                for m in SPEEDUPS["COMPILED_MODULES"]]
-    modules.append(Extension(ZBUFFER, [str(ZBUFFER_SOURCE.relative_to(HERE))], optional=True))
+    modules.append(Extension(ZBUFFER["MODULE"], [str(ZBUFFER["SOURCE"].relative_to(HERE))], optional=True))
     # annotation_typing off: annotations are documentation here, and Cython would otherwise enforce
     # `-> list` on a function that returns a tuple. nonecheck on: a None where a .pxd declares a C type is an
     # AttributeError, as from source, never a crash. The C files stay out of the source tree.
@@ -55,12 +53,12 @@ class BuildWithManifest(build_ext):
         super().run()
         if not self.extensions:
             return
-        zbuffer = Path(self.get_ext_fullpath(ZBUFFER))
+        zbuffer = Path(self.get_ext_fullpath(ZBUFFER["MODULE"]))
         if zbuffer.exists():
-            digest = hashlib.sha256(ZBUFFER_SOURCE.read_bytes()).hexdigest()
-            zbuffer.with_name("_zbuffer.json").write_text(json.dumps({"digest": digest}) + "\n")
+            manifest = zbuffer.with_name(ZBUFFER["MANIFEST"].name)
+            manifest.write_text(json.dumps({"digest": ZBUFFER["source_digest"]()}) + "\n")
         built = {ext.name: SPEEDUPS["source_digest"](SPEEDUPS["source_path"](ext.name, HERE / "agentspeak"))
-                 for ext in self.extensions if ext.name != ZBUFFER and Path(self.get_ext_fullpath(ext.name)).exists()}
+                 for ext in self.extensions if ext.name != ZBUFFER["MODULE"] and Path(self.get_ext_fullpath(ext.name)).exists()}
         package_dir = Path(self.get_ext_fullpath("agentspeak.terms")).parent   # the tree, or the wheel's
         (package_dir / SPEEDUPS["MANIFEST"]).write_text(json.dumps(built, indent=1, sort_keys=True) + "\n")
         for module, compiled in SPEEDUPS["compiled_files"](package_dir).items():

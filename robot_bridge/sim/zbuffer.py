@@ -7,6 +7,8 @@ a compiled file that does not match the source on disk (edited since) is not use
 exactly like the interpreter's guard (``agentspeak/_speedups.py``). Without it (no C compiler,
 ``FAULTMAS_PURE_PYTHON=1`` at run time, or a stale build) the camera draws with numpy: same pixels,
 bit for bit, only slower.
+
+This module must import only the standard library: ``setup.py`` reads it before anything is built.
 """
 from __future__ import annotations
 
@@ -21,7 +23,7 @@ from types import ModuleType
 SOURCE = Path(__file__).with_name("_zbuffer.pyx")
 MANIFEST = Path(__file__).with_name("_zbuffer.json")
 MODULE = "robot_bridge.sim._zbuffer"
-PURE_ENV = "FAULTMAS_PURE_PYTHON"
+PURE_ENV = "FAULTMAS_PURE_PYTHON"   # the interpreter's switch (agentspeak/_speedups.py) serves here too
 
 log = logging.getLogger("faultmas.sim")
 
