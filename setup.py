@@ -20,6 +20,7 @@ HERE = Path(__file__).resolve().parent
 SPEEDUPS = runpy.run_path(str(HERE / "agentspeak" / "_speedups.py"))
 # the simulated camera's z-buffer loop, a .pyx of its own, and its guard (which says why)
 ZBUFFER = runpy.run_path(str(HERE / "robot_bridge" / "sim" / "zbuffer.py"))
+BUILD_DIR = HERE / "build" / "cython"   # Cython's C files, out of the source tree
 
 
 def _extensions() -> list[Extension]:
@@ -30,6 +31,7 @@ def _extensions() -> list[Extension]:
     except ImportError:
         print("faultmas: Cython is not installed; the interpreter runs from source")
         return []
+    _forget_stale_translations()
     modules = [Extension(m, [str(SPEEDUPS["source_path"](m, Path("agentspeak")))], optional=True)
                for m in SPEEDUPS["COMPILED_MODULES"]]
     modules.append(Extension(ZBUFFER["MODULE"], [str(ZBUFFER["SOURCE"].relative_to(HERE))], optional=True))
@@ -37,7 +39,21 @@ def _extensions() -> list[Extension]:
     # `-> list` on a function that returns a tuple. nonecheck on: a None where a .pxd declares a C type is an
     # AttributeError, as from source, never a crash. The C files stay out of the source tree.
     return cythonize(modules, language_level=3, quiet=True, nthreads=os.cpu_count() or 1,
-                     build_dir="build/cython", compiler_directives={"annotation_typing": False, "nonecheck": True})
+                     build_dir=str(BUILD_DIR.relative_to(HERE)), compiler_directives={"annotation_typing": False, "nonecheck": True})
+
+
+def _forget_stale_translations() -> None:
+    """Cython translates a module again when a file it depends on is newer than its C file, so a removed
+    ``.pxd`` goes unnoticed: the old C file (with the old C types) would be compiled while the manifest
+    records the new digest. The C file of every module whose digest differs from the last build's goes."""
+    try:
+        built = json.loads((HERE / "agentspeak" / SPEEDUPS["MANIFEST"]).read_text())
+    except (OSError, ValueError):
+        built = {}
+    for module in SPEEDUPS["COMPILED_MODULES"]:
+        source = SPEEDUPS["source_path"](module, HERE / "agentspeak")
+        if built.get(module) != SPEEDUPS["source_digest"](source):
+            (BUILD_DIR / source.relative_to(HERE)).with_suffix(".c").unlink(missing_ok=True)
 
 
 class BuildWithManifest(build_ext):
