@@ -21,8 +21,9 @@ $(STAMP): pyproject.toml Makefile setup.py
 
 install: $(STAMP)
 
-# The compiled interpreter (agentspeak/_speedups.py), rebuilt in place for sources edited since the last
-# build; a no-op when nothing changed. Without it an edited module runs from source, with a warning.
+# The compiled interpreter (agentspeak/_speedups.py) and the camera's z-buffer loop (robot_bridge/sim/zbuffer.py),
+# rebuilt in place for sources edited since the last build; a no-op when nothing changed. Without it an edited
+# module runs from source (the camera draws with numpy), with a warning.
 speedups: $(STAMP)
 	$(PY) setup.py -q build_ext --inplace
 

@@ -1071,14 +1071,14 @@ def _draw_circles(r: _Renderer, prisms: list[_Prism], disparity: np.ndarray, ima
     ks = np.stack((a / zmin, a / zmax, b / zmin, b / zmax))
     v0a = np.maximum(0, np.floor(ks.min(axis=0) * cam.fy + cam.cy)).astype(np.intp)
     v1a = np.minimum(cam.height, np.ceil(ks.max(axis=0) * cam.fy + cam.cy) + 1).astype(np.intp)
-    rows = np.maximum(v1a - v0a, 0)
-    small = rows * lens <= _BATCH_PX
-    side_only = ((a < 0) & (b > 0)).tolist()       # camera between bottom and top: no cap in sight
     limits = {key: r.height_limits(*key) for key in {(p.bottom, p.top) for p in drawn}}
     if _ZBUFFER is not None:
         _draw_cylinders_compiled(r, drawn, starts, u0, lens, v0a, v1a, t1, t1_32, t2_32, face, zmin, limits,
                                  disparity, image, labels, full, shadows, gain, bands)
         return
+    rows = np.maximum(v1a - v0a, 0)
+    small = rows * lens <= _BATCH_PX
+    side_only = ((a < 0) & (b > 0)).tolist()       # camera between bottom and top: no cap in sight
     fb32 = r.fb32
     starts_, ends_, u0_, u1_, v0s, v1s = (x.tolist() for x in (starts, ends, u0, u1, v0a, v1a))
     for i in np.flatnonzero(~small & (rows > 0)).tolist():        # big ones one by one, near to far
@@ -1127,11 +1127,7 @@ def _draw_cylinders_compiled(r: _Renderer, drawn: list[_Prism], starts: np.ndarr
                              full: np.ndarray | None, shadows: list, gain: float, bands: dict) -> None:
     """The loop of ``_draw_circles`` (and ``_draw_small_cylinders``) for every cylinder in ``drawn``, near to
     far, by the compiled ``_zbuffer.draw_cylinders``: the same pixels, pixel counts and shadows."""
-    h = disparity.shape[0]
-    keys = list(limits)
-    lo_rows = np.concatenate([limits[k][0].ravel() for k in keys])
-    hi_rows = np.concatenate([limits[k][1].ravel() for k in keys])
-    limit_row0 = np.array([keys.index((p.bottom, p.top)) * h for p in drawn], np.intp)
+    lo_rows, hi_rows, limit_row0 = _stacked_limits(limits, drawn, disparity.shape[0])
     hc = r.rig.height_m
     cap_rgb = np.array([_cap_colour(p.rgb, _cap_factor(p, hc, gain)) for p in drawn], np.uint8)
     label = np.array([p.label for p in drawn], np.int16)
@@ -1139,15 +1135,32 @@ def _draw_cylinders_compiled(r: _Renderer, drawn: list[_Prism], starts: np.ndarr
     _ZBUFFER.draw_cylinders(disparity, image, labels, t1_32, t2_32, face, lo_rows, hi_rows, starts, u0, cols,
                             v0, v1, limit_row0, cap_rgb, label, float(r.fb32), hits, written)
     if full is not None:
-        for i in np.flatnonzero(v1 > v0).tolist():
-            p = drawn[i]
-            if p.label:
-                full[p.label] += int(hits[i])
-                c0 = int(u0[i])
-                bands[p.label] = (int(v0[i]), int(v1[i]), c0, c0 + int(cols[i]))
+        some = np.flatnonzero(v1 > v0)
+        _count_marker_pixels([drawn[i] for i in some.tolist()], hits[some], v0[some], v1[some], u0[some], cols[some],
+                             full, bands)
     for i in np.flatnonzero(written).tolist():
         s, c0 = int(starts[i]), int(u0[i])
         shadows.append((c0, int(v0[i]), int(v1[i]), float(t1[s]), float(zmin[i])))
+
+
+def _stacked_limits(limits: dict, members: list[_Prism], h: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The per-row depth limits (``height_limits``) of every height range in ``limits``, one range after the
+    other, and for each of ``members`` where its range's rows start in them."""
+    keys = list(limits)
+    lo = np.concatenate([limits[k][0].ravel() for k in keys])
+    hi = np.concatenate([limits[k][1].ravel() for k in keys])
+    return lo, hi, np.array([keys.index((p.bottom, p.top)) * h for p in members], np.intp)
+
+
+def _count_marker_pixels(members: list[_Prism], hits: np.ndarray, v0: np.ndarray, v1: np.ndarray, u0: np.ndarray,
+                         cols: np.ndarray, full: np.ndarray, bands: dict) -> None:
+    """For each labelled cylinder of ``members`` (drawn in rows ``v0:v1``, columns ``u0:u0 + cols``): its
+    pixels hit, visible or not, into ``full``, and its band, where ``_render`` counts the visible ones."""
+    for j, p in enumerate(members):
+        if p.label:
+            full[p.label] += int(hits[j])
+            c0 = int(u0[j])
+            bands[p.label] = (int(v0[j]), int(v1[j]), c0, c0 + int(cols[j]))
 
 
 _BATCH_PX = 1500
@@ -1169,10 +1182,7 @@ def _draw_small_cylinders(r: _Renderer, drawn: list[_Prism], batch: np.ndarray, 
     hc = r.rig.height_m
     # one segment per (cylinder, row), ``cols`` pixels long
     members = [drawn[i] for i in batch.tolist()]
-    keys = list(limits)
-    lo_tab = np.concatenate([limits[k][0].ravel() for k in keys])
-    hi_tab = np.concatenate([limits[k][1].ravel() for k in keys])
-    key_of = np.array([keys.index((p.bottom, p.top)) for p in members]) * h
+    lo_tab, hi_tab, key_of = _stacked_limits(limits, members, h)
     seg_cyl = np.repeat(np.arange(batch.size), rows)                  # position in ``batch``
     first = np.cumsum(rows) - rows
     seg_row = np.arange(seg_cyl.size) - np.repeat(first - v0[batch], rows)
@@ -1191,12 +1201,8 @@ def _draw_small_cylinders(r: _Renderer, drawn: list[_Prism], batch: np.ndarray, 
     flat = disparity.reshape(-1)
     valid = hit & (dhit > flat[pix])
     if full is not None:
-        hits = np.bincount(cyl[hit], minlength=batch.size).tolist()
-        for j, (i, p) in enumerate(zip(batch.tolist(), members)):
-            if p.label:
-                full[p.label] += hits[j]
-                c0 = int(u0[i])
-                bands[p.label] = (int(v0[i]), int(v0[i] + rows[j]), c0, c0 + int(cols[j]))
+        _count_marker_pixels(members, np.bincount(cyl[hit], minlength=batch.size), v0[batch], v0[batch] + rows,
+                             u0[batch], cols, full, bands)
     sel = np.flatnonzero(valid)
     if not sel.size:
         return
