@@ -12,7 +12,7 @@ the rate is N over the time from the goal to the answer. Content ``m(I,"xx...")`
 its belief base). Also reported: CPU time per tell of the sending agents' thread and of the whole
 sink process (Linux ``/proc``), which says where the time goes when the machine is shared.
 
-Last, where a 64 B tell's CPU goes, by stage, the same two programs in this one process without a
+Last, where a tell's CPU goes (the smallest size), by stage, the same two programs in this one process without a
 network (``_stages``): the sending agent (loop, ``.send``, envelope encoding, batching); on the sink's
 side the envelope's decoding and checks, the content's reading, and the reasoning (belief, event,
 plan); beside them, the CPU a tell may cost on each side for the 30% target at the raw rate measured.
@@ -57,7 +57,7 @@ def run(quick: bool = False) -> str:
     trips = 300 if quick else 2_000
     raw_rates, raw_rtt = _raw(count, trips)
     agent_rates, agent_rtt, cpu = _agents(count, trips)
-    stages = _stages(count)
+    stages = _stages(count, SIZES[0])
     lines = [f"{'measure (2 processes, loopback)':36} {'raw Zenoh':>14} {'agents':>14} {'ratio':>7}"]
     for size in SIZES:
         raw_rate, agent_rate = raw_rates[size], agent_rates[size]
@@ -70,10 +70,11 @@ def run(quick: bool = False) -> str:
                      f"{raw_us / agent_us:>6.0%}")
     lines.append("CPU per tell, sending agents' thread / whole sink process: "
                  + ", ".join(f"{size} B {sender * 1e6:.0f} / {sink * 1e6:.0f} µs" for size, (sender, sink) in cpu.items()))
-    lines.append("where a 64 B tell's CPU goes, one process, no network: sending agent {sender:.1f} µs; sink "
-                 "{sink:.1f} µs = envelope decoding and checks {decode:.1f} + content reading {content:.1f} + "
-                 "reasoning {reasoning:.1f}".format(**stages)
-                 + f"; the 30% target allows {1e6 / (0.3 * raw_rates[SIZES[0]]):.1f} µs per tell on each side")
+    allowed = 1e6 / (0.3 * raw_rates[SIZES[0]])
+    lines.append(f"where a {SIZES[0]} B tell's CPU goes, one process, no network: sending agent "
+                 f"{stages['sender']:.1f} µs; sink {stages['sink']:.1f} µs = envelope decoding and checks "
+                 f"{stages['decode']:.1f} + content reading {stages['content']:.1f} + reasoning "
+                 f"{stages['reasoning']:.1f}; the 30% target allows {allowed:.1f} µs per tell on each side")
     lines.append("raw round trip: 200 B ping/pong; ratio: agents / raw for rates, raw / agents for latencies")
     lines.append("targets: tell >= 30% of raw; askOne median < 1,000 µs")
     return "\n".join(lines)
@@ -203,7 +204,7 @@ class _CapturingTransport(LocalTransport):
 
 
 def _stages(count: int, size: int = 64, repeats: int = 3) -> dict[str, float]:
-    """µs of CPU per tell by stage (best of ``repeats``), the agents of ``_agents`` in this process:
+    """µs of CPU per tell by stage (best of ``repeats``), the programs of ``_agents``, both in this process:
     the sending agent's run (its payloads captured); the sink transport's ``receive_bytes`` of those
     payloads with a callback that only keeps the envelopes (decoding and checks); the content reader on
     their contents; the sink agent's whole handling (``receive_bytes`` and a run after each payload),
