@@ -32,24 +32,25 @@ def _extensions() -> list[Extension]:
         print("faultmas: Cython is not installed; the interpreter runs from source")
         return []
     _forget_stale_translations()
-    modules = [Extension(m, [str(SPEEDUPS["source_path"](m, Path("agentspeak")))], optional=True)
+    modules = [Extension(m, [str(SPEEDUPS["source_path"](m, Path("agentspeak")))])
                for m in SPEEDUPS["COMPILED_MODULES"]]
-    modules.append(Extension(ZBUFFER["MODULE"], [str(ZBUFFER["SOURCE"].relative_to(HERE))], optional=True))
+    modules.append(Extension(ZBUFFER["MODULE"], [str(ZBUFFER["SOURCE"].relative_to(HERE))]))
     # annotation_typing off: annotations are documentation here, and Cython would otherwise enforce
     # `-> list` on a function that returns a tuple. nonecheck on: a None where a .pxd declares a C type is an
     # AttributeError, as from source, never a crash. The C files stay out of the source tree.
-    return cythonize(modules, language_level=3, quiet=True, nthreads=os.cpu_count() or 1,
-                     build_dir=str(BUILD_DIR.relative_to(HERE)), compiler_directives={"annotation_typing": False, "nonecheck": True})
+    extensions = cythonize(modules, language_level=3, quiet=True, nthreads=os.cpu_count() or 1,
+                           build_dir=str(BUILD_DIR.relative_to(HERE)),
+                           compiler_directives={"annotation_typing": False, "nonecheck": True})
+    for extension in extensions:   # set here: cythonize's Extensions do not keep an ``optional`` given to it
+        extension.optional = True  # a module the C compiler fails on (or no compiler at all) runs from source
+    return extensions
 
 
 def _forget_stale_translations() -> None:
     """Cython translates a module again when a file it depends on is newer than its C file, so a removed
     ``.pxd`` goes unnoticed: the old C file (with the old C types) would be compiled while the manifest
     records the new digest. The C file of every module whose digest differs from the last build's goes."""
-    try:
-        built = json.loads((HERE / "agentspeak" / SPEEDUPS["MANIFEST"]).read_text())
-    except (OSError, ValueError):
-        built = {}
+    built = SPEEDUPS["built_digests"](HERE / "agentspeak")
     for module in SPEEDUPS["COMPILED_MODULES"]:
         source = SPEEDUPS["source_path"](module, HERE / "agentspeak")
         if built.get(module) != SPEEDUPS["source_digest"](source):
@@ -57,8 +58,9 @@ def _forget_stale_translations() -> None:
 
 
 class BuildWithManifest(build_ext):
-    """build_ext on every core, then record the digest of each source that was compiled (and remove compiled
-    files of modules an older build compiled and this one does not)."""
+    """build_ext on every core, then record the digest of each source compiled by this build and remove every
+    compiled file it did not make: a module no longer listed, or one whose compile failed (the extensions are
+    optional; setuptools then still copies an older build's file from build/lib into the tree)."""
 
     def finalize_options(self) -> None:
         super().finalize_options()
@@ -66,23 +68,30 @@ class BuildWithManifest(build_ext):
             self.parallel = os.cpu_count() or 1
 
     def run(self) -> None:
+        self.compiled_now: set[str] = set()
         super().run()
         if not self.extensions:
             return
         zbuffer = Path(self.get_ext_fullpath(ZBUFFER["MODULE"]))
-        if zbuffer.exists():
+        if ZBUFFER["MODULE"] in self.compiled_now:
             manifest = zbuffer.with_name(ZBUFFER["MANIFEST"].name)
             manifest.write_text(json.dumps({"digest": ZBUFFER["source_digest"]()}) + "\n")
+        else:
+            zbuffer.unlink(missing_ok=True)
         built = {ext.name: SPEEDUPS["source_digest"](SPEEDUPS["source_path"](ext.name, HERE / "agentspeak"))
-                 for ext in self.extensions if ext.name != ZBUFFER["MODULE"] and Path(self.get_ext_fullpath(ext.name)).exists()}
+                 for ext in self.extensions if ext.name != ZBUFFER["MODULE"] and ext.name in self.compiled_now}
         package_dir = Path(self.get_ext_fullpath("agentspeak.terms")).parent   # the tree, or the wheel's
         (package_dir / SPEEDUPS["MANIFEST"]).write_text(json.dumps(built, indent=1, sort_keys=True) + "\n")
         for module, compiled in SPEEDUPS["compiled_files"](package_dir).items():
-            if module not in built:   # left by an older build (a module no longer listed): never imported, so gone
+            if module not in built:   # not made by this build from the source on disk: never imported, so gone
                 compiled.unlink()
                 print(f"faultmas: removed the compiled {module} of an older build")
         print(f"faultmas: {len(built)} of {len(self.extensions) - 1} interpreter modules compiled; camera "
               f"z-buffer loop {'compiled' if zbuffer.exists() else 'not compiled (numpy draws)'}")
+
+    def build_extension(self, ext: Extension) -> None:
+        super().build_extension(ext)
+        self.compiled_now.add(ext.name)   # reached when it compiled, or was up to date with its (current) C file
 
 
 setup(ext_modules=_extensions(), cmdclass={"build_ext": BuildWithManifest})

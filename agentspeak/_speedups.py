@@ -86,6 +86,15 @@ def compiled_files(package_dir: Path) -> dict[str, Path]:
     return found
 
 
+def built_digests(package_dir: Path = _PACKAGE_DIR) -> dict[str, str]:
+    """The source digests the last build recorded, by module (empty: no build, or an unreadable record)."""
+    try:
+        built = json.loads((package_dir / MANIFEST).read_text())
+    except (OSError, ValueError):
+        return {}
+    return built if isinstance(built, dict) else {}
+
+
 def modules_to_load_from_source(package_dir: Path = _PACKAGE_DIR) -> tuple[dict[str, Path], list[str]]:
     """Which compiled modules must not be used: ``{module: its .py}`` (none, or all of them), and the stale
     ones (edited since the build, or left by an older one) that made it all."""
@@ -94,10 +103,7 @@ def modules_to_load_from_source(package_dir: Path = _PACKAGE_DIR) -> tuple[dict[
         return {}, []
     if pure_requested():
         return present, []
-    try:
-        built = json.loads((package_dir / MANIFEST).read_text())
-    except (OSError, ValueError):
-        built = {}
+    built = built_digests(package_dir)
     stale = sorted(m for m, src in present.items() if built.get(m) != source_digest(src))
     # a listed module the build did not compile (its C compile failed: the extensions are optional)
     stale += sorted(m for m in COMPILED_MODULES if m not in present and source_path(m, package_dir).exists())
