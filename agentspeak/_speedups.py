@@ -29,7 +29,10 @@ import importlib.util
 import json
 import logging
 import os
+import shlex
+import shutil
 import sys
+import sysconfig
 from pathlib import Path
 
 # The interpreter's modules, compiled when a C compiler and Cython are at hand. Left out: the parser (a
@@ -71,6 +74,13 @@ def source_digest(path: Path) -> str:
 
 def pure_requested() -> bool:
     return os.environ.get(PURE_ENV, "") not in ("", "0")
+
+
+def c_compiler_available() -> bool:
+    """Whether ``setup.py`` can compile here: the C compiler that setuptools would call (``$CC``, else the one
+    Python was built with) is on the path. Without one the build leaves everything to the sources."""
+    command = shlex.split(os.environ.get("CC") or sysconfig.get_config_var("CC") or "")
+    return bool(command) and shutil.which(command[0]) is not None
 
 
 def compiled_files(package_dir: Path) -> dict[str, Path]:

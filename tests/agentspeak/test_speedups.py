@@ -9,7 +9,6 @@ import os
 import shutil
 import subprocess
 import sys
-import sysconfig
 from pathlib import Path
 
 import pytest
@@ -39,7 +38,7 @@ def test_every_listed_module_exists_and_is_not_this_guard():
     assert "agentspeak._speedups" not in _speedups.COMPILED_MODULES
 
 
-@pytest.mark.skipif(not sysconfig.get_config_var("CC"), reason="no C compiler: the interpreter runs from source")
+@pytest.mark.skipif(not _speedups.c_compiler_available(), reason="no C compiler: the interpreter runs from source")
 def test_a_machine_with_a_compiler_runs_the_compiled_interpreter():
     assert BUILT, f"no {_speedups.MANIFEST}: run {_speedups.REBUILD}"
     files, stderr = _where(list(_speedups.COMPILED_MODULES), PACKAGE.parent)

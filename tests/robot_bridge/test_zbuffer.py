@@ -5,11 +5,11 @@ from __future__ import annotations
 import json
 import logging
 import shutil
-import sysconfig
 
 import numpy as np
 import pytest
 
+from agentspeak import _speedups
 from robot_bridge.sim import camera, zbuffer
 from robot_bridge.sim.render_scenes import random_scene
 from tests.robot_bridge.test_camera_render import CAMERA, RIG, _crowd
@@ -18,7 +18,7 @@ BUILT = zbuffer.MANIFEST.exists()
 needs_build = pytest.mark.skipif(not BUILT, reason="the z-buffer loop is not built (no C compiler)")
 
 
-@pytest.mark.skipif(not sysconfig.get_config_var("CC"), reason="no C compiler: numpy draws")
+@pytest.mark.skipif(not _speedups.c_compiler_available(), reason="no C compiler: numpy draws")
 def test_a_machine_with_a_compiler_draws_with_the_compiled_loop():
     assert BUILT, "no _zbuffer.json: run make speedups"
     assert camera._ZBUFFER is not None and zbuffer.load() is not None
