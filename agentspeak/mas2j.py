@@ -40,6 +40,9 @@ class MasProject:
     infrastructure: str | None = None
     source_paths: list[str] = field(default_factory=list)
     file: str = ""
+    source_dirs: list[str] = field(default_factory=list)
+    """Where includes and ``.create_agent`` look (absolute): each ``aslSourcePath`` entry against the
+    working directory (as Jason), then against the project file's folder, then that folder."""
 
     def agent_names(self) -> list[str]:
         return [n for a in self.agents for n in a.instance_names()]
@@ -80,10 +83,24 @@ def parse_mas2j(text: str, file: str = "<mas2j>") -> MasProject:
             project.infrastructure = _class_text(section.children[0])
         elif section.data == "source_path":
             project.source_paths = [str(s)[1:-1] for s in section.children]
-    paths = [os.path.join(base, p) for p in project.source_paths] + [base]
+    project.source_dirs = source_dirs(project.source_paths, base)
     for decl in project.agents:
-        decl.source = _find_source(decl.source, paths)
+        decl.source = _find_source(decl.source, project.source_dirs)
     return project
+
+
+def source_dirs(entries: list[str], base: str) -> list[str]:
+    """The folders of an ``aslSourcePath``, absolute: Jason reads a relative entry against the working
+    directory; an entry found only beside the project file is taken from there (what users of earlier
+    faultmas versions wrote), and the project's folder comes last."""
+    out: list[str] = []
+    for entry in entries:
+        for candidate in ([entry] if os.path.isabs(entry) else [entry, os.path.join(base, entry)]):
+            if os.path.isdir(candidate):
+                out.append(os.path.abspath(candidate))
+                break
+    out.append(os.path.abspath(base))
+    return list(dict.fromkeys(out))
 
 
 def _agent(tree: Tree) -> AgentDecl:
@@ -101,12 +118,28 @@ def _agent(tree: Tree) -> AgentDecl:
         for opt in options_part.children:
             key, value = opt.children
             v = str(value)
-            options[str(key)] = v[1:-1] if isinstance(value, Token) and value.type == "STRING" else v
+            options[str(key)] = _unescape(v[1:-1]) if isinstance(value, Token) and value.type == "STRING" else v
     instances = 0
     for child in tree.children[3:]:
         if isinstance(child, Tree) and child.data == "instances":
             instances = int(float(str(child.children[0])))
     return AgentDecl(name, source, options, instances)
+
+
+def _unescape(text: str) -> str:
+    """A string option's escapes as Java reads them: ``\\"`` is ``"``, ``\\\\`` is ``\\``."""
+    out = []
+    i = 0
+    while i < len(text):
+        ch = text[i]
+        if ch == "\\" and i + 1 < len(text):
+            nxt = text[i + 1]
+            out.append({"n": "\n", "t": "\t"}.get(nxt, nxt))
+            i += 2
+            continue
+        out.append(ch)
+        i += 1
+    return "".join(out)
 
 
 def _class_text(tree: Tree) -> str:

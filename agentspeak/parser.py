@@ -24,7 +24,8 @@ from agentspeak.program import (
 )
 from agentspeak.stdlib.functions import FUNCTIONS, check_function_name, rule_function
 from agentspeak.terms import (
-    And, Arith, ArithmeticError_, Func, Literal, Not, Or, Rel, Term, Var, is_ground, make_list, resolve,
+    And, AnnotatedVar, Arith, ArithmeticError_, Func, Literal, Not, Or, Rel, Term, Var, is_ground, make_list,
+    resolve,
 )
 
 _GRAMMAR = Path(__file__).with_name("agentspeak.lark")
@@ -131,13 +132,18 @@ class _ToProgram(Transformer):
         return ("end", None, self.line)
 
     def plan(self, c):
-        label, trigger, context, _arrow, body = c
+        label, trigger, context, _gc, goal_condition, _arrow, body = c
         plan = Plan(trigger, context, body or (), label, self.source_file, trigger_line(trigger, self))
+        plan.goal_condition = goal_condition
         self._end_clause()
         return ("plan", plan, plan.line)
 
     def label_named(self, c):
         return _not_function(c[0])
+
+    def label_var(self, c):
+        """``@L`` in a plan term (``{@L +!g <- b}``): unifies with a plan's label."""
+        return self.var_literal(c)
 
     def label_anon(self, c):
         annots = c[0]
@@ -256,8 +262,10 @@ class _ToProgram(Transformer):
 
     # -- plan terms -------------------------------------------------------------------------------
     def plan_term_full(self, c):
-        label, trigger, context, _arrow, body = c
-        return PlanTerm(plan=Plan(trigger, context, body or (), label, self.source_file, self.line))
+        label, trigger, context, _gc, goal_condition, _arrow, body = c
+        plan = Plan(trigger, context, body or (), label, self.source_file, self.line)
+        plan.goal_condition = goal_condition
+        return PlanTerm(plan=plan)
 
     def plan_term_ctx(self, c):
         label, trigger, context = c
@@ -414,32 +422,12 @@ def _binary(op: str, left: Term, right: Term) -> Term:
     return Rel(op, left, right)
 
 
-class AnnotatedVar(Var):
-    """A variable with annotations, ``X[a]``: unifies with a literal whose annotations include ``a``."""
-
-    __slots__ = ("var", "annots", "annot_tail")
-
-    def __init__(self, var: Var, annots: tuple, tail: Var | None) -> None:
-        super().__init__(var.name)
-        self.var, self.annots, self.annot_tail = var, annots, tail
-
-    def resolve(self, b):
-        value = resolve(self.var, b)
-        if isinstance(value, Literal):
-            extra = tuple(resolve(a, b) for a in self.annots)
-            merged = value
-            for a in extra:
-                merged = merged.add_annot(a)
-            return merged
-        return value
-
-
 class _BadInput(Exception):
     """A clause that parses but is not valid AgentSpeak (raised inside the transformer)."""
 
 
 def parse_program(text: str, source_file: str = "<string>", base_dir: str | None = None,
-                  _seen: set | None = None) -> Program:
+                  _seen: set | None = None, source_path: tuple = ()) -> Program:
     """Parse a whole agent program; raise ``AslSyntaxError`` at the first error.
 
     A file without includes is parsed once per process: later calls with the same text get a copy
@@ -462,7 +450,7 @@ def parse_program(text: str, source_file: str = "<string>", base_dir: str | None
                 pass
         _PARSED[key] = program
         return _copy_program(program)
-    return _expand_includes(program, source_file, base_dir, _seen)
+    return _expand_includes(program, source_file, base_dir, _seen, source_path)
 
 
 _PARSED: dict[tuple, Program] = {}
@@ -605,7 +593,11 @@ def program_directive(program: Program, lit: Literal, line: int) -> None:
         program.warnings.append(f"{program.source_file}:{line}: unknown directive '{lit}' ignored")
 
 
-def _expand_includes(program: Program, source_file: str, base_dir: str | None, seen: set | None) -> Program:
+def _expand_includes(program: Program, source_file: str, base_dir: str | None, seen: set | None,
+                     source_path: tuple = ()) -> Program:
+    """Inline ``{ include("f.asl") }``: beside the including file, then along the source path
+    (``agentspeak.sources``); a file already included is not included again."""
+    from agentspeak.sources import find_source
     includes = program.__dict__.pop("includes", [])
     if not includes:
         return program
@@ -613,14 +605,17 @@ def _expand_includes(program: Program, source_file: str, base_dir: str | None, s
     seen.add(os.path.abspath(source_file))
     base = base_dir or (os.path.dirname(source_file) if source_file and not source_file.startswith("<") else ".")
     for rel, line in includes:
-        path = rel if os.path.isabs(rel) else os.path.join(base, rel)
+        path = find_source(rel, base, source_path)
+        if path is None:
+            where = ", ".join([base or "."] + list(source_path))
+            raise AslSyntaxError(f"cannot include '{rel}': no such file (looked in {where})", source_file, line)
         if os.path.abspath(path) in seen:
             continue
         try:
             text = Path(path).read_text()
         except OSError as exc:
             raise AslSyntaxError(f"cannot include '{rel}': {exc.strerror or exc}", source_file, line) from exc
-        sub = parse_program(text, path, os.path.dirname(path), seen)
+        sub = parse_program(text, path, os.path.dirname(path), seen, source_path)
         program.beliefs.extend(sub.beliefs)
         program.rules.extend(sub.rules)
         program.goals.extend(sub.goals)

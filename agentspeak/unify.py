@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import Iterator
 
 from agentspeak.terms import (
-    NIL, And, Arith, Bindings, Cons, Func, Literal, Not, Or, Rel, Term, Var, list_items, make_list,
+    NIL, And, AnnotatedVar, Arith, Bindings, Cons, Func, Literal, Not, Or, Rel, Term, Var, list_items, make_list,
 )
 
 
@@ -89,6 +89,10 @@ def _unify_general(a: Term, c: Term, b: Bindings, trail: list) -> bool:
             b[y] = x
             trail.append(y)
             continue
+        if tx is AnnotatedVar or ty is AnnotatedVar:
+            if not _unify_annotated_var(x, y, b, trail):
+                return False
+            continue
         if tx is Literal:
             if ty is not Literal:
                 return False
@@ -157,6 +161,34 @@ def _unify_general(a: Term, c: Term, b: Bindings, trail: list) -> bool:
         if x != y:
             return False
     return True
+
+
+def _unify_annotated_var(x: Term, y: Term, b: Bindings, trail: list) -> bool:
+    """``X[a|T] = p(1)[a,b]`` as Jason: the left side's annotations are a subset of the right side's;
+    the variable is bound to the literal without annotations (``X = p(1)``, ``T = [b]``)."""
+    av = x if type(x) is AnnotatedVar else y
+    other = y if av is x else x
+    if type(other) is AnnotatedVar:  # two annotated variables: unify the variables and the annotations
+        return (unify(av.var, other.var, b, trail)
+                and unify(make_list(list(x.annots), x.annot_tail), make_list(list(y.annots), y.annot_tail), b, trail))
+    if type(other) is not Literal:
+        return False
+    pattern = av.as_pattern(other.functor, other.args, other.neg)
+    if av is x:
+        if not unify_annots(pattern, other, b, trail):
+            return False
+    elif not unify_annots(other, pattern, b, trail):
+        return False
+    value = av.var
+    while type(value) is Var:
+        bound = b.get(value)
+        if bound is None:
+            break
+        value = bound
+    if type(value) is Var:
+        bind(value, other.without_annots(), b, trail)
+        return True
+    return unify(value, other, b, trail) if av is x else unify(other, value, b, trail)
 
 
 def unify_annots(x: Literal, y: Literal, b: Bindings, trail: list) -> bool:

@@ -63,15 +63,18 @@ def remove_plan(ctx, labels, source=None):
 
 @internal_action(".relevant_plans", args=(2, 3))
 def relevant_plans(ctx, trigger_term, result, labels=None):
-    """The plans relevant for a trigger ``{+!g}``, as plan terms (and their labels)."""
+    """The plans relevant for a trigger ``{+!g}``, as plan terms with fresh variables (Jason returns
+    copies: a copy bound into the running plan must not share its variables), and their labels."""
     trigger = trigger_term.as_trigger() if isinstance(trigger_term, PlanTerm) else None
     if trigger is None:
         raise wrong_arguments(".relevant_plans needs a trigger term such as {+!g}")
     from agentspeak.unify import unifies
-    found = [p for p in ctx.agent.plans.relevant(trigger) if unifies(p.trigger.literal, trigger.literal, {})]
-    ok = ctx.unify(result, make_list([PlanTerm(plan=p) for p in found]))
+    found = [p for p in ctx.agent.plans.relevant(trigger)
+             if p.trigger.op == trigger.op and p.trigger.kind == trigger.kind
+             and unifies(p.trigger.literal, trigger.literal, {})]
+    ok = ctx.unify(result, make_list([PlanTerm(plan=p).rename({}) for p in found]))
     if ok and labels is not None:
-        ok = ctx.unify(labels, make_list([p.label for p in found]))
+        ok = ctx.unify(labels, make_list([p.ensure_label() for p in found]))
     return ok
 
 
