@@ -436,21 +436,24 @@ def parse_program(text: str, source_file: str = "<string>", base_dir: str | None
     # the functions known decide whether `ns.f(...)` is a call: a function registered later must not
     # meet a parse made before it
     key = (text, source_file, len(FUNCTIONS.functions))
-    cached = _PARSED.get(key)
+    cached = _PARSED.get(key) or _PARSED.get(key + (tuple(source_path),))
     if cached is not None:
         return _copy_program(cached)
     program, errors = _parse(text, source_file, stop_at_first=True)
     if errors:
         raise errors[0]
-    if not program.__dict__.get("includes"):
-        if len(_PARSED) >= _PARSED_MAX:
-            try:
-                del _PARSED[next(iter(_PARSED))]  # the oldest
-            except (KeyError, RuntimeError, StopIteration):  # another thread got there first
-                pass
-        _PARSED[key] = program
-        return _copy_program(program)
-    return _expand_includes(program, source_file, base_dir, _seen, source_path)
+    if program.__dict__.get("includes"):
+        # the included files are read now; the expanded program is kept like any other (100 agents that
+        # include the same library parse it once)
+        program = _expand_includes(program, source_file, base_dir, _seen, source_path)
+        key = key + (tuple(source_path),)
+    if len(_PARSED) >= _PARSED_MAX:
+        try:
+            del _PARSED[next(iter(_PARSED))]  # the oldest
+        except (KeyError, RuntimeError, StopIteration):  # another thread got there first
+            pass
+    _PARSED[key] = program
+    return _copy_program(program)
 
 
 _PARSED: dict[tuple, Program] = {}
@@ -464,9 +467,15 @@ def _copy_program(program: Program) -> Program:
         beliefs=list(program.beliefs),
         rules=[dataclasses.replace(r) for r in program.rules],
         goals=list(program.goals),
-        plans=[Plan(p.trigger, p.context, p.body, p.label, p.source_file, p.line) for p in program.plans],
+        plans=[_copy_plan(p) for p in program.plans],
         source_file=program.source_file,
         warnings=list(program.warnings))
+
+
+def _copy_plan(p: Plan) -> Plan:
+    q = Plan(p.trigger, p.context, p.body, p.label, p.source_file, p.line)
+    q.goal_condition = p.goal_condition
+    return q
 
 
 def parse_program_all_errors(text: str, source_file: str = "<string>") -> tuple[Program, list[AslSyntaxError]]:

@@ -86,6 +86,7 @@ class LocalRuntime:
         self.remote: Callable[[Message], bool] | None = None   # a transport for agents elsewhere
         self.undeliverable = 0
         self.source_dirs: list[str] = []     # where .create_agent and includes look (a project's aslSourcePath)
+        self._yield_turn = False             # end the running agent's turn now (it created an agent)
 
     # -- set-up
     def add_agent(self, name: str, source: str | None = None, source_file: str = "<string>",
@@ -135,6 +136,9 @@ class LocalRuntime:
         if self.trusted_senders is not None:
             self.trusted_senders.add(unique)
         self.add_agent(unique, source_file=path, program=program)
+        # the creator's turn ends after this cycle, so the new agent starts before the creator goes on
+        # (Jason starts it on a thread of its own at once; a creator that loops must not starve it)
+        self._yield_turn = True
         return unique
 
     def kill_agent(self, name: str) -> bool:
@@ -260,7 +264,8 @@ class LocalRuntime:
                     agent.cycle()  # called on the agent (not a bound method kept aside): compiled, a C call
                     # that still honours a cycle() overridden in a Python subclass
                     if not (agent.events or agent.running or agent.mailbox or agent.feedback) \
-                            or self._stop_at is not None:
+                            or self._stop_at is not None or self._yield_turn:
+                        self._yield_turn = False
                         break
                 if agent.timers:
                     timed.add(agent)  # timers are only set by the agent itself, during its turn

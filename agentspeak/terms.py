@@ -77,6 +77,9 @@ class AnnotatedVar(Var):
                                 resolve(self.annot_tail, b) if self.annot_tail is not None else None)
         return value
 
+    def without_annots(self) -> Var:
+        return self.var
+
     def rename(self, mapping: dict) -> "AnnotatedVar":
         return AnnotatedVar(rename(self.var, mapping), tuple(rename(a, mapping) for a in self.annots),
                             rename(self.annot_tail, mapping) if self.annot_tail is not None else None)

@@ -199,3 +199,51 @@ def intention(ctx, ident, state, stack=None, which=None):
                 stack is None or ctx.unify(stack, make_list([im_term(im) for im in reversed(i.stack)]))):
             yield
         undo(ctx.b, ctx.trail, mark)
+
+
+@internal_action(".current_intention", args=1)
+def current_intention(ctx, result):
+    """``.current_intention(intention(Id, Stack))`` (Jason keeps it beside ``.intention``)."""
+    i = ctx.intention if ctx.intention is not None else getattr(ctx.agent, "current_intention", None)
+    if i is None:
+        return False
+    return ctx.unify(result, Literal("intention", (i.id, make_list([im_term(im) for im in reversed(i.stack)]))))
+
+
+@internal_action(".eval", args=2)
+def eval_(ctx, result, formula):
+    """``.eval(X, Formula)``: X is ``true`` if the logical formula holds, else ``false``."""
+    from agentspeak.solver import solve_first
+    b = dict(ctx.b)
+    return ctx.unify(result, Literal("true" if solve_first(ctx.agent, formula, b) else "false"))
+
+
+@internal_action(".relevant_rules", args=2)
+def relevant_rules(ctx, pattern, result):
+    """``.relevant_rules(p(_,_), L)``: the rules whose head unifies with the pattern, as rule terms."""
+    from agentspeak.unify import unifies
+    if not isinstance(pattern, Literal):
+        raise wrong_arguments(".relevant_rules needs a literal")
+    rules = [r for r in ctx.agent.bb.rules_for(pattern) if unifies(pattern, r.head, {})]
+    return ctx.unify(result, make_list([PlanTerm(rule=r).rename({}) for r in rules]))
+
+
+@internal_action(".list_rules", args=(0, 1))
+def list_rules(ctx, pattern=None):
+    """Print the rules (those whose head unifies with the pattern)."""
+    from agentspeak.unify import unifies
+    for r in ctx.agent.bb.rules():
+        if pattern is None or (isinstance(pattern, Literal) and unifies(pattern, r.head, {})):
+            ctx.agent.arch.print_line(ctx.agent, str(r) + ".")
+
+
+@internal_action(".drop_event", args=1)
+def drop_event(ctx, goal):
+    """``.drop_event(G)``: remove the pending ``+!G`` events (the goals not yet intended)."""
+    from agentspeak.unify import unifies
+    agent = ctx.agent
+    keep = [ev for ev in agent.events
+            if not (ev.trigger.op == ADD and ev.trigger.kind == ACHIEVE and ev.intention is None
+                    and unifies(goal, ev.trigger.literal, {}))]
+    agent.events.clear()
+    agent.events.extend(keep)
