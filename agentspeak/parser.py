@@ -373,6 +373,14 @@ class _ToProgram(Transformer):
         # a quoted atom keeps its quotes, as in Jason: 'a b' prints quoted and 'abc' is not abc
         return text
 
+    def ns_functor(self, c):
+        """``ns::name`` is the functor ``ns::name`` (name spaces are kept in the name; ``::name`` and
+        ``default::name`` are the default name space, i.e. plain ``name``)."""
+        tok = c[-1]
+        self.line = tok.line
+        ns = c[0].value if len(c) == 3 else "default"
+        return tok.value if ns == "default" else f"{ns}::{tok.value}"
+
     def annotations(self, c):
         items, tail = self._items(c)
         return (tuple(items), tail)
@@ -597,7 +605,9 @@ def _collect(items, program: Program, offset_line: int) -> None:
 
 def program_directive(program: Program, lit: Literal, line: int) -> None:
     if isinstance(lit, Literal) and lit.functor == "include" and lit.args and isinstance(lit.args[0], str):
-        program.__dict__.setdefault("includes", []).append((lit.args[0], line))
+        # where the directive stands: the included clauses go there, in source order (as Jason)
+        at = (len(program.beliefs), len(program.rules), len(program.plans), len(program.goals))
+        program.__dict__.setdefault("includes", []).append((lit.args[0], line, at))
     else:
         program.warnings.append(f"{program.source_file}:{line}: unknown directive '{lit}' ignored")
 
@@ -613,7 +623,8 @@ def _expand_includes(program: Program, source_file: str, base_dir: str | None, s
     seen = set() if seen is None else seen
     seen.add(os.path.abspath(source_file))
     base = base_dir or (os.path.dirname(source_file) if source_file and not source_file.startswith("<") else ".")
-    for rel, line in includes:
+    inserted = [0, 0, 0, 0]  # clauses inserted so far into each list (the later positions move)
+    for rel, line, at in includes:
         path = find_source(rel, base, source_path)
         if path is None:
             where = ", ".join([base or "."] + list(source_path))
@@ -625,10 +636,11 @@ def _expand_includes(program: Program, source_file: str, base_dir: str | None, s
         except OSError as exc:
             raise AslSyntaxError(f"cannot include '{rel}': {exc.strerror or exc}", source_file, line) from exc
         sub = parse_program(text, path, os.path.dirname(path), seen, source_path)
-        program.beliefs.extend(sub.beliefs)
-        program.rules.extend(sub.rules)
-        program.goals.extend(sub.goals)
-        program.plans.extend(sub.plans)
+        for k, (target, items) in enumerate(((program.beliefs, sub.beliefs), (program.rules, sub.rules),
+                                             (program.plans, sub.plans), (program.goals, sub.goals))):
+            pos = at[k] + inserted[k]
+            target[pos:pos] = items
+            inserted[k] += len(items)
         program.warnings.extend(sub.warnings)
     return program
 

@@ -911,6 +911,9 @@ def _plain_atom(name: str) -> bool:
     c = name[0]
     if not (c.islower() or c == "."):
         return False
+    if "::" in name:  # a name space: `family::brother`
+        ns, _, rest = name.partition("::")
+        return _plain_atom(ns) and _plain_atom(rest)
     return all(ch.isalnum() or ch in "_." for ch in name)
 
 

@@ -247,3 +247,47 @@ def drop_event(ctx, goal):
                     and unifies(goal, ev.trigger.literal, {}))]
     agent.events.clear()
     agent.events.extend(keep)
+
+
+# ---------------------------------------------------------------------- name spaces
+def _namespaces(agent) -> list[str]:
+    seen = {"default": None}
+    for lit in agent.bb.literals():
+        if "::" in lit.functor:
+            seen.setdefault(lit.functor.split("::", 1)[0], None)
+    for ns in getattr(agent, "namespace_props", {}):
+        seen.setdefault(ns, None)
+    return list(seen)
+
+
+@internal_action(".namespace", args=1)
+def namespace(ctx, ns):
+    """``.namespace(NS)``: NS is a name space of the agent's beliefs (backtracks when NS is free)."""
+    for name in _namespaces(ctx.agent):
+        mark = len(ctx.trail)
+        if ctx.unify(ns, Literal(name)):
+            yield
+        undo(ctx.b, ctx.trail, mark)
+
+
+@internal_action(".namespace_set_prop", args=3)
+def namespace_set_prop(ctx, ns, key, value):
+    """``.namespace_set_prop(NS, Key, Value)``: a property of a name space."""
+    props = ctx.agent.__dict__.setdefault("namespace_props", {})
+    props.setdefault(_text(ns), {})[key] = value
+
+
+@internal_action(".namespace_get_prop", args=(2, 4))
+def namespace_get_prop(ctx, ns, key, value=None, default=None):
+    """``.namespace_get_prop(NS, Key[, Value[, Default]])``: backtracks over the keys when Key is free."""
+    props = getattr(ctx.agent, "namespace_props", {}).get(_text(ns), {})
+    if not isinstance(key, Var) and key not in props:
+        if default is not None and value is not None:
+            if ctx.unify(value, default):
+                yield
+        return
+    for k, v in list(props.items()):
+        mark = len(ctx.trail)
+        if ctx.unify(key, k) and (value is None or ctx.unify(value, v)):
+            yield
+        undo(ctx.b, ctx.trail, mark)
