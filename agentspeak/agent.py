@@ -338,7 +338,7 @@ class Agent:
                 try:
                     if not context(self, b, trail, _true_k):
                         continue
-                except (SolveError, ArithmeticError_) as exc:
+                except (SolveError, ArithmeticError_, RecursionError, TypeError, ValueError, AttributeError) as exc:
                     trail = []
                     b = None
                     log.warning("[%s] error in the context of the plan at %s:%s: %s", self.name,
@@ -482,6 +482,11 @@ class Agent:
                 self._fail(intention, exc.error, exc.message, instr)
             except ArithmeticError_ as exc:
                 self._fail(intention, "wrong_arguments", str(exc), instr)
+            except RecursionError:
+                self._fail(intention, "wrong_arguments", "a term too deep or cyclic to work with", instr)
+            except Exception as exc:  # a broken internal action fails its intention, never the agent
+                log.exception("[%s] %s raised", self.name, instr)
+                self._fail(intention, "ia_failed", f"{instr}: {type(exc).__name__}: {exc}", instr)
             else:
                 if intention.suspended is None and not intention.dropped:
                     # clr_int's two usual cases inlined: the top plan still has formulas to run

@@ -133,6 +133,7 @@ class _ToProgram(Transformer):
 
     def plan(self, c):
         label, trigger, context, _gc, goal_condition, _arrow, body = c
+        context = _no_true(context)
         plan = Plan(trigger, context, body or (), label, self.source_file, trigger_line(trigger, self))
         plan.goal_condition = goal_condition
         self._end_clause()
@@ -263,12 +264,14 @@ class _ToProgram(Transformer):
     # -- plan terms -------------------------------------------------------------------------------
     def plan_term_full(self, c):
         label, trigger, context, _gc, goal_condition, _arrow, body = c
+        context = _no_true(context)
         plan = Plan(trigger, context, body or (), label, self.source_file, self.line)
         plan.goal_condition = goal_condition
         return PlanTerm(plan=plan)
 
     def plan_term_ctx(self, c):
         label, trigger, context = c
+        context = _no_true(context)
         return PlanTerm(plan=Plan(trigger, context, (), label, self.source_file, self.line))
 
     def plan_term_body(self, c):
@@ -404,6 +407,14 @@ class _ToProgram(Transformer):
             if x is not None:
                 items.append(x)
         return items, tail
+
+
+def _no_true(context: Term) -> Term:
+    """A context that is just ``true`` is no context (Jason prints ``+!g : true <- b`` as ``+!g <- b``)."""
+    if type(context) is Literal and context.functor == "true" and not context.args and not context.neg \
+            and context.annots is None:
+        return None
+    return context
 
 
 def _not_function(t: Term) -> Term:

@@ -203,6 +203,9 @@ def unify_annots(x: Literal, y: Literal, b: Bindings, trail: list) -> bool:
         if tail_value is not None:
             yann.extend(_safe_items(tail_value, b))
     used = [False] * len(yann)
+    # an unbound tail on the right takes the left annotations it lacks (Jason: p[a,b] = X[H|T], T = [b])
+    open_tail = y.annot_tail if y.annot_tail is not None and b.get(y.annot_tail) is None else None
+    extra: list = []
     for ax in x.annots or ():
         for i, ay in enumerate(yann):
             if used[i]:
@@ -213,7 +216,14 @@ def unify_annots(x: Literal, y: Literal, b: Bindings, trail: list) -> bool:
                 break
             undo(b, trail, mark)
         else:
+            if open_tail is None:
+                return False
+            extra.append(ax)
+    if open_tail is not None and x.annot_tail is None:
+        if not unify(open_tail, make_list(extra), b, trail):
             return False
+    elif extra:
+        return False
     if x.annot_tail is not None:
         rest = make_list([a for a, u in zip(yann, used) if not u])
         return unify(x.annot_tail, rest, b, trail)

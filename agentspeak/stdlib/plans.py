@@ -80,9 +80,25 @@ def relevant_plans(ctx, trigger_term, result, labels=None):
 
 @internal_action(".plan_label", args=2)
 def plan_label(ctx, plan, label):
-    name = label.functor if isinstance(label, Literal) else None
-    p = ctx.agent.plans.by_label(name) if name else None
-    return p is not None and ctx.unify(plan, PlanTerm(plan=p))
+    """``.plan_label(P, L)``: the plan (as a term) of label L, or the label of plan term P, or, both
+    free, backtracks over every plan (Jason's three modes)."""
+    from agentspeak.terms import Var
+    from agentspeak.unify import undo
+    if isinstance(plan, Var) and not isinstance(label, Var):
+        name = label.functor if isinstance(label, Literal) else to_str(label)
+        p = ctx.agent.plans.by_label(name)
+        return p is not None and ctx.unify(plan, PlanTerm(plan=p).rename({}))
+    if isinstance(label, Var) and isinstance(plan, PlanTerm) and plan.plan is not None:
+        return plan.plan.label is not None and ctx.unify(label, plan.plan.label)
+    return _all_plan_labels(ctx, plan, label, undo)
+
+
+def _all_plan_labels(ctx, plan, label, undo):
+    for p in list(ctx.agent.plans):
+        mark = len(ctx.trail)
+        if ctx.unify(label, p.ensure_label()) and ctx.unify(plan, PlanTerm(plan=p).rename({})):
+            yield
+        undo(ctx.b, ctx.trail, mark)
 
 
 @internal_action(".list_plans", args=(0, 1))
