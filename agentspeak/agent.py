@@ -173,6 +173,8 @@ class Agent:
     def post_external(self, trigger: Trigger, force: bool = False) -> None:
         """An event that starts a new intention (percepts, messages, ``!!g``, initial goals)."""
         self._notify_waiters(trigger)
+        if self.plans.has_meta and trigger.kind == ACHIEVE and trigger.op == ADD:
+            self.goal_state(trigger, "pending")
         if force or self.plans.relevant(trigger):
             self.events.append(Event(trigger))
         elif trigger.kind != BEL:
@@ -659,6 +661,9 @@ class Agent:
             trig = im.plan.trigger
             if trig.op == ADD and trig.kind != BEL:
                 lit = resolve(trig.literal, im.b)
+                if self.plans.has_meta:
+                    self.goal_state(Trigger(ADD, trig.kind, resolve(im.event_literal, im.b)), "failed",
+                                    Literal(error))
                 if type(lit) is Literal and self.plans.relevant(Trigger(DEL, trig.kind, lit)):
                     self.events.append(Event(Trigger(DEL, trig.kind, _add_annots(lit, annots)), intention, im))
                     self._notify_waiters(self.events[-1].trigger)
@@ -699,6 +704,14 @@ class Agent:
             if done[0] or intention.dropped:
                 return
             done[0] = True
+            held = intention.waiting
+            if held is not susp and held is not None and getattr(held, "inner", None) is susp:
+                # suspended by .suspend while waiting (Jason keeps it pending): .resume completes this
+                held.complete = lambda: complete(ok, error, message, extra)
+                return
+            complete(ok, error, message, extra)
+
+        def complete(ok: bool, error: str, message: str, extra: tuple) -> None:
             intention.waiting = None
             if ok:
                 self._advance(im)
@@ -712,6 +725,13 @@ class Agent:
                 self._fail(intention, error, message or f"{instr} failed", instr, extra=extra)
 
         susp.finish = finish  # type: ignore[attr-defined]
+        if self.plans.has_meta:
+            for gim in reversed(intention.stack):
+                t = gim.plan.trigger
+                if t.op == ADD and t.kind == ACHIEVE:
+                    self.goal_state(Trigger(ADD, ACHIEVE, resolve(gim.event_literal, gim.b)), "waiting",
+                                    susp.term if susp.term is not None else Literal(susp.reason))
+                    break
         ctx = IAContext(self, intention, im, im.b, [])
         if susp.future is not None:
             self.pending_futures += 1
@@ -906,6 +926,8 @@ def _exec_achieve(ag: Agent, intention: Intention, im: IntendedMeans, frame: Fra
     trigger = Trigger(ADD, ACHIEVE, ag._fresh_goal(instr.term, im.b))
     if ag.event_waiters:  # post_internal, inlined: this is the step of every subgoal
         ag._notify_waiters(trigger)
+    if ag.plans.has_meta:
+        ag.goal_state(trigger, "pending")
     ag.events.append(Event(trigger, intention))
     intention.suspended = "event"
 

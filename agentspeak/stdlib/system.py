@@ -77,8 +77,10 @@ def wait(ctx, what, timeout=None, elapsed=None):
     """``.wait(Ms)``, ``.wait({Event}[, Ms[, Elapsed]])`` or ``.wait(Condition[, Ms[, Elapsed]])``.
     With two arguments a timeout fails the goal; with three it does not (Elapsed says how long)."""
     started = time.monotonic()
+    from agentspeak.terms import Literal
     if isinstance(what, (int, float)):
-        return Suspend(timeout=max(0.0, what / 1000.0), on_timeout=lambda c: True, reason="wait")
+        return Suspend(timeout=max(0.0, what / 1000.0), on_timeout=lambda c: True, reason="wait",
+                       term=Literal("wait", (what,), (Literal("time", (what,)),)))
     seconds = None
     if timeout is not None:
         if not isinstance(timeout, (int, float)):
