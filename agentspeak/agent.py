@@ -36,6 +36,8 @@ from agentspeak.unify import undo, unify
 log = logging.getLogger("faultmas.agentspeak")
 
 _TRUE = Literal("true")
+_JAG_SLEEPING = Literal("jag_sleeping")
+_JAG_AWAKING = Literal("jag_awaking")
 _new = object.__new__
 """Hot paths build objects with ``_new(Class)`` (or ``Class.__new__(Class)`` for the classes that the
 compiled build makes C types, see agent.pxd: ``object.__new__`` refuses those) and slot stores: a class
@@ -101,6 +103,7 @@ class Agent:
         self.failures_unhandled = 0
         self.dropped: dict[str, int] = {}
         self.current_intention: Intention | None = None  # the intention of the event or formula at hand
+        self.sleeping_evt = False  # +jag_sleeping was posted and nothing woke the agent since
         if program is not None:
             self.load(program)
 
@@ -206,6 +209,8 @@ class Agent:
         self.cycles += 1
         if self.arch is not self._arch_seen:
             self._see_arch(self.arch)
+        if self.plans.has_jag and self.sleeping_evt:
+            self._awaking()
         if self._perceive is not None or self.feedback or self.timers:
             did = self.sense()
         elif self.mailbox:  # sense() with only a message to read, inlined
@@ -220,7 +225,31 @@ class Agent:
             did = True
         if self.condition_waiters:
             self._check_conditions()
+        if self.plans.has_jag and not self.sleeping_evt and not (
+                self.events or self.running or self.mailbox or self.feedback):
+            # nothing left to do: Jason's +jag_sleeping (once, until something wakes the agent)
+            self.sleeping_evt = True
+            self.post_external(Trigger(ADD, BEL, _JAG_SLEEPING))
         return did
+
+    def _awaking(self) -> None:
+        """Something other than the +jag_sleeping plan woke the agent: +jag_awaking (Jason's rule)."""
+        awake = bool(self.mailbox)
+        if not awake:
+            for ev in self.events:
+                lit = ev.trigger.literal
+                if not (type(lit) is Literal and lit.functor == "jag_sleeping"):
+                    awake = True
+                    break
+        if not awake:
+            for i in self.running:
+                if not any(type(im.event_literal) is Literal and im.event_literal.functor == "jag_sleeping"
+                           for im in i.stack):
+                    awake = True
+                    break
+        if awake:
+            self.sleeping_evt = False
+            self.post_external(Trigger(ADD, BEL, _JAG_AWAKING))
 
     def has_work(self) -> bool:
         return bool(self.events or self.running or self.mailbox or self.feedback)

@@ -116,11 +116,15 @@ class PlanLibrary:
         self._var_plans: dict[tuple, list[Plan]] = {}
         self.kqml_override = False  # a plan is relevant to +!kqml_received/4 (valid while _index is)
         self.has_meta = False       # a ^!g plan exists: the agent posts goal-state meta events
+        self.has_jag = False        # a +jag_sleeping/+jag_awaking plan exists: the agent posts them
 
     def add(self, plan: Plan, at_end: bool = True) -> None:
         plan.ensure_label()
         if plan.trigger.op == "^":
             self.has_meta = True
+        lit = plan.trigger.literal
+        if getattr(lit, "functor", None) in ("jag_sleeping", "jag_awaking"):
+            self.has_jag = True
         if at_end:
             self.plans.append(plan)
         else:

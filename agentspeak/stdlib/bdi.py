@@ -127,13 +127,21 @@ def drop_all_desires(ctx):
     for i in agent.intentions():
         if i is not ctx.intention:
             agent.drop_intention(i)
-    agent.drop_intention(ctx.intention)
-    return Suspend(reason="dropped")
+    # the calling intention goes on (Jason: drop_all_desires removes the other desires)
+    return True
 
 
 @internal_action(".drop_all_intentions", args=0)
 def drop_all_intentions(ctx):
-    return drop_all_desires(ctx)
+    """Drop every intention (the calling one too) but keep the pending events (Jason 3)."""
+    agent = ctx.agent
+    for i in agent.intentions():
+        if i is not ctx.intention:
+            agent.drop_intention(i)
+    if ctx.intention is not None:
+        agent.drop_intention(ctx.intention)
+        return Suspend(reason="dropped")
+    return True
 
 
 @internal_action(".drop_all_events", args=0)
