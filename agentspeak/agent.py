@@ -405,6 +405,14 @@ class Agent:
                                 self.name, trigger, intention)
                     self.drop_intention(intention)
             return
+        if intention is None and type(trigger.literal) is Literal and trigger.literal.functor == "kqml_received" \
+                and len(trigger.literal.args) == 4:
+            held = getattr(self, "kqml_messages", None)
+            msg = held.pop(trigger.literal.args[3], None) if held else None
+            if msg is not None:  # no user plan applies: the default semantics (Jason's kqmlPlans.asl)
+                from agentspeak.communication import receive_by_default
+                receive_by_default(self, msg)
+                return
         if intention is None:
             # an external goal (.at, !!g, a message) without a plan: Jason posts -!g when a plan is
             # relevant for it (generateGoalDeletionFromEvent), else it warns

@@ -159,6 +159,12 @@ def receive_message(agent: Any, msg: Message) -> None:
     if plans.kqml_override:
         sender = _atom_of(name) if name != agent.name else SELF
         goal = Literal("kqml_received", (sender, Literal(perf), msg.content, msg.msg_id), (SOURCE_SELF,))
+        # kept until a plan handles it: when none of the user's +!kqml_received plans applies, the
+        # message gets the default semantics (Jason's kqmlPlans.asl comes after the user's plans)
+        held = agent.__dict__.setdefault("kqml_messages", {})
+        if len(held) >= 1000:
+            del held[next(iter(held))]
+        held[msg.msg_id] = msg
         agent.post_external(Trigger(ADD, ACHIEVE, goal), force=True)
         return
     content = msg.content
@@ -195,6 +201,20 @@ def receive_message(agent: Any, msg: Message) -> None:
         handler(agent, msg, sender)
     except (SolveError, TypeError, ValueError) as exc:
         log.warning("[%s] message from %s dropped: %s", agent.name, msg.sender, exc)
+
+
+def receive_by_default(agent: Any, msg: Message) -> None:
+    """The default semantics of a message, also when the agent has ``+!kqml_received`` plans (for a
+    message none of them applies to)."""
+    plans = agent.plans
+    if plans._index is None:
+        plans._build()
+    saved = plans.kqml_override
+    plans.kqml_override = False
+    try:
+        receive_message(agent, msg)
+    finally:
+        plans.kqml_override = saved
 
 
 def _tell(agent, msg: Message, sender: Term) -> None:

@@ -111,9 +111,9 @@ def _types(x) -> list[str]:
     tx = type(x)
     if (tx is int or tx is float) and tx is not bool:
         out.append("number")
-    if tx is Literal and not x.args and not x.neg and x.functor not in ("",):
+    if tx is Literal and not x.args and not x.neg and x.annots is None and x.annot_tail is None:
         out.append("atom")
-    if tx is Literal or tx is Cons or x is NIL:
+    if tx is Literal:
         out.append("literal")
     if tx is str:
         out.append("string")
