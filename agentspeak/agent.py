@@ -225,12 +225,70 @@ class Agent:
             did = True
         if self.condition_waiters:
             self._check_conditions()
+        if self.plans.has_goal_conditions:
+            self._check_goal_conditions()
         if self.plans.has_jag and not self.sleeping_evt and not (
                 self.events or self.running or self.mailbox or self.feedback):
             # nothing left to do: Jason's +jag_sleeping (once, until something wakes the agent)
             self.sleeping_evt = True
             self.post_external(Trigger(ADD, BEL, _JAG_SLEEPING))
         return did
+
+    # ------------------------------------------------------------------ deadlines and goal conditions
+    def _check_deadline(self, goal: Literal, intention: Intention) -> None:
+        """``!g[hard_deadline(MS)]``: if g is still pursued MS milliseconds later, it fails with
+        ``error(deadline_reached)`` (Jason's TransitionSystem.checkHardDeadline)."""
+        for a in goal.annots:
+            if type(a) is Literal and a.functor == "hard_deadline" and len(a.args) == 1 \
+                    and type(a.args[0]) in (int, float):
+                size = len(intention.stack)
+                self.add_timer(a.args[0] / 1000.0, lambda: self._deadline(goal, intention, size))
+                return
+
+    def _deadline(self, goal: Literal, intention: Intention, size: int) -> None:
+        if intention.dropped or len(intention.stack) < size:
+            return
+        im = intention.stack[size - 1] if size else None
+        if im is None or im.event_literal is not goal:
+            return
+        del intention.stack[size:]
+        im.frames[:] = [im.frames[0]]
+        intention.waiting = None  # a wait in progress is abandoned
+        self.running_remove(intention)
+        intention.suspended = None
+        self.suspended.pop(intention.id, None)
+        self._fail(intention, "deadline_reached", f"hard deadline of {to_str(goal)} reached")
+        if intention.suspended is None and not intention.dropped:
+            self._requeue(intention)
+
+    def running_remove(self, intention: Intention) -> None:
+        try:
+            self.running.remove(intention)
+        except ValueError:
+            pass
+
+    def _check_goal_conditions(self) -> None:
+        """Jason 3.2's ``+!g <: C``: a goal whose condition holds is achieved at once (applyClrSatInt)."""
+        for intention in self.intentions():
+            stack = intention.stack
+            for idx, im in enumerate(stack):
+                gc = im.plan.goal_condition
+                if gc is None:
+                    continue
+                if solve_first(self, gc, dict(im.b)):
+                    del stack[idx + 1:]
+                    im.frames[:] = [im.frames[0]]
+                    im.frames[0].pc = len(im.frames[0].body)
+                    intention.waiting = None
+                    intention.suspended = None
+                    self.suspended.pop(intention.id, None)
+                    self.event_waiters = [w for w in self.event_waiters if w[1] is not intention]
+                    self.condition_waiters = [w for w in self.condition_waiters if w[0] is not intention]
+                    self.running_remove(intention)
+                    self.clr_int(intention)
+                    if not intention.dropped and intention.stack:
+                        self.running.append(intention)
+                    break
 
     def _awaking(self) -> None:
         """Something other than the +jag_sleeping plan woke the agent: +jag_awaking (Jason's rule)."""
@@ -387,8 +445,11 @@ class Agent:
                 self.running.append(new)
             else:
                 self.push_im(ev, plan, b)
-            if self.plans.has_meta and trigger.op == ADD and trigger.kind == ACHIEVE:
-                self.goal_state(trigger, "executing")
+            if trigger.op == ADD and trigger.kind == ACHIEVE:
+                if self.plans.has_meta:
+                    self.goal_state(trigger, "executing")
+                if type(lit) is Literal and lit.annots is not None and len(lit.annots) > 1:
+                    self._check_deadline(lit, intention if intention is not None else self.running[-1])
             return True
         self._no_plan(ev, "no_applicable", f"found a goal for which there is no applicable plan: {trigger}")
         return True
@@ -597,6 +658,9 @@ class Agent:
                 continue
             if not stack:
                 break
+            if im.plan.trigger.kind == BEL:
+                # a plan reacting to the caller's +b/-b: the caller had already moved past that formula
+                continue
             caller = stack[-1]
             instr = caller.current()
             value = resolve(im.result, im.b)
@@ -742,9 +806,11 @@ class Agent:
                 return
             done[0] = True
             held = intention.waiting
-            if held is not susp and held is not None and getattr(held, "inner", None) is susp:
-                # suspended by .suspend while waiting (Jason keeps it pending): .resume completes this
-                held.complete = lambda: complete(ok, error, message, extra)
+            if held is not susp:
+                if held is not None and getattr(held, "inner", None) is susp:
+                    # suspended by .suspend while waiting (Jason keeps it pending): .resume completes this
+                    held.complete = lambda: complete(ok, error, message, extra)
+                # else the wait was abandoned (its goal failed or succeeded meanwhile)
                 return
             complete(ok, error, message, extra)
 

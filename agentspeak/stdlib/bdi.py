@@ -149,12 +149,25 @@ def drop_all_events(ctx):
     ctx.agent.events.clear()
 
 
+def _failing(agent, intention: Intention) -> set:
+    """The intended means whose goal is being failed (a -!g event or plan handles it): no longer a
+    desire (Jason pops them with the failure)."""
+    out = {id(im.handles) for im in intention.stack if im.handles is not None}
+    for ev in agent.events:
+        if ev.intention is intention and ev.handles is not None:
+            out.add(id(ev.handles))
+    return out
+
+
 @internal_action(".intend", args=(1, 2))
 def intend(ctx, goal, ident=None):
     """Is ``goal`` currently intended? Backtracks over intentions."""
     for intention in ctx.agent.intentions() + ([ctx.intention] if ctx.intention and ctx.intention.dropped is False and ctx.intention not in ctx.agent.intentions() else []):
+        failing = _failing(ctx.agent, intention)
         for i in _goal_ims(intention, goal):
             im = intention.stack[i]
+            if id(im) in failing:
+                continue
             mark = len(ctx.trail)
             if ctx.unify(goal, resolve(im.plan.trigger.literal, im.b)) and (ident is None or ctx.unify(ident, intention.id)):
                 yield

@@ -162,13 +162,18 @@ def _remaining_body(im) -> tuple:
 def im_term(im) -> Literal:
     """``im(Label, {Trigger}, {Body still to run}, [map(Var, Value), ...])`` (Jason's IntendedMeans
     as a term); the body and trigger with the intended means' bindings applied."""
+    from agentspeak.terms import rename
     b = im.b
+    fresh: dict = {}  # the term shares no variable with the running plan (Jason makes them anonymous)
+
+    def copy(t):
+        return rename(resolve(t, b), fresh)
     trig = im.plan.trigger
     literal = im.event_literal if im.event_literal is not None else trig.literal
-    trigger = PlanTerm(plan=Plan(Trigger(trig.op, trig.kind, resolve(literal, b))))
-    body = PlanTerm(body=tuple(instr.map_terms(lambda t: resolve(t, b)) if hasattr(instr, "term") else instr
+    trigger = PlanTerm(plan=Plan(Trigger(trig.op, trig.kind, copy(literal))))
+    body = PlanTerm(body=tuple(instr.map_terms(copy) if hasattr(instr, "term") else instr
                                for instr in _remaining_body(im)))
-    unifier = make_list([Literal("map", (v, resolve(v, b))) for v in body_variables(im.plan.body)
+    unifier = make_list([Literal("map", (Var(v.name), copy(v))) for v in body_variables(im.plan.body)
                          if v in b and not v.name.startswith("_")])
     return Literal("im", (_label_term(im.plan), trigger, body, unifier))
 
