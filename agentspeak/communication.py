@@ -128,8 +128,16 @@ def _annotate(lit: Term, who: Term) -> Term:
             lit = rename(lit, {})
         if lit.annots is None:  # the usual content: no annotations of its own
             return Literal(lit.functor, lit.args, (_source_of(who),), lit.neg)
-        return Literal(lit.functor, lit.args, lit.annots, lit.neg).add_annot(_source_of(who))
+        return nested_source(lit, who)
     return lit
+
+
+def nested_source(lit: Literal, who: Term) -> Literal:
+    """Jason's ``.add_nested_source``: ``p[a,b]`` from ``who`` is ``p[source(who)[a,b]]`` (what a told
+    belief or an answer was annotated with stays visible, inside the source)."""
+    annots = lit.annots
+    src = Literal("source", (who,), annots if annots else None)
+    return Literal(lit.functor, lit.args, (src,), lit.neg)
 
 
 _SOURCE_ANNOTS: dict[str, tuple] = {}

@@ -129,7 +129,8 @@ def _answer_value(perf: str, reply: Message, question):
 
 def _with_source(t, sender):
     if isinstance(t, Literal):
-        return t.add_annot(Literal("source", (sender,)))
+        from agentspeak.communication import nested_source
+        return nested_source(t, sender)
     return t
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import re
 
-from agentspeak.program import ACHIEVE, ADD, PlanTerm, Plan, Trigger, body_variables
+from agentspeak.program import ACHIEVE, ADD, PlanTerm, Plan, Trigger, body_variables, substitute
 from agentspeak.stdlib.registry import IAError, internal_action, wrong_arguments
 from agentspeak.terms import Literal, Var, make_list, resolve, to_print_str
 from agentspeak.unify import undo
@@ -167,7 +167,7 @@ def im_term(im) -> Literal:
     fresh: dict = {}  # the term shares no variable with the running plan (Jason makes them anonymous)
 
     def copy(t):
-        return rename(resolve(t, b), fresh)
+        return rename(substitute(t, b), fresh)
     trig = im.plan.trigger
     literal = im.event_literal if im.event_literal is not None else trig.literal
     trigger = PlanTerm(plan=Plan(Trigger(trig.op, trig.kind, copy(literal))))
@@ -296,3 +296,16 @@ def namespace_get_prop(ctx, ns, key, value=None, default=None):
         if ctx.unify(key, k) and (value is None or ctx.unify(value, v)):
             yield
         undo(ctx.b, ctx.trail, mark)
+
+
+@internal_action(".add_nested_source", args=3)
+def add_nested_source(ctx, lit, source, result):
+    """``.add_nested_source(p[a], bob, R)``: R is ``p[source(bob)[a]]`` (a list: each of its literals)."""
+    from agentspeak.communication import nested_source
+    from agentspeak.terms import Cons, NIL, list_items
+    if isinstance(lit, Cons) or lit is NIL:
+        return ctx.unify(result, make_list([nested_source(x, source) if isinstance(x, Literal) else x
+                                            for x in list_items(lit)]))
+    if not isinstance(lit, Literal):
+        raise wrong_arguments(".add_nested_source needs a literal")
+    return ctx.unify(result, nested_source(lit, source))
