@@ -18,7 +18,7 @@ from agentspeak.beliefs import SELF, SOURCE_SELF, source
 from agentspeak.intentions import Event
 from agentspeak.program import ACHIEVE, ADD, BEL, DEL, Plan, PlanTerm, Trigger
 from agentspeak.solver import SolveError, solve
-from agentspeak.terms import NIL, Cons, Literal, Term, is_ground, list_items, make_list, rename, resolve, to_str
+from agentspeak.terms import NIL, Cons, Literal, Term, Var, is_ground, list_items, make_list, rename, resolve, to_str
 
 log = logging.getLogger("faultmas.agentspeak")
 
@@ -273,11 +273,20 @@ def _answer(agent, msg: Message, performative: str, content: Term) -> None:
     agent.arch.send(agent, reply)
 
 
+def _with_annots_of_answer(query: Term) -> Term:
+    """The query with an open annotation tail: its answer carries the annotations of the belief that
+    answered it (Jason answers ``askOne value(X)`` with ``value(10)[source(bob)]``)."""
+    if isinstance(query, Literal) and query.annot_tail is None:
+        return Literal(query.functor, query.args, query.annots, query.neg, Var("_Annots"))
+    return query
+
+
 def _ask_one(agent, msg: Message, sender: Term) -> None:
     query = msg.content
     b: dict = {}
-    for _ in solve(agent, query, b):
-        _answer(agent, msg, "tell", _strip_self_source(resolve(query, b)) if isinstance(query, Literal) else resolve(query, b))
+    pattern = _with_annots_of_answer(query)
+    for _ in solve(agent, pattern, b):
+        _answer(agent, msg, "tell", _strip_self_source(resolve(pattern, b)) if isinstance(query, Literal) else resolve(query, b))
         return
     # no belief: try a +?q plan, answering when it finishes
     if isinstance(query, Literal) and agent.plans.relevant(Trigger(ADD, "?", query)):
@@ -305,8 +314,9 @@ def _ask_all(agent, msg: Message, sender: Term) -> None:
     query = msg.content
     b: dict = {}
     answers = []
-    for _ in solve(agent, query, b):
-        value = resolve(query, b)
+    pattern = _with_annots_of_answer(query)
+    for _ in solve(agent, pattern, b):
+        value = resolve(pattern, b)
         answers.append(_strip_self_source(value) if isinstance(value, Literal) else value)
     _answer(agent, msg, "tell", make_list(answers))
 
