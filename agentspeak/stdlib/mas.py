@@ -171,9 +171,12 @@ def im_term(im) -> Literal:
     trig = im.plan.trigger
     literal = im.event_literal if im.event_literal is not None else trig.literal
     trigger = PlanTerm(plan=Plan(Trigger(trig.op, trig.kind, copy(literal))))
-    body = PlanTerm(body=tuple(instr.map_terms(copy) if hasattr(instr, "term") else instr
-                               for instr in _remaining_body(im)))
-    unifier = make_list([Literal("map", (Var(v.name), copy(v))) for v in body_variables(im.plan.body)
+    remaining = _remaining_body(im)
+    body = PlanTerm(body=tuple(instr.map_terms(copy) if hasattr(instr, "term") else instr for instr in remaining))
+    # the bindings of the variables the rest of the plan still uses (Jason lists the whole unifier; the
+    # values of variables the plan is done with can be large, e.g. a list of plans, and copying them
+    # for every assert made Jason's test harness slow)
+    unifier = make_list([Literal("map", (Var(v.name), copy(v))) for v in body_variables(remaining)
                          if v in b and not v.name.startswith("_")])
     return Literal("im", (_label_term(im.plan), trigger, body, unifier))
 
