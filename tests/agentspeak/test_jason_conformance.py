@@ -325,3 +325,20 @@ def test_a_user_kqml_plan_does_not_swallow_other_messages():
     assert "[b] custom(hello)" in out
     assert "[b] greeted" in out
     assert "[a] v(1)[source(b)]" in out
+
+
+def test_directory_facilitator_register_search_subscribe():
+    # jason.stdlib.df_register/df_search/df_subscribe: subscribers are told provider(Ag, Service)
+    out = run_mas({
+        "c": asl("""
+            !start.
+            +!start <- .df_subscribe("seller"); .wait(200); .df_search("seller", L); .print(L).
+            +provider(A, S)[source(df)] <- .print(provider(A, S)).
+        """),
+        "s": asl("""
+            !start.
+            +!start <- .wait(50); .df_register("seller").
+        """),
+    }, timeout=5)
+    assert "[c] provider(s,\"seller\")" in out
+    assert "[c] [s]" in out
