@@ -230,9 +230,12 @@ def eval_(ctx, result, formula):
 def relevant_rules(ctx, pattern, result):
     """``.relevant_rules(p(_,_), L)``: the rules whose head unifies with the pattern, as rule terms."""
     from agentspeak.unify import unifies
-    if not isinstance(pattern, Literal):
+    if isinstance(pattern, Var):  # every rule
+        rules = list(ctx.agent.bb.rules())
+    elif isinstance(pattern, Literal):
+        rules = [r for r in ctx.agent.bb.rules_for(pattern) if unifies(pattern, r.head, {})]
+    else:
         raise wrong_arguments(".relevant_rules needs a literal")
-    rules = [r for r in ctx.agent.bb.rules_for(pattern) if unifies(pattern, r.head, {})]
     return ctx.unify(result, make_list([PlanTerm(rule=r).rename({}) for r in rules]))
 
 
