@@ -342,3 +342,16 @@ def test_directory_facilitator_register_search_subscribe():
     }, timeout=5)
     assert "[c] provider(s,\"seller\")" in out
     assert "[c] [s]" in out
+
+
+def test_sets_queues_and_maps_as_jason():
+    # jason.stdlib.set/queue/map: mutable collections held by a variable; an unbound variable gets a new one
+    out = run_asl(asl("""
+        !t.
+        +!t <- .set.add_all(S, [c, a, b, a]); .print(S); .length(S, N); .print(N);
+               .queue.create(Q); .queue.add(Q, z); .queue.add(Q, y); .queue.remove(Q, H); .print(H, " ", Q);
+               .queue.create(P, priority); .queue.add_all(P, [d, b, c]); .print(P);
+               .map.create(M); .map.put(M, b, 2); .map.put(M, a, 1); .print(M);
+               .map.get(M, zz, V, none); .print(V); .findall(K, .map.key(M, K), Ks); .print(Ks).
+    """))
+    assert out == ["{a,b,c}", "3", "z [y]", "[b,c,d]", "{a->1,b->2}", "none", "[a,b]"]
