@@ -53,18 +53,21 @@ def main(args: argparse.Namespace) -> int:
         print("error: --runs must be at least 1", file=sys.stderr)
         return 2
     faults = (*FAULTS, "none") if args.fault == "all" else (args.fault,)
-    run_one = _runner(args)
     summaries, firsts = [], []
-    for fault in faults:
-        results = []
-        for i in range(runs):
-            seed = args.seed + i
-            start = fault_time(seed, args.duration)
-            result = run_one(fault, start, seed)
-            results.append(result)
-            _progress(fault, i, runs, result)
-        summaries.append(imu_report.summarize(fault, results))
-        firsts.append(results[0])
+    try:
+        run_one = _runner(args)
+        for fault in faults:
+            results = []
+            for i in range(runs):
+                seed = args.seed + i
+                result = run_one(fault, fault_time(seed, args.duration), seed)
+                results.append(result)
+                _progress(fault, i, runs, result)
+            summaries.append(imu_report.summarize(fault, results))
+            firsts.append(results[0])
+    except (RuntimeError, ImportError) as exc:      # ROS 2 missing, a node that died: say so, no traceback
+        print(f"error: experiment imu on {args.bridge}: {exc}", file=sys.stderr)
+        return 1
     settings = {"bridge": args.bridge, "runs": runs, "seed": args.seed, "duration_s": args.duration,
                 "fault_window_s": [FAULT_WINDOW[0] * args.duration, FAULT_WINDOW[1] * args.duration]}
     if args.json:

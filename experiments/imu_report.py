@@ -102,8 +102,10 @@ def table(summaries: Sequence[FaultSummary]) -> str:
                          f"RMS {s.rms_reduction.text('{:+.1f}')} %{paper_text}")
             lines.append(f"  detected in {s.detected}/{s.runs} runs; latency fault -> rule fired: "
                          f"median {s.latency_median:.2f} s, p95 {s.latency_p95:.2f} s")
-        lines.append(f"  false switches: {s.false_switches}/{s.runs}"
-                     f"{' (fault-free runs)' if s.fault == 'none' else ' (rule fired before the fault)'}")
+        if s.fault == "none":
+            lines.append(f"  false switches: {s.false_switches}/{s.runs} fault-free runs")
+        else:
+            lines.append(f"  false switches (rule fired before the fault began): {s.false_switches}/{s.runs}")
         lines.append(f"  CPU of observers + diagnosis + rules: {100 * s.cpu_share_max:.2f} % of one core (worst run)")
         lines.append("")
     return "\n".join(lines).rstrip() + "\n"

@@ -36,6 +36,35 @@ def _wrap(angle: float) -> float:
     return math.atan2(math.sin(angle), math.cos(angle))
 
 
+class Increments:
+    """Turns the two input streams into the fusion's steps: distance and rotations since the last
+    wheel-odometry message (the gyro integrated over its header stamps)."""
+
+    def __init__(self) -> None:
+        self._imu_angle = 0.0             # the gyro's rotation integrated since start (rad)
+        self._imu_stamp: float | None = None
+        self._imu_angle_used = 0.0        # ... up to the last wheel-odometry message
+        self._wheel: tuple[float, float, float] | None = None
+
+    def imu(self, msg: Imu) -> None:
+        stamp = _seconds(msg.header.stamp)
+        if self._imu_stamp is not None and stamp > self._imu_stamp:
+            self._imu_angle += msg.angular_velocity.z * (stamp - self._imu_stamp)
+        self._imu_stamp = stamp
+
+    def wheel_odometry(self, msg: Odometry) -> tuple[float, float, float] | None:
+        """(distance m, wheel rotation rad, gyro rotation rad) since the previous message; None for the first."""
+        x, y, yaw = pose_of(msg)
+        previous, self._wheel = self._wheel, (x, y, yaw)
+        imu_rotation, self._imu_angle_used = self._imu_angle - self._imu_angle_used, self._imu_angle
+        if previous is None:
+            return None
+        wheel_rotation = _wrap(yaw - previous[2])
+        mid = previous[2] + wheel_rotation / 2.0
+        distance = (x - previous[0]) * math.cos(mid) + (y - previous[1]) * math.sin(mid)
+        return distance, wheel_rotation, imu_rotation
+
+
 class OdometryFusionNode(Node):
     """Keeps one :class:`OdometryFusion` and steps it with each wheel-odometry message."""
 
@@ -44,12 +73,9 @@ class OdometryFusionNode(Node):
         self.declare_parameter("use_imu", use_imu)
         self.fusion = OdometryFusion(use_imu=bool(self.get_parameter("use_imu").value))
         self.add_on_set_parameters_callback(self._on_parameters)
-        self._imu_angle = 0.0             # the gyro's rotation integrated since start (rad)
-        self._imu_stamp: float | None = None
-        self._imu_angle_used = 0.0        # ... up to the last wheel-odometry message
-        self._wheel: tuple[float, float, float] | None = None
+        self._increments = Increments()
         self._pub = self.create_publisher(Odometry, "odometry/fused", 50)
-        self.create_subscription(Imu, "sensors/imu_data", self._on_imu, 100)
+        self.create_subscription(Imu, "sensors/imu_data", self._increments.imu, 100)
         self.create_subscription(Odometry, "odom", self._on_wheel_odometry, 100)
 
     def _on_parameters(self, params) -> SetParametersResult:
@@ -61,22 +87,11 @@ class OdometryFusionNode(Node):
                 self.get_logger().info(f"use_imu: {self.fusion.use_imu}")
         return SetParametersResult(successful=True)
 
-    def _on_imu(self, msg: Imu) -> None:
-        stamp = _seconds(msg.header.stamp)
-        if self._imu_stamp is not None and stamp > self._imu_stamp:
-            self._imu_angle += msg.angular_velocity.z * (stamp - self._imu_stamp)
-        self._imu_stamp = stamp
-
     def _on_wheel_odometry(self, msg: Odometry) -> None:
-        x, y, yaw = pose_of(msg)
-        previous, self._wheel = self._wheel, (x, y, yaw)
-        imu_rotation, self._imu_angle_used = self._imu_angle - self._imu_angle_used, self._imu_angle
-        if previous is None:
+        step = self._increments.wheel_odometry(msg)
+        if step is None:
             return
-        wheel_rotation = _wrap(yaw - previous[2])
-        mid = previous[2] + wheel_rotation / 2.0
-        distance = (x - previous[0]) * math.cos(mid) + (y - previous[1]) * math.sin(mid)
-        pose = self.fusion.step(distance, wheel_rotation, imu_rotation)
+        pose = self.fusion.step(*step)
         twist = msg.twist.twist
         self._pub.publish(odometry(pose.x, pose.y, pose.yaw, twist.linear.x, twist.angular.z,
                                    msg.header.stamp))
