@@ -154,9 +154,14 @@ def plot(results: Sequence[RunResult], path: str) -> None:
         ax.set_title(f"{title} (seed {result.seed})")
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
-        ax.set_aspect("equal", adjustable="datalim")
+        # Frame the route and the odometries that stay near it; a runaway always-IMU leaves the frame.
+        near = [p for s in result.samples for p in (s.truth, s.encoders, s.switched)]
+        xs, ys = [p[0] for p in near], [p[1] for p in near]
+        ax.set_xlim(min(xs) - 1.0, max(xs) + 1.0)
+        ax.set_ylim(min(ys) - 1.0, max(ys) + 1.0)
+        ax.set_aspect("equal", adjustable="box")
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7, loc="best")
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -24,8 +24,8 @@ CONTROL_EVERY = 5
 SAMPLE_EVERY = 5
 """Steps between error samples: 10 Hz."""
 
-def run(fault: str, fault_time: float, seed: int, duration: float,
-        detect: bool = True) -> RunResult:
+
+def run(fault: str, fault_time: float, seed: int, duration: float, detect: bool = True) -> RunResult:
     """Drive ``duration`` simulated seconds with ``fault`` from ``fault_time`` on (``none``: healthy).
 
     ``detect``: run the observers, diagnosis and rules (``False``: the three odometries only, the
