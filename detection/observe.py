@@ -66,15 +66,15 @@ def _live(args: argparse.Namespace) -> int:
     from detection.taps.ros2 import Ros2Tap, TapError, info_publisher
     from detection.taps.ros2_parameters import Ros2Parameters
 
-    parameters = Ros2Parameters(args.domain_id)
-    session = None
+    environment = ActionEnvironment()
+    session = open_session(args.config, args.model, args.rules, environment)   # bad input: before any network
     tap = None
     try:
-        session = open_session(args.config, args.model, args.rules, ActionEnvironment(parameters=parameters))
         show, table = _printer(args, session)
-        recorder = BagRecorder(args.record) if args.record else None
-        tap = Ros2Tap(session.config, session.observers, session.pipeline.observe, domain_id=args.domain_id,
-                      recorder=recorder)
+        tap = Ros2Tap(session.config, session.observers, session.pipeline.observe, domain_id=args.domain_id)
+        if args.record:
+            tap.recorder = BagRecorder(args.record)
+        environment.parameters = Ros2Parameters(args.domain_id)
         session.pipeline.add_listener(info_publisher(tap))
         session.pipeline.add_listener(show)
         stop = threading.Event()
@@ -94,9 +94,9 @@ def _live(args: argparse.Namespace) -> int:
     finally:
         if tap is not None:
             tap.close()
-        parameters.close()
-        if session is not None:
-            session.close()
+        if environment.parameters is not None:
+            environment.parameters.close()
+        session.close()
     _report_errors(session)
     return 0
 
