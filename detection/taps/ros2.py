@@ -14,17 +14,13 @@ import time
 from typing import Callable
 
 from detection.config import ObserverConfig
-from detection.message import Message
 from detection.observation import Observation
 from detection.observer_set import ObserverSet
-from detection.observers.activated import GRAPH_CHANNEL
-from detection.observers.resource import RESOURCE_CHANNEL
 from detection.taps import codec
-from detection.taps.processes import ProcessSampler
+from detection.taps.live import LiveTap
 
 log = logging.getLogger("faultmas.detection")
 GRAPH_PERIOD = 0.1          # seconds between graph polls (activated reacts within this + one evaluation)
-RESOURCE_PERIOD = 0.5       # seconds between psutil samples
 
 
 class TapError(ValueError):
@@ -42,53 +38,39 @@ def message_class(msgtype: str):
         raise TapError(f"unknown topic type {msgtype!r}: no installed ROS 2 package defines it") from None
 
 
-class Ros2Tap:
+class Ros2Tap(LiveTap):
     """Feeds ``observers`` from a live ROS 2 graph; ``on_observations`` gets what changed."""
 
     def __init__(self, config: ObserverConfig, observers: ObserverSet,
                  on_observations: Callable[[list[Observation]], None], *, domain_id: int | None = None,
                  recorder=None, clock: Callable[[], int] = time.time_ns) -> None:
-        from robot_bridge.ros2.runtime import RosContext
-
-        self.config = config
-        self.observers = observers
-        self.on_observations = on_observations
-        self.recorder = recorder
-        self.clock = clock
-        self.types: dict[str, str] = {}
-        self._decoders: dict[str, Callable] = {}
-        for topic, msgtype in config.topics.items():     # fail before touching the network
+        for msgtype in config.topics.values():         # fail before touching the network
             if msgtype:
                 message_class(msgtype)
+        super().__init__(config, observers, on_observations, recorder=recorder, clock=clock)
+        from robot_bridge.ros2.runtime import RosContext
+
+        self.types: dict[str, str] = {}
+        self._decoders: dict[str, Callable] = {}
         self.ros = RosContext(domain_id=domain_id)
         import rclpy.node
 
         self.node = self.ros.add(rclpy.node.Node("faultmas_observers", context=self.ros.context))
         self._subscriptions: dict[str, object] = {}
-        self._graph: frozenset[str] | None = None
-        self._last_graph = self._last_resource = 0.0
-        self._sampler = ProcessSampler(config.processes) if config.processes else None
-        self._started = False
+        self._last_graph = 0.0
 
-    # -- running ------------------------------------------------------------------------------------
     def start(self) -> "Ros2Tap":
-        t0 = self.clock()
-        self.observers.start(t0)
-        if self.recorder is not None:
-            self.recorder.start(t0)
+        self.begin()
         for topic, msgtype in self.config.topics.items():
             if msgtype:
                 self._subscribe(topic, msgtype)
         self.node.create_timer(1.0 / max(self.config.rate_hz, 1.0) / 2, self._tick)
         self.ros.start()
-        self._started = True
         return self
 
     def close(self) -> None:
         self.ros.close()
-        if self.recorder is not None:
-            self.recorder.close()
-            self.recorder = None
+        self.close_recorder()
 
     def _subscribe(self, topic: str, msgtype: str) -> None:
         from rclpy.qos import qos_profile_sensor_data
@@ -100,42 +82,23 @@ class Ros2Tap:
             except codec.UnknownType as exc:
                 raise TapError(f"{topic}: {exc}") from None
         self.types[topic] = msgtype
+        decode = self._decoders.get(topic)
         self._subscriptions[topic] = self.node.create_subscription(
-            cls, topic, lambda raw, t=topic: self._on_raw(t, raw), qos_profile_sensor_data, raw=True)
+            cls, topic, lambda raw, t=topic, d=decode, m=msgtype: self.feed(t, raw=raw, decode=d, msgtype=m),
+            qos_profile_sensor_data, raw=True)
         log.info("observing %s (%s)", topic, msgtype)
 
-    # -- callbacks (executor thread) ----------------------------------------------------------------
-    def _on_raw(self, topic: str, raw: bytes) -> None:
-        msg = Message(topic, self.clock(), raw=raw, decode=self._decoders.get(topic))
-        self._feed(msg, self.types[topic])
-
-    def _feed(self, msg: Message, msgtype: str | None = None) -> None:
-        if self.recorder is not None:
-            self.recorder.write(msg, msgtype)
-        changed = self.observers.feed(msg)
-        if changed:
-            self.on_observations(changed)
-
+    # -- the timer (executor thread) ----------------------------------------------------------------
     def _tick(self) -> None:
-        now = self.clock()
         wall = time.monotonic()
         if wall - self._last_graph >= GRAPH_PERIOD:
             self._last_graph = wall
-            self._poll_graph(now)
-        if self._sampler is not None and wall - self._last_resource >= RESOURCE_PERIOD:
-            self._last_resource = wall
-            for node, sample in self._sampler.sample().items():
-                self._feed(Message(RESOURCE_CHANNEL + node, now, sample))
-        changed = self.observers.advance(now)
-        if changed:
-            self.on_observations(changed)
+            self._poll_graph()
+        self.tick()
 
-    def _poll_graph(self, now: int) -> None:
+    def _poll_graph(self) -> None:
         if self.config.nodes:
-            names = frozenset(f"{ns.rstrip('/')}/{name}" for name, ns in self.node.get_node_names_and_namespaces())
-            if names != self._graph:
-                self._graph = names
-                self._feed(Message(GRAPH_CHANNEL, now, names))
+            self.graph(frozenset(f"{ns.rstrip('/')}/{name}" for name, ns in self.node.get_node_names_and_namespaces()))
         pending = [t for t in self.config.topics if t not in self._subscriptions]
         if pending:
             present = dict(self.node.get_topic_names_and_types())

@@ -64,6 +64,11 @@ setup:
         states: [{state: calibrated, score: {type: student_t, true_mean: 0.0, significance_level: 0.01}}]
   - type: activated
     nodes: [{name: /victim}]
+  - type: resource
+    nodes:
+      - name: talker
+        process: "--name talker"
+        states: [{state: ok, cpu: {type: less_than, less_than: 95}, memory: {type: in_between, lower_bound: 1, upper_bound: 4000}}]
 """
 
 
@@ -140,3 +145,12 @@ def test_a_stopped_node_is_not_activated_within_a_second(live):
     gone = time.time()
     assert wait_for(lambda: not seen.latest("activated(victim)").holds, 10)
     assert seen.latest("activated(victim)").time - gone <= 1.0
+
+
+def test_resource_reads_the_publisher_process_with_psutil(live):
+    tap, seen, _ = live
+    assert wait_for(lambda: seen.latest("resource(talker)") is not None, 20)
+    o = seen.latest("resource(talker)")
+    assert o.holds and o.state == "ok" and 0 <= o.measured < 95
+    memory = next(x for x in tap.observers.observers if x.name == "resource(talker)").filters["memory"].value()
+    assert 10 < memory < 4000             # MB: a Python process with rclpy loaded
