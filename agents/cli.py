@@ -15,6 +15,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "agentspeak.cli",          # faultmas asl check|run
     "agents.mas_cli",          # faultmas mas run, faultmas agent run, faultmas router
     "diagnosis.cli",           # faultmas diagnose
+    "detection.cli",           # faultmas observe
     "perception.cli",          # faultmas perceive
     "robot_bridge.cli",        # faultmas ros launch, faultmas sim ...
     "agents.demo_cli",         # faultmas run, faultmas eval
