@@ -17,6 +17,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from agentspeak.errors import AslSyntaxError
 from agentspeak.ground_terms import read_ground_term
+from agentspeak.source_text import read_source
 from agentspeak.nesting import MAX_NESTING, first_too_deep_bracket, nesting_depth, too_deep_message
 from agentspeak.program import (
     ACHIEVE, ADD, BEL, DEL, META, TEST, Achieve, AchieveNew, Action, AddBel, AddBelEnd, AddBelNew,
@@ -636,9 +637,11 @@ def _expand_includes(program: Program, source_file: str, base_dir: str | None, s
         if os.path.abspath(path) in seen:
             continue
         try:
-            text = Path(path).read_text()
+            text = read_source(path)
         except OSError as exc:
             raise AslSyntaxError(f"cannot include '{rel}': {exc.strerror or exc}", source_file, line) from exc
+        except ValueError as exc:  # not UTF-8 (a SourceError), or a NUL byte in the path
+            raise AslSyntaxError(f"cannot include {rel!r}: {exc}", source_file, line) from None
         sub = parse_program(text, path, os.path.dirname(path), seen)
         program.beliefs.extend(sub.beliefs)
         program.rules.extend(sub.rules)
