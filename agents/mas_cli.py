@@ -41,6 +41,7 @@ def build_local_mas(project, printer=None):
 
     from agentspeak.parser import parse_program
     from agentspeak.runtime import LocalRuntime
+    from agentspeak.source_text import read_source
 
     runtime = LocalRuntime(printer=printer)
     runtime.trusted_senders = set(project.agent_names())
@@ -48,7 +49,7 @@ def build_local_mas(project, printer=None):
     for decl in project.agents:
         if decl.source not in programs:
             try:
-                text = Path(decl.source).read_text()
+                text = read_source(decl.source)
             except OSError as exc:
                 from agentspeak.errors import SourceError
                 raise SourceError(f"agent '{decl.name}': cannot read {decl.source}: {exc.strerror or exc}",
