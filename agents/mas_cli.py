@@ -45,6 +45,7 @@ def build_local_mas(project, printer=None):
 
     runtime = LocalRuntime(printer=printer)
     runtime.trusted_senders = set(project.agent_names())
+    runtime.source_dirs = list(project.source_dirs)
     programs: dict[str, object] = {}
     for decl in project.agents:
         if decl.source not in programs:
@@ -59,7 +60,8 @@ def build_local_mas(project, printer=None):
         goals = option_literals(decl.options.get("goals"), project.file)
         for name in decl.instance_names():
             # each instance gets its own parse: plans hold per-agent labels and state
-            program = parse_program(programs[decl.source], decl.source)
+            program = parse_program(programs[decl.source], decl.source,
+                                    source_path=tuple(project.source_dirs))
             runtime.add_agent(name, source_file=decl.source, program=program,
                               extra_beliefs=beliefs, extra_goals=goals)
     return runtime
