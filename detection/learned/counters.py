@@ -1,8 +1,13 @@
 """The targets: a component process's resource counters, read with psutil once a second.
 
-Levels (RSS, VMS, threads, open fds) are used as they are; cumulative counters (CPU time, context
-switches, IO bytes, page faults) as their increase over the last tick. Page faults are not in psutil:
-they come from ``/proc/PID/stat`` (minor + major), 0 where there is no such file.
+Every counter is used as its change over the last tick (1 s): CPU seconds per second, context
+switches, IO bytes and page faults per second, and the growth of RSS, VMS, threads and open fds.
+Why growth and not the levels: a process's RSS differs by a few hundred kB from one run to the next
+(allocator, import order) while it varies by a few kB within a run; a model trained on levels
+learns the run it saw, and a fresh healthy run looks like a leak (measured on the smoke data: every
+tick of a held-out run flagged). Growth is ~0 in every healthy run and clearly positive under a
+leak; the price is that a leak slower than the allocator's noise (~10 kB/s) goes unseen.
+Page faults are not in psutil: they come from ``/proc/PID/stat`` (minor + major), 0 without that file.
 """
 from __future__ import annotations
 
@@ -10,8 +15,10 @@ import numpy as np
 
 COUNTER_NAMES: tuple[str, ...] = ("cpu_s", "rss_mb", "vms_mb", "threads", "fds", "ctx_switches",
                                   "io_bytes", "page_faults")
-CUMULATIVE = {"cpu_s", "ctx_switches", "io_bytes", "page_faults"}
-TARGET_NAMES: tuple[str, ...] = tuple(f"d_{n}" if n in CUMULATIVE else n for n in COUNTER_NAMES)
+TARGET_NAMES: tuple[str, ...] = tuple(f"d_{n}" for n in COUNTER_NAMES)
+RESOLUTION: tuple[float, ...] = (0.01, 4 / 1024, 4 / 1024, 1.0, 1.0, 1.0, 1.0, 1.0)
+"""The smallest change each counter can show (a 10 ms CPU tick, a 4 KiB page, one thread...): a change
+of that size is a measurement step, not a deviation (see ``model.fit``)."""
 
 
 def _page_faults(pid: int) -> float:
@@ -40,10 +47,5 @@ def read_counters(process) -> np.ndarray:
 
 
 def targets_from_counters(samples: np.ndarray) -> np.ndarray:
-    """Targets at each sample after the first: levels as they are, cumulative counters differenced."""
-    samples = np.asarray(samples, dtype=np.float64)
-    out = samples[1:].copy()
-    for i, name in enumerate(COUNTER_NAMES):
-        if name in CUMULATIVE:
-            out[:, i] = np.diff(samples[:, i])
-    return out
+    """Targets at each sample after the first: every counter's change since the previous sample."""
+    return np.diff(np.asarray(samples, dtype=np.float64), axis=0)

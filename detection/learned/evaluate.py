@@ -3,7 +3,7 @@ and make the paper's Table I (plus AUC per fault kind and per component, and ROC
 
 Partitions of the fault-free runs, in run order: the last ``held_out`` are test runs (with every faulty
 run); of the rest, half fit the Elastic Net (partition 1), a quarter the covariance (2), a quarter the
-threshold (3), each at least one run (partition 1 at least two, for folds grouped by run).
+threshold (3), rounding in favour of partition 3; at least 2 + 1 + 1 runs (folds grouped by run).
 """
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from typing import Callable
 import numpy as np
 
 from detection.learned.baselines import OneClassSvmDetector, RandomDetector
-from detection.learned.counters import TARGET_NAMES
+from detection.learned.counters import RESOLUTION, TARGET_NAMES
 from detection.learned.dataset import Dataset
 from detection.learned.metrics import Scores, auc_by, table_row
 from detection.learned.model import DEFAULT_TARGET_FPR, ComponentModel, fit
@@ -30,8 +30,8 @@ def partitions(fault_free: list[int], held_out: int) -> tuple[list[int], list[in
         raise ValueError(f"{len(runs)} fault-free runs: training needs at least 4 (2 + 1 + 1) plus "
                          f"{held_out} held out")
     test, train = runs[len(runs) - held_out:], runs[:len(runs) - held_out]
-    n2 = n3 = max(1, len(train) // 4)
-    n1 = len(train) - n2 - n3
+    n1 = len(train) // 2
+    n2 = (len(train) - n1) // 2
     return train[:n1], train[n1:n1 + n2], train[n1 + n2:], test
 
 
@@ -67,7 +67,7 @@ def train_models(dataset: Dataset, parts, target_fpr: float, progress: Callable[
         progress(f"training {name} ({n}/{len(dataset.components)})")
         split = [samples.select(p) for p in (p1, p2, p3)]
         models[name] = fit(name, samples.features, list(TARGET_NAMES),
-                           [(s.X, s.Y, s.run) for s in split], target_fpr)
+                           [(s.X, s.Y, s.run) for s in split], target_fpr, RESOLUTION)
     return models
 
 

@@ -6,7 +6,9 @@ each component's process (``counters``), computes the same features as in traini
 its threshold in ``confirm[0]`` of the last ``confirm[1]`` ticks becomes ``resource(C) = false``
 (the paper's ``~resource(C)``); it turns true again once that no longer holds. One flagged second is
 not enough on purpose: at a 0.5 % target FPR and a handful of components, single-tick verdicts would
-raise a false alarm every minute or so. Only changes are emitted, as observers do.
+raise a false alarm every minute or so. As every observer does (docs/observers.md), it emits an
+``Observation`` (source ``learned``, ``measured`` = the squared distance) when the verdict is first
+known and each time it flips, for ``Pipeline.observe``.
 """
 from __future__ import annotations
 
@@ -18,26 +20,15 @@ from typing import Callable, Iterable
 
 import numpy as np
 
-from detection.learned.counters import TARGET_NAMES, CUMULATIVE, COUNTER_NAMES, read_counters
-from detection.learned.features import ChannelBuffer, feature_names
+from detection.learned.counters import TARGET_NAMES, read_counters, targets_from_counters
+from detection.learned.features import ChannelBuffer
 from detection.learned.model import ComponentModel, ModelFileError
+from detection.observation import Observation
 
 DEFAULT_CONFIRM = (3, 5)
 
 
-@dataclass(frozen=True)
-class ResourceVerdict:
-    """One change of ``resource(component)``, with the measured distance that decided it."""
-
-    component: str
-    ok: bool
-    distance: float
-    threshold: float
-    time: float
-
-    @property
-    def literal(self) -> str:
-        return f"resource({self.component})"
+SOURCE = "learned"
 
 
 def model_channels(model: ComponentModel) -> list[tuple[str, int]]:
@@ -53,27 +44,21 @@ def model_channels(model: ComponentModel) -> list[tuple[str, int]]:
 
 
 class LearnedResourceObserver:
-    """Scores every watched component at each tick; emits ``ResourceVerdict`` changes to ``emit``."""
+    """Scores every watched component at each tick; hands the observations that changed to ``emit``
+    (e.g. ``Pipeline.observe``)."""
 
     def __init__(self, models: dict[str, ComponentModel], processes: dict[str, object],
-                 emit: Callable[[ResourceVerdict], None], confirm: tuple[int, int] = DEFAULT_CONFIRM,
-                 columns: dict[str, list[str]] | None = None) -> None:
+                 emit: Callable[[list[Observation]], object], confirm: tuple[int, int] = DEFAULT_CONFIRM) -> None:
         missing = sorted(set(models) - set(processes))
         if missing:
             raise ValueError(f"no process found for {', '.join(missing)}")
         self.models, self.processes, self.emit, self.confirm = models, processes, emit, confirm
         self.channels = {c: model_channels(m) for c, m in models.items()}
-        if columns is not None:                      # the live encoders must give what the model learned
-            for c, model in models.items():
-                live = [n for topic, _ in self.channels[c] for n in feature_names(topic, columns.get(topic, []))]
-                if live != model.features:
-                    raise ModelFileError(f"model of {c!r} does not fit the live system: its channels or their "
-                                         "message types differ from the training data; train it again")
         widths = {topic: width for chans in self.channels.values() for topic, width in chans}
         self.buffers = {topic: ChannelBuffer(width) for topic, width in widths.items()}
         self.previous: dict[str, np.ndarray] = {}
         self.recent = {c: deque(maxlen=confirm[1]) for c in models}
-        self.ok = {c: True for c in models}
+        self.ok: dict[str, bool | None] = {c: None for c in models}        # None: not known yet
         self.last_distance: dict[str, float] = {}
         self.tick_seconds: list[float] = []
 
@@ -85,12 +70,19 @@ class LearnedResourceObserver:
     def features(self, component: str, tick: float) -> np.ndarray:
         return np.concatenate([self.buffers[topic].features(tick) for topic, _ in self.channels[component]])
 
-    def tick(self, now: float | None = None) -> list[ResourceVerdict]:
-        """Score every component at ``now``; returns (and emits) the verdicts that changed."""
+    def tick(self, now: float | None = None, counters: dict[str, np.ndarray] | None = None) -> list[Observation]:
+        """Score every component at ``now``; returns (and emits) the observations that changed.
+
+        ``counters`` (component → ``COUNTER_NAMES`` sample) replaces reading the processes: a recorded
+        run replayed through this very code (``replay``)."""
         now = time.time() if now is None else now
         started = time.perf_counter()
         samples = {}
         for c, process in self.processes.items():
+            if counters is not None:
+                sample = counters.get(c)
+                samples[c] = None if sample is None or not np.isfinite(sample).all() else sample
+                continue
             try:
                 samples[c] = read_counters(process)
             except Exception:                       # a process that is gone: the activated observer's job
@@ -103,10 +95,7 @@ class LearnedResourceObserver:
                 self.previous[c] = sample
             if sample is None or previous is None:
                 continue
-            y = sample.copy()
-            for i, name in enumerate(COUNTER_NAMES):
-                if name in CUMULATIVE:
-                    y[i] = sample[i] - previous[i]
+            y = targets_from_counters(np.vstack([previous, sample]))[0]
             x = np.concatenate([features[topic] for topic, _ in self.channels[c]])
             distance = float(model.score(x, y)[0])
             self.last_distance[c] = distance
@@ -114,11 +103,37 @@ class LearnedResourceObserver:
             ok = sum(self.recent[c]) < self.confirm[0]
             if ok != self.ok[c]:
                 self.ok[c] = ok
-                changes.append(ResourceVerdict(c, ok, distance, model.threshold, now))
+                changes.append(Observation(f"resource({c})", ok, now, measured=distance, source=SOURCE))
         self.tick_seconds.append(time.perf_counter() - started)
-        for verdict in changes:
-            self.emit(verdict)
+        if changes:
+            self.emit(changes)
         return changes
+
+
+def replay(observer: LearnedResourceObserver, run_file: str | Path,
+           on_tick: Callable[[float], None] | None = None) -> list[Observation]:
+    """Feed a recorded run (``record``'s file) through ``observer`` in time order, ticking at the
+    recorded ticks with the recorded counters; returns every observation emitted. ``on_tick(t)`` is
+    called after each tick (``observer.last_distance`` then holds that tick's distances)."""
+    with np.load(run_file) as data:
+        arrays = {key: data[key] for key in data.files}
+    events = []
+    for topic in observer.buffers:
+        if f"events/{topic}/t" in arrays:
+            times, values = arrays[f"events/{topic}/t"], arrays[f"events/{topic}/x"].astype(np.float64)
+            events += [(t, topic, v) for t, v in zip(times, values)]
+    events.sort(key=lambda e: e[0])
+    emitted: list[Observation] = []
+    i = 0
+    for k, tick in enumerate(arrays["ticks"]):
+        while i < len(events) and events[i][0] <= tick:
+            observer.on_event(*events[i])
+            i += 1
+        counters = {c: arrays[f"counters/{c}"][k] for c in observer.models if f"counters/{c}" in arrays}
+        emitted += observer.tick(float(tick), counters)
+        if on_tick is not None:
+            on_tick(float(tick))
+    return emitted
 
 
 def load_models(directory: str | Path, components: Iterable[str] | None = None) -> dict[str, ComponentModel]:

@@ -46,12 +46,17 @@ PROFILES: dict[str, Profile] = {
     # a few minutes in all; the tests read it. The camera (rendering 640x480 at 10 Hz per robot) is off
     # so that a run fits a shared 2-core machine; the leak goes to the motion decomposer (its inputs
     # and outputs change with the workload, so the model has something to learn).
-    "smoke": Profile("smoke", fault_free_runs=5, faulty_runs=3, duration_s=60.0, camera=False,
+    "smoke": Profile("smoke", fault_free_runs=8, faulty_runs=3, duration_s=60.0, camera=False,
                      fault_length_s=(30.0, 40.0), kinds=("memory_leak", "wasted_cpu", "thread_leak")),
     # the issue's data set: >= 10 fault-free and >= 20 faulty runs of >= 4 min, every kind 3 times
     "paper": Profile("paper", fault_free_runs=12, faulty_runs=21, duration_s=240.0, camera=True,
                      fault_length_s=(40.0, 90.0)),
 }
+
+
+FAULTY_IDS = 100
+"""Faulty runs are numbered from here, fault-free ones from 0: a profile can grow either kind of run
+and the runs already recorded keep their ids."""
 
 
 def run_plan(profile: Profile, seed: int = 0) -> list[dict]:
@@ -63,7 +68,7 @@ def run_plan(profile: Profile, seed: int = 0) -> list[dict]:
     for j in range(profile.faulty_runs):
         kind = profile.kinds[j % len(profile.kinds)]
         node = "motion_decomposer" if profile.name == "smoke" else rng.choice(nodes)
-        runs.append({"id": profile.fault_free_runs + j, "seed": seed * 1000 + profile.fault_free_runs + j,
+        runs.append({"id": FAULTY_IDS + j, "seed": seed * 1000 + FAULTY_IDS + j,
                      "kind": kind, "component": component_name(rng.choice(ROBOTS), node)})
     return runs
 
