@@ -19,7 +19,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "perception.cli",          # faultmas perceive
     "robot_bridge.cli",        # faultmas ros launch, faultmas sim ...
     "agents.demo_cli",         # faultmas run, faultmas eval
-    "experiments.cli",         # faultmas experiment imu|...
+    "experiments.cli",         # faultmas experiment imu|perfbugs
 )
 
 
