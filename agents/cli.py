@@ -18,6 +18,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "perception.cli",          # faultmas perceive
     "robot_bridge.cli",        # faultmas ros launch, faultmas sim ...
     "agents.demo_cli",         # faultmas run, faultmas eval
+    "agents.inspector.cli",    # faultmas inspect
 )
 
 
