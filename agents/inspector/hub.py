@@ -108,8 +108,8 @@ class TeamHub:
             self.changed.notify_all()
 
     def _drop(self, key: str, reason: str) -> None:
-        self.dropped += 1
         log.warning("inspector: dropped a malformed message on %s: %s", key, reason[:120])
+        self.dropped += 1
 
     # -- the team --------------------------------------------------------------------------------
     def _on_alive(self, sample: Any) -> None:
@@ -269,7 +269,7 @@ class TeamHub:
 
     # -- the world -------------------------------------------------------------------------------
     def _robot(self, name: str) -> dict:
-        return self.robots.setdefault(name, {"odom": None, "seen": [], "truth": None})
+        return self.robots.setdefault(name, {"odom": None, "seen": [], "truth": None, "origin": None})
 
     def _trail(self, name: str, kind: str) -> _Trail:
         return self._trails.setdefault((name, kind), _Trail())
@@ -309,6 +309,8 @@ class TeamHub:
             for name, (x, y, yaw) in poses.items():
                 robot = self._robot(name)
                 pose = (round(x, 3), round(y, 3), round(yaw, 1))
+                if robot["origin"] is None:   # odometry starts at zero where the robot stood: the map
+                    robot["origin"] = pose    # draws it from there, in the world's frame
                 if pose != robot["truth"]:
                     robot["truth"], changed = pose, True
                     self._trail(name, "truth").add(x, y)

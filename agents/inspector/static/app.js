@@ -4,7 +4,7 @@
 
 const $ = (id) => document.getElementById(id);
 const COLOURS = ["#1e88e5", "#e53935", "#43a047", "#fb8c00", "#8e24aa", "#00acc1", "#6d4c41", "#3949ab", "#c0ca33", "#d81b60", "#546e7a", "#00897b"];
-const state = { agent: null, source: null, marks: [], view: null, zoom: 8, plansShown: -1, colours: {} };
+const state = { agent: null, source: null, marks: [], view: null, zoom: 8, fit: true, plansShown: -1, colours: {} };
 
 function colour(name) {
   if (!(name in state.colours)) state.colours[name] = COLOURS[Object.keys(state.colours).length % COLOURS.length];
@@ -108,13 +108,25 @@ function renderMind(mind) {
   if (!mind.diagnoses.length) diag.append(el("p", { class: "hint", text: `${mind.agent} has made no .diagnose call yet` }));
 }
 
+// Odometry starts at zero where each robot stood; with the simulator's ground truth (origin) it is drawn
+// from there, in the world's frame; without, each robot in its own odometry frame.
+function toWorld(origin, p) {
+  if (!origin || !p) return p;
+  const a = origin[2] * Math.PI / 180, [x, y] = p;
+  const out = [origin[0] + x * Math.cos(a) - y * Math.sin(a), origin[1] + x * Math.sin(a) + y * Math.cos(a)];
+  if (p.length > 2) out.push(p[2] + origin[2]);
+  return out;
+}
+
 function renderWorld(robots) {
   const canvas = $("map"), ctx = canvas.getContext("2d");
   const names = Object.keys(robots);
   const pts = [];
   for (const r of Object.values(robots)) {
+    r.trail = r.trail.map((p) => toWorld(r.origin, p));
+    r.pose = toWorld(r.origin, r.odom);
     pts.push(...r.trail, ...r.truth_trail);
-    if (r.odom) pts.push([r.odom[0], r.odom[1]]);
+    if (r.pose) pts.push([r.pose[0], r.pose[1]]);
     if (r.truth) pts.push([r.truth[0], r.truth[1]]);
   }
   let [x0, x1, y0, y1] = [-2, 2, -2, 2];
@@ -138,7 +150,10 @@ function renderWorld(robots) {
     const r = robots[name], c = colour(name);
     path(r.truth_trail, true, "#90a4ae");
     path(r.trail, false, c);
-    const pose = r.odom || r.truth;
+    if (r.truth && r.pose) {   // where it is, faint, when it believes otherwise
+      ctx.strokeStyle = c; ctx.lineWidth = 1; ctx.beginPath(); ctx.arc(X(r.truth[0]), Y(r.truth[1]), 7, 0, 2 * Math.PI); ctx.stroke();
+    }
+    const pose = r.pose || r.truth;
     if (pose) {
       const [x, y, yaw] = pose, a = yaw * Math.PI / 180;
       ctx.fillStyle = c; ctx.beginPath(); ctx.arc(X(x), Y(y), 7, 0, 2 * Math.PI); ctx.fill();
@@ -162,22 +177,26 @@ function renderTimeline(clock) {
   const marks = state.marks, svg = $("timeline");
   $("clock").textContent = `(${clock} seconds)`;
   const agents = [...new Set(marks.map((m) => m.agent))].sort();
-  const lane = 34, left = 80, end = Math.max(10, ...marks.map((m) => m.t));
-  const width = left + end * state.zoom + 200;
+  const lane = 54, left = 80, end = Math.max(10, ...marks.map((m) => m.t));
+  if (state.fit) state.zoom = Math.max(2, ($("timeline-scroll").clientWidth - left - 160) / end);
+  const width = left + end * state.zoom + 160;
   svg.setAttribute("width", width); svg.setAttribute("height", Math.max(60, 20 + agents.length * lane));
   const ns = "http://www.w3.org/2000/svg";
   const node = (tag, attrs, text) => { const e = document.createElementNS(ns, tag); for (const [k, v] of Object.entries(attrs)) e.setAttribute(k, v); if (text !== undefined) e.textContent = text; return e; };
   svg.replaceChildren();
-  for (let t = 0; t <= end; t += state.zoom >= 8 ? 5 : 20) {
+  const tick = [1, 2, 5, 10, 20, 50, 100, 200, 500].find((d) => d * state.zoom >= 40) || 1000;
+  for (let t = 0; t <= end; t += tick) {
     svg.append(node("line", { x1: left + t * state.zoom, x2: left + t * state.zoom, y1: 0, y2: 12 + agents.length * lane, stroke: "#eceff1" }));
     svg.append(node("text", { x: left + t * state.zoom + 2, y: 10, fill: "#90a4ae" }, `${t}s`));
   }
   agents.forEach((a, i) => svg.append(node("text", { x: 4, y: 28 + i * lane, fill: colour(a) }, a)));
+  const nth = {};
   for (const m of marks) {
     const i = agents.indexOf(m.agent), x = left + m.t * state.zoom, y = 24 + i * lane;
+    const k = (nth[m.agent] = (nth[m.agent] ?? -1) + 1);
     const g = node("g", { class: "mark", "data-step": m.step, "data-agent": m.agent });
     g.append(node("circle", { cx: x, cy: y, r: 4, fill: colour(m.agent) }));
-    g.append(node("text", { x: x + 5, y: y + 12, fill: "#37474f" }, m.step));
+    g.append(node("text", { x: x + 3, y: y + 12 + (k % 3) * 10, fill: "#37474f" }, m.step));
     g.append(node("title", {}, `${m.t.toFixed(2)} s ${m.agent}: ${m.step} ${m.detail}`));
     svg.append(g);
   }
@@ -202,7 +221,7 @@ async function command(name) {
 
 for (const name of ["pause", "step", "resume"]) $(name).onclick = () => command(name);
 $("belief-filter").oninput = () => state.view && renderMind(state.view.mind);
-$("zoom-in").onclick = () => { state.zoom *= 1.5; renderTimeline(state.view ? state.view.clock : ""); };
-$("zoom-out").onclick = () => { state.zoom = Math.max(0.5, state.zoom / 1.5); renderTimeline(state.view ? state.view.clock : ""); };
+$("zoom-in").onclick = () => { state.fit = false; state.zoom *= 1.5; renderTimeline(state.view ? state.view.clock : ""); };
+$("zoom-out").onclick = () => { state.fit = false; state.zoom = Math.max(0.5, state.zoom / 1.5); renderTimeline(state.view ? state.view.clock : ""); };
 const wanted = new URLSearchParams(location.hash.slice(1)).get("agent");
 if (wanted) select(wanted); else connect();
