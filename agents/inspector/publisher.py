@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import logging
+import queue
 import threading
 import time
 from collections import deque
@@ -63,11 +64,10 @@ class MindPublisher:
         self._closed = threading.Event()
         self._thread: threading.Thread | None = None
         self._control_thread: threading.Thread | None = None
+        self._controls: queue.SimpleQueue = queue.SimpleQueue()
 
     # -- life cycle ------------------------------------------------------------------------------
     def start(self) -> "MindPublisher":
-        import zenoh
-
         session = self.transport.session
         for name, agent in self.runtime.agents.items():
             watched = _Watched(agent, PauseGate(agent, self._stopping), self.history)
@@ -77,12 +77,13 @@ class MindPublisher:
                 lambda status, w=watched: self._on_matching(w, status.matching))
             queryable = session.declare_queryable(keys.state_key(self.mas, name),
                                                   lambda query, w=watched: self._on_state_query(w, query))
-            self._declared += [listener, queryable, watched.stream]
-        controls = session.declare_queryable(f"{keys.mas_prefix(self.mas)}/inspect/*/control",
-                                             zenoh.handlers.FifoChannel(64))
-        self._declared.append(controls)
-        self._control_thread = threading.Thread(target=self._serve_controls, args=(controls.handler,),
-                                                name="faultmas-inspect-control", daemon=True)
+            # each agent's own key: every process of the MAS has a publisher, only the agent's answers
+            control = session.declare_queryable(keys.control_key(self.mas, name),
+                                                lambda query, n=name: self._controls.put((n, query)))
+            self._declared += [listener, queryable, control, watched.stream]
+        # pause and step wait for the agent's thread: not on Zenoh's threads, on one of ours
+        self._control_thread = threading.Thread(target=self._serve_controls, name="faultmas-inspect-control",
+                                                daemon=True)
         self._control_thread.start()
         if self.bridge is not None:
             self.bridge.on_message = self._on_message
@@ -94,6 +95,7 @@ class MindPublisher:
         """Undeclare everything and let paused agents go (the process is stopping)."""
         self._closed.set()
         self._wake.set()
+        self._controls.put(None)
         for watched in self.agents.values():
             watched.gate.resume()
         if self.bridge is not None and getattr(self.bridge, "on_message", None) == self._on_message:
@@ -176,19 +178,18 @@ class MindPublisher:
             self._closed.wait(self.period)
 
     # -- pause / step / resume -------------------------------------------------------------------
-    def _serve_controls(self, channel: Any) -> None:
-        try:
-            while True:
-                query = channel.recv()
-                try:
-                    reply = self._control(keys.agent_of(str(query.key_expr)), _payload(query))
-                    query.reply(str(query.key_expr), _encode(reply))
-                except Exception:
-                    log.exception("inspector: a control request failed")
-                finally:
-                    query.drop()
-        except Exception:  # channel closed: undeclared
-            return
+    def _serve_controls(self) -> None:
+        while True:
+            item = self._controls.get()
+            if item is None:
+                return
+            name, query = item
+            try:
+                query.reply(keys.control_key(self.mas, name), _encode(self._control(name, _payload(query))))
+            except Exception:  # a viewer gone meanwhile: nothing to answer
+                log.exception("inspector: a control request for %s failed", name)
+            finally:
+                query.drop()
 
     def _control(self, name: str, request: dict) -> dict:
         watched = self.agents.get(name)

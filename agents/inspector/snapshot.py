@@ -55,7 +55,8 @@ def intentions_of(agent: Any) -> list:
 
 
 def _where(source_file: str, line: int) -> str:
-    return f"{os.path.basename(source_file) or '?'}:{line}"
+    """``file.asl:line``; plans of no file (the interpreter's own, e.g. for ``askOne``) are built-in."""
+    return f"{os.path.basename(source_file)}:{line}" if source_file else "built-in"
 
 
 def _intended_means(im: Any) -> dict:

@@ -20,10 +20,12 @@ from agents.zenoh_arch import TransportBridge
 from agentspeak.runtime import LocalRuntime
 from tests.agents.transport_fixtures import poll, unique_mas
 
+# .wait(1): a busy loop that never leaves the compiled interpreter keeps Python's interpreter lock, so
+# other threads (Zenoh's callbacks, the inspector's) wait for it; an agent of a robot waits on its robot.
 COUNTER = """
 count(0).
 !loop.
-+!loop : count(N) & N < 100000000 <- -+count(N + 1); !inner(N); !loop.
++!loop : count(N) & N < 100000000 <- -+count(N + 1); !inner(N); .wait(1); !loop.
 +!inner(N) <- true.
 """
 

@@ -10,6 +10,7 @@ import time
 
 import psutil
 import pytest
+from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
 from tests.agents.inspector_fixtures import DOCS, launch_browser, open_page, run_inspected, wait_line
 
@@ -36,6 +37,12 @@ def main_job(browser):
     """The main job with the page open on Faulty and on Helper from the start, held 120 s at its end."""
     proc, url = run_inspected("--inspect-hold", "120", "--allow-pause", "--timeout", "90")
     pages = {name: open_page(browser, url, name) for name in ("faulty", "helper")}
+    try:   # docs/inspector.png: the helper's mind while it looks for Faulty, the run going on
+        pages["helper"].wait_for_function("document.querySelector('#intentions').innerText.includes('findRobot(faulty')"
+                                          " && document.querySelectorAll('#plans li').length > 10", timeout=60_000)
+        pages["helper"].screenshot(path=str(DOCS / "inspector.png"), full_page=True)
+    except PlaywrightTimeout:
+        pass   # missed: test_page_shows_the_main_job_as_it_runs says what the page did show
     wait_line(proc, r"run finished; the inspector stays", 120)
     for page in pages.values():   # the page catches up (the run's process also simulates the cameras)
         page.wait_for_selector("#timeline .mark[data-agent=faulty][data-step=diagnosed]", timeout=30_000)
@@ -80,9 +87,7 @@ def test_page_shows_the_main_job_as_it_runs(main_job):
     assert ["faulty", "diagnosed"] in marks, marks
     assert [m for m in marks if m[0] == "faulty"][-1] == ["faulty", "diagnosed"], marks
 
-    page = pages["faulty"]
-    page.wait_for_function("document.querySelectorAll('#plans li').length > 10")
-    page.screenshot(path=str(DOCS / "inspector.png"), full_page=True)
+    assert pages["faulty"].query_selector_all("#plans li")   # the plan library, with source lines
 
 
 def test_pause_and_step_change_the_cycle_count_by_exactly_one(main_job):

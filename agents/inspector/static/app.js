@@ -60,7 +60,7 @@ function renderTeam(team) {
   for (const a of team) {
     const row = el("tr", { "data-agent": a.agent },
       el("td", { text: a.agent }), el("td", { text: a.robot || "-" }),
-      el("td", { class: "cycles", text: a.cycles ?? "-" }), el("td", { class: "top", text: a.top || "" }));
+      el("td", { class: "cycles", text: a.cycles ?? "-" }), el("td", { class: "top", title: a.top || "", text: a.top || "" }));
     row.className = (a.alive ? "alive" : "dead") + (a.agent === state.agent ? " selected" : "") + (a.paused ? " paused" : "");
     row.onclick = () => select(a.agent);
     body.append(row);
