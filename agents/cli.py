@@ -20,6 +20,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "robot_bridge.cli",        # faultmas ros launch, faultmas sim ...
     "agents.demo_cli",         # faultmas run, faultmas eval
     "experiments.cli",         # faultmas experiment imu|perfbugs
+    "agents.inspector.cli",    # faultmas inspect
 )
 
 

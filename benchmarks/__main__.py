@@ -18,6 +18,7 @@ BENCHMARKS: dict[str, str] = {
     "sim": "benchmarks.bench_sim",
     "perception": "benchmarks.bench_perception",
     "perfbugs": "benchmarks.bench_perfbugs",
+    "inspect": "benchmarks.bench_inspect",
 }
 
 
