@@ -8,7 +8,7 @@ PURE_PYTHON := FAULTMAS_PURE_PYTHON=1
 
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: run test bench install speedups browser clean
+.PHONY: run test bench install speedups browser clean jason-tests
 
 $(STAMP): pyproject.toml Makefile setup.py
 	$(PYTHON) -m venv $(VENV)
@@ -43,6 +43,12 @@ test: speedups browser
 	$(PY) -m pytest -q -p no:cacheprovider
 	# the language suite again on the interpreter run from source (what runs without a C compiler)
 	$(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider tests/agentspeak
+
+# Jason 3.3.2's own AgentSpeak unit tests, run unchanged from ../shared (see tests/jason_suite): fails
+# unless every executed test passes, and prints executed/passed
+JASON_TESTS ?= ../shared/jason-unit-tests
+jason-tests: speedups
+	$(PY) -m tests.jason_suite $(abspath $(JASON_TESTS))
 
 bench: speedups
 	$(PY) -m benchmarks
