@@ -17,7 +17,10 @@ DISCOVERY = 3.0   # seconds to look for a MAS when --mas is not given
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("inspect", help="a live web view of a running MAS: agents' minds, robots, timeline",
-                       description=__doc__.splitlines()[0])
+                       description="A live local web page of a running MAS: its agents (alive or gone), each "
+                                   "agent's beliefs, events, intentions, plans and messages, the robots on a map, "
+                                   "the .diagnose calls and the timeline of the fault-plan steps. "
+                                   "See docs/inspector.md.")
     p.add_argument("--mas", default=None, help="the MAS to look at (default: the only one seen)")
     p.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
                    help="a Zenoh router or agent of the MAS, e.g. tcp/127.0.0.1:7447 (repeatable)")
