@@ -141,3 +141,21 @@ def test_listen_is_loopback_unless_public_is_given(capsys):
         parse_listen("8470", False)
     assert parse_listen("0.0.0.0:8470", True) == ("0.0.0.0", 8470)
     assert "WARNING serving on 0.0.0.0, not loopback" in capsys.readouterr().err
+
+
+def test_the_mind_shows_what_the_agents_observers_see(tmp_path):
+    from agents.inspector.observers import observers_of
+    from tests.detection.test_agent_actions import AGENT, MODEL, OBSERVERS, RULES, record_slowing_scan
+
+    (tmp_path / "obs.yaml").write_text(OBSERVERS)
+    (tmp_path / "nav.yaml").write_text(MODEL)
+    (tmp_path / "nav.rules.yaml").write_text(RULES)
+    record_slowing_scan(tmp_path / "run")
+    runtime = LocalRuntime(printer=lambda name, text: None)
+    agent = runtime.add_agent("robot", AGENT, source_file=str(tmp_path / "robot.asl"))
+    runtime.run(timeout=30)          # the bag replayed: the scan slowed down, the rule asked for a repair
+    [seen] = observers_of(agent)
+    assert seen["config"] == "obs.yaml" and seen["obs"] == ["~hz(scan)"]
+    assert seen["possibly_faulty"] == ["laser_driver"]
+    assert [f["rule"] for f in seen["fired"]] == ["ask_for_repair"]
+    assert [(v["observation"], v["holds"]) for v in seen["verdicts"]] == [("hz(scan)", False)]
