@@ -58,7 +58,7 @@ def parse_listen(text: str, public: bool) -> tuple[str, int]:
 
 def cmd_inspect(args: argparse.Namespace) -> int:
     from agents.inspector.hub import TeamHub
-    from agents.inspector.web import WebServer
+    from agents.inspector.web import WebServer, listening_socket
     from agents.mas_cli import setup_logging
     from agents.transport.config import ZenohOptions, build_config
 
@@ -68,23 +68,26 @@ def cmd_inspect(args: argparse.Namespace) -> int:
     except ValueError as exc:
         print(f"faultmas inspect: {exc}", file=sys.stderr)
         return 2
+    try:
+        sock = listening_socket(host, port)
+    except OSError as exc:
+        print(f"faultmas inspect: cannot serve on {args.listen}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
     import zenoh
 
     try:
         session = zenoh.open(build_config(ZenohOptions(connect=tuple(args.connect), config_file=args.config)))
     except Exception as exc:  # zenoh.ZError or ValueError: bad endpoint or config
+        sock.close()
         print(f"faultmas inspect: cannot join the network: {exc}", file=sys.stderr)
         return 1
     try:
         mas = args.mas or _discover(session)
         if mas is None:
+            sock.close()
             return 1
         hub = TeamHub(session, mas).start()
-        try:
-            server = WebServer(hub, host, port)
-        except OSError as exc:
-            print(f"faultmas inspect: cannot serve on {args.listen}: {exc.strerror or exc}", file=sys.stderr)
-            return 1
+        server = WebServer(hub, sock)
         print(f"faultmas inspect: MAS {mas} at {server.url} (Ctrl-C to stop)", flush=True)
         server.serve_forever()
         hub.close()

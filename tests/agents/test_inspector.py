@@ -159,3 +159,24 @@ def test_the_mind_shows_what_the_agents_observers_see(tmp_path):
     assert seen["possibly_faulty"] == ["laser_driver"]
     assert [f["rule"] for f in seen["fired"]] == ["ask_for_repair"]
     assert [(v["observation"], v["holds"]) for v in seen["verdicts"]] == [("hz(scan)", False)]
+
+
+def test_the_commands_refuse_a_taken_port_or_a_public_address_before_anything_starts():
+    import socket
+
+    from tests.agents.distributed_fixtures import Proc
+
+    taken = socket.socket()
+    taken.bind(("127.0.0.1", 0))
+    taken.listen(1)
+    port = taken.getsockname()[1]
+    try:
+        run = Proc(["run", "--inspect", "--listen", f"127.0.0.1:{port}"])
+        assert run.finish(60) == 1
+        assert f"cannot serve the inspector on 127.0.0.1:{port}: Address already in use" in "\n".join(run.err)
+        assert not any(line.startswith("[faulty]") for line in run.out)          # no run started
+    finally:
+        taken.close()
+    public = Proc(["inspect", "--listen", "0.0.0.0:8470"])
+    assert public.finish(60) == 2
+    assert "not a loopback address; add --public" in "\n".join(public.err)
