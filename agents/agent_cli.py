@@ -64,12 +64,13 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
     from agentspeak.mas2j import load_mas2j
     from agentspeak.parser import parse_program
     from agentspeak.runtime import LocalRuntime
+    from agentspeak.source_text import read_source
 
     setup_logging()
     try:
         check_name(args.name)
         check_name(args.mas, "MAS name")
-        source = Path(args.file).read_text()
+        source = read_source(args.file)
         program = parse_program(source, args.file)
         declared: list[str] = [args.name]
         beliefs: list = []

@@ -15,10 +15,11 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "agentspeak.cli",          # faultmas asl check|run
     "agents.mas_cli",          # faultmas mas run, faultmas agent run, faultmas router
     "diagnosis.cli",           # faultmas diagnose
+    "detection.cli",           # faultmas observe
     "perception.cli",          # faultmas perceive
     "robot_bridge.cli",        # faultmas ros launch, faultmas sim ...
     "agents.demo_cli",         # faultmas run, faultmas eval
-    "experiments.cli",         # faultmas experiment NAME
+    "experiments.cli",         # faultmas experiment NAME (experiments/cli.py lists them)
 )
 
 

@@ -44,7 +44,7 @@ def _fmt(value: float) -> str:
     return "  n/a" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{value:.3f}"
 
 
-def run(args: argparse.Namespace) -> int:
+def main(args: argparse.Namespace) -> int:
     from detection.learned.dataset import DatasetError, load
     from detection.learned.evaluate import evaluate, plot_roc
 
