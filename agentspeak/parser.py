@@ -12,6 +12,7 @@ import re
 import threading
 from pathlib import Path
 
+from agentspeak.lark_loader import lalr_parser  # first: it refuses lark-parser 0.12 with the fix
 from lark import Lark, Token, Transformer
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
@@ -555,7 +556,7 @@ def _parse_items(text: str, source_file: str) -> list:
     global _INLINE_PARSER
     with _PARSE_LOCK:
         if _INLINE_PARSER is None:
-            _INLINE_PARSER = Lark(_GRAMMAR.read_text(), parser="lalr", lexer="contextual",
+            _INLINE_PARSER = lalr_parser(_GRAMMAR, lexer="contextual",
                                   maybe_placeholders=True, transformer=_TRANSFORMER, **_speedups())
         t = _TRANSFORMER
         t.source_file, t.vars, t.line, t.trigger_line = source_file, {}, 0, 0
