@@ -14,9 +14,13 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from lark import Lark
 
 CACHE_ENV = "FAULTMAS_CACHE_DIR"
 """Where the built tables go (default: ``$XDG_CACHE_HOME/faultmas`` or ``~/.cache/faultmas``)."""
@@ -32,22 +36,36 @@ def fix_command() -> str:
     return f"{sys.executable} -m pip install --force-reinstall --no-deps '{LARK_REQUIREMENT}'"
 
 
+def installed_lark_version() -> str | None:
+    """The version of the ``lark`` package ``import lark`` would give, read without importing it (Lark's
+    import costs more than the check is worth for commands that never parse); None if there is none."""
+    module = sys.modules.get("lark")
+    if module is not None:
+        return str(getattr(module, "__version__", "unknown"))
+    import importlib.util
+
+    spec = importlib.util.find_spec("lark")
+    if spec is None or not spec.origin:
+        return None
+    try:
+        found = re.search(r"^__version__\s*(?::\s*str\s*)?=\s*[\"']([^\"']+)", Path(spec.origin).read_text(), re.M)
+    except OSError:
+        return "unknown"
+    return found.group(1) if found else "unknown"
+
+
 def require_lark_1() -> None:
     """Raise ``WrongLarkError`` (with the fix) unless ``import lark`` gives Lark 1.x."""
-    try:
-        import lark
-    except ImportError as exc:
-        raise WrongLarkError(f"faultmas needs Lark 1.x, which is not installed ({exc}); fix: {fix_command()}") from None
-    version = getattr(lark, "__version__", "unknown")
+    version = installed_lark_version()
+    if version is None:
+        raise WrongLarkError(f"faultmas needs Lark 1.x, which is not installed; fix: {fix_command()}")
     if not version.startswith("1."):
         raise WrongLarkError(
             f"faultmas needs Lark 1.x, but the installed 'lark' package is version {version} (the ROS 2 wheels' "
             f"lark-parser replaced it); fix: {fix_command()}")
 
 
-require_lark_1()
-
-from lark import Lark  # noqa: E402  (after the check: Lark 0.12 would import but parse wrongly)
+require_lark_1()      # at import: the modules that parse import this one before ``lark``
 
 
 def cache_dir() -> Path:
@@ -64,6 +82,8 @@ def lalr_parser(grammar_file: Path, **options: Any) -> Lark:
 
     The file name holds a digest of the grammar text and the options, so a changed grammar never meets
     an old table (Lark checks its own digest on load too, and rebuilds on a mismatch or a damaged file)."""
+    from lark import Lark
+
     text = Path(grammar_file).read_text(encoding="utf-8")
     key = repr(sorted((k, v) for k, v in options.items() if k not in ("transformer", "_plugins")))
     digest = hashlib.sha256(f"{text}\0{key}\0{'_plugins' in options}".encode()).hexdigest()[:20]
