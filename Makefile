@@ -6,7 +6,9 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.faultmas-installed
 PURE_PYTHON := FAULTMAS_PURE_PYTHON=1
 
-.PHONY: run test test-install bench install speedups clean
+CHROMIUM := /usr/bin/chromium
+
+.PHONY: run test test-install bench install speedups browser clean
 
 # constraints.txt: the exact versions (pyproject.toml publishes ranges; issue 23). Installs go through it.
 $(STAMP): pyproject.toml constraints.txt Makefile setup.py
@@ -31,7 +33,14 @@ speedups: $(STAMP)
 run: speedups
 	$(VENV)/bin/faultmas run
 
-test: speedups
+# The inspector's browser tests drive Debian's Chromium with Playwright (Playwright's own browser download
+# cannot work here: see ../shared/notes/browser-tests.md). Installed once, as root (CI runs as root).
+browser: $(CHROMIUM)
+$(CHROMIUM):
+	command -v apt-get >/dev/null && [ "$$(id -u)" = 0 ] || { echo "install Debian's chromium (apt-get install chromium) for the browser tests" >&2; exit 1; }
+	apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
+
+test: speedups browser
 	$(PY) -m pytest -q -p no:cacheprovider
 	# the language suite again on the interpreter run from source (what runs without a C compiler)
 	$(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider tests/agentspeak

@@ -48,6 +48,8 @@ def add_agent_parser(sub: argparse._SubParsersAction) -> None:
                      help="an option for the bridge (repeatable; numbers are converted)")
     run.add_argument("--bridge-timeout", type=float, default=30.0, metavar="S",
                      help="seconds the robot gets to answer at start (default %(default)s)")
+    run.add_argument("--allow-pause", action="store_true",
+                     help="let `faultmas inspect` pause and step this agent (read-only otherwise)")
     run.set_defaults(func=cmd_agent_run)
     agent.set_defaults(func=lambda args: (agent.print_help(), 2)[1])
 
@@ -64,12 +66,13 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
     from agentspeak.mas2j import load_mas2j
     from agentspeak.parser import parse_program
     from agentspeak.runtime import LocalRuntime
+    from agentspeak.source_text import read_source
 
     setup_logging()
     try:
         check_name(args.name)
         check_name(args.mas, "MAS name")
-        source = Path(args.file).read_text()
+        source = read_source(args.file)
         program = parse_program(source, args.file)
         declared: list[str] = [args.name]
         beliefs: list = []
@@ -117,11 +120,14 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
     try:
         bridge = TransportBridge(runtime, transport, declared=declared,
                                  allowed_code_senders=args.allow_code_from).attach()
+        from agents.inspector.publisher import MindPublisher  # state on demand for `faultmas inspect`
+        inspected = MindPublisher(transport, runtime, bridge, allow_control=args.allow_pause).start()
         if args.wait_for_peers > 0 and not transport.wait_for_agents(declared, args.wait_for_peers):
             missing = sorted(set(declared) - transport.alive_agents())
             log.warning("agent %s: still missing after %.0f s: %s; starting anyway", args.name,
                         args.wait_for_peers, ", ".join(missing))
         why = bridge.run(timeout=args.timeout)
+        inspected.close()
         bridge.detach()
     finally:
         if robot is not None:

@@ -26,6 +26,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "sim": ("robot_bridge.cli", "the embedded simulator: scripted runs with faults"),
     "run": ("agents.demo_cli", "the main job: two robots diagnose an injected fault together"),
     "eval": ("agents.demo_cli", "every fault scenario R times: success rates and step latencies"),
+    "observe": ("detection.cli", "watch a running system: observers, diagnosis and rules"),
+    "experiment": ("experiments.cli", "run an experiment that reproduces a paper's table"),
+    "inspect": ("agents.inspector.cli", "a live web view of a running MAS: agents' minds, robots, timeline"),
 }
 
 DESCRIPTION = ("faultmas: BDI agents in AgentSpeak with which a team of robots detects, diagnoses and reacts to "
@@ -108,7 +111,11 @@ def setup_logging(args: argparse.Namespace) -> None:
     import logging
 
     level = args.log_level or {0: "WARNING", 1: "INFO"}.get(args.verbose, "DEBUG")
-    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr, force=True)
+    root = logging.getLogger()
+    if not root.handlers:
+        logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr)
+    elif args.log_level or args.verbose:    # logging set up by the caller (tests, an embedding program)
+        root.setLevel(level)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -240,8 +240,12 @@ def build_world(scenario: Scenario, speed: float = 0.0):
 def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float = 120.0,
                  out: TextIO | None = None, err: TextIO | None = None,
                  echo: Callable[[Mark], None] | None = None,
-                 on_mark: Callable[[Mark, Callable[[str], None]], None] | None = None) -> RunResult:
+                 on_mark: Callable[[Mark, Callable[[str], None]], None] | None = None,
+                 inspector=None) -> RunResult:
     """Run ``scenario`` to the end (or ``timeout`` wall seconds); agents' lines go to ``out``.
+
+    ``inspector``: an ``agents.inspector.live.LiveInspector`` that serves the web view on the run's hub
+    (only with ``processes``) and holds the agents alive at the end.
 
     ``on_mark(mark, kill)``: called on every step; ``kill(name)`` SIGKILLs that agent's process (for
     robustness tests: a helper or a faulty robot that dies mid-way); a true return ends the run.
@@ -250,7 +254,7 @@ def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float =
     world, bridges = build_world(scenario)
     try:
         if processes:
-            finished = _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark)
+            finished = _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark, inspector)
         else:
             finished = _run_in_process(scenario, world, bridges, timeout, out, echo)
     finally:
@@ -290,23 +294,30 @@ def _run_in_process(scenario, world, bridges, timeout, out, echo) -> ProgressLog
     return log
 
 
-def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=None) -> ProgressLog:
+def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=None, inspector=None) -> ProgressLog:
     from robot_bridge.sim.server import SimServer
 
     def serve(hub) -> Callable[[], None]:
-        return SimServer(hub.session, scenario.mas, bridges).start().stop
-    return run_agent_processes(scenario, ["--bridge", "zenoh"], timeout, world=world, out=out, err=err,
-                               echo=echo, on_mark=on_mark, serve=serve)
+        stop_sim = SimServer(hub.session, scenario.mas, bridges).start().stop
+        if inspector is None:
+            return stop_sim
+        stop_inspector = inspector.serve(hub, world)
+        return lambda: (stop_inspector(), stop_sim())
+    extra = ["--bridge", "zenoh"] + (["--allow-pause"] if inspector is not None and inspector.allow_pause else [])
+    return run_agent_processes(scenario, extra, timeout, world=world, out=out, err=err, echo=echo,
+                               on_mark=on_mark, serve=serve, hold=inspector.hold if inspector is not None else None)
 
 
 def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: float, *, world=None,
                         clock: Callable[[], float] | None = None, out: TextIO | None = None,
                         err: TextIO | None = None, echo: Callable[[Mark], None] | None = None,
                         on_mark: Callable[[Mark, Callable[[str], None]], bool | None] | None = None,
-                        serve: Callable[[object], Callable[[], None]] | None = None) -> ProgressLog:
+                        serve: Callable[[object], Callable[[], None]] | None = None,
+                        hold: Callable[[], None] | None = None) -> ProgressLog:
     """One ``faultmas agent run ... EXTRA_ARGS`` process per robot of ``scenario`` over a Zenoh hub on
     loopback; ``serve(hub)`` starts what the robots need on the hub (returns its stop). The progress
-    reports the agents publish are recorded until every robot is done, ``on_mark`` says stop, or ``timeout``."""
+    reports the agents publish are recorded until every robot is done, ``on_mark`` says stop, or ``timeout``;
+    then ``hold()`` runs (the agents still alive) before they are stopped."""
     import os
     import sys
     import tempfile
@@ -348,6 +359,8 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
         try:
             launcher.start()
             launcher.wait(timeout, stop_when_idle=False)
+            if hold is not None:
+                hold()
         finally:
             launcher.stop_all()
             if stop_serving is not None:

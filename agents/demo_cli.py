@@ -46,6 +46,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--plot", metavar="PNG", help="draw ground-truth and believed trajectories to this file")
     run.add_argument("--quiet", action="store_true", help="do not show the agents' own lines")
     run.add_argument("--timeout", type=float, default=120.0, help="wall seconds before giving up (default %(default)s)")
+    run.add_argument("--inspect", action="store_true",
+                     help="serve the live web view (faultmas inspect) of this run; wait at its end until Ctrl-C")
+    run.add_argument("--inspect-hold", type=float, default=None, metavar="S",
+                     help="with --inspect: wait S seconds at the end instead of until Ctrl-C (0: not at all)")
+    run.add_argument("--allow-pause", action="store_true", help="with --inspect: let the page pause and step agents")
+    from agents.inspector.cli import add_listen_arguments  # stdlib only: keeps --help fast
+    add_listen_arguments(run)
     run.set_defaults(func=cmd_run)
 
     ev = sub.add_parser("eval", help="every fault scenario R times: success rates and step latencies")
@@ -84,6 +91,20 @@ def cmd_run(args: argparse.Namespace) -> int:
         print(f"faultmas run: {exc}", file=sys.stderr)
         return 2
     show = sys.stderr if args.json else sys.stdout
+    inspector = None
+    if args.inspect:
+        from agents.inspector.cli import parse_listen
+        from agents.inspector.live import LiveInspector
+        if args.in_process or args.bridge != "sim":
+            print("faultmas run: --inspect needs the agents in their own processes on the simulator "
+                  "(not --in-process, not --bridge ros2: use `faultmas inspect --connect` there)", file=sys.stderr)
+            return 2
+        try:
+            host, port = parse_listen(args.listen, args.public)
+        except ValueError as exc:
+            print(f"faultmas run: {exc}", file=sys.stderr)
+            return 2
+        inspector = LiveInspector(host, port, args.inspect_hold, args.allow_pause, out=show)
     for r in scenario.robots if args.bridge == "sim" else ():
         what = f"fault {r.fault}" + (" (a transient stall raises a false alarm)" if r.false_alarm else "")
         print(f"faultmas: {r.name:<8} at ({r.x:5.2f}, {r.y:5.2f}) heading {r.yaw_deg:6.1f} deg, {what}", file=show)
@@ -93,7 +114,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         result = run_on_ros2(scenario, timeout=args.timeout, out=agent_lines, echo=lambda m: _echo(m, show))
     else:
         result = run_scenario(scenario, processes=not args.in_process, timeout=args.timeout,
-                              out=agent_lines, err=sys.stderr, echo=lambda m: _echo(m, show))
+                              out=agent_lines, err=sys.stderr, echo=lambda m: _echo(m, show), inspector=inspector)
     if args.plot and result.world is not None:
         from robot_bridge.cli import plot
         plot(result.world, args.plot)

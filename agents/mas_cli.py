@@ -41,14 +41,16 @@ def build_local_mas(project, printer=None):
 
     from agentspeak.parser import parse_program
     from agentspeak.runtime import LocalRuntime
+    from agentspeak.source_text import read_source
 
     runtime = LocalRuntime(printer=printer)
     runtime.trusted_senders = set(project.agent_names())
+    runtime.source_dirs = list(project.source_dirs)
     programs: dict[str, object] = {}
     for decl in project.agents:
         if decl.source not in programs:
             try:
-                text = Path(decl.source).read_text()
+                text = read_source(decl.source)
             except OSError as exc:
                 from agentspeak.errors import SourceError
                 raise SourceError(f"agent '{decl.name}': cannot read {decl.source}: {exc.strerror or exc}",
@@ -58,7 +60,8 @@ def build_local_mas(project, printer=None):
         goals = option_literals(decl.options.get("goals"), project.file)
         for name in decl.instance_names():
             # each instance gets its own parse: plans hold per-agent labels and state
-            program = parse_program(programs[decl.source], decl.source)
+            program = parse_program(programs[decl.source], decl.source,
+                                    source_path=tuple(project.source_dirs))
             runtime.add_agent(name, source_file=decl.source, program=program,
                               extra_beliefs=beliefs, extra_goals=goals)
     return runtime

@@ -26,14 +26,20 @@ def _setup_logging() -> None:
 
 
 def cmd_check(args) -> int:
+    from agentspeak.errors import SourceError
     from agentspeak.parser import parse_program_all_errors
+    from agentspeak.source_text import read_source
     _setup_logging()
     failed = 0
     for file in args.files:
         try:
-            text = Path(file).read_text()
+            text = read_source(file)
         except OSError as exc:
             print(f"{file}: cannot read: {exc.strerror or exc}", file=sys.stderr)
+            failed += 1
+            continue
+        except SourceError as exc:  # not UTF-8
+            print(exc, file=sys.stderr)
             failed += 1
             continue
         if file.endswith(".mas2j"):
@@ -61,11 +67,15 @@ def cmd_check(args) -> int:
 def cmd_run(args) -> int:
     from agentspeak.errors import AslSyntaxError
     from agentspeak.runtime import LocalRuntime
+    from agentspeak.source_text import read_source
     _setup_logging()
     try:
-        text = Path(args.file).read_text()
+        text = read_source(args.file)
     except OSError as exc:
         print(f"{args.file}: cannot read: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except AslSyntaxError.__mro__[1] as exc:  # SourceError: not UTF-8
+        print(exc, file=sys.stderr)
         return 2
     name = args.name or Path(args.file).stem
     runtime = LocalRuntime()

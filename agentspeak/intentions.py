@@ -115,9 +115,12 @@ class PlanLibrary:
         self._index: dict[tuple, list[Plan]] | None = None
         self._var_plans: dict[tuple, list[Plan]] = {}
         self.kqml_override = False  # a plan is relevant to +!kqml_received/4 (valid while _index is)
+        self.has_meta = False       # a ^!g plan exists: the agent posts goal-state meta events
 
     def add(self, plan: Plan, at_end: bool = True) -> None:
         plan.ensure_label()
+        if plan.trigger.op == "^":
+            self.has_meta = True
         if at_end:
             self.plans.append(plan)
         else:

@@ -29,9 +29,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 def read_observations(path: str) -> dict[str, bool]:
     """OBS.json as name -> bool; a bad file raises SourceError naming it."""
     from agentspeak.errors import SourceError
+    from agentspeak.source_text import read_source
 
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        data = json.loads(read_source(path, "observations file"))
+    except RecursionError:  # json's C decoder guards its recursion: a file nested 100,000 deep
+        raise SourceError(f"nested too deeply (JSON arrays or objects inside each other beyond "
+                          f"{sys.getrecursionlimit()} levels)", file=path) from None
     except OSError as exc:
         raise SourceError(f"cannot read observations: {exc.strerror}", file=path) from None
     except json.JSONDecodeError as exc:

@@ -17,6 +17,8 @@ from agentspeak.lark_loader import lalr_parser  # first: it refuses lark-parser 
 from lark import Lark, Transformer, v_args
 from lark.exceptions import UnexpectedEOF, UnexpectedInput
 
+from agentspeak.nesting import MAX_NESTING, first_too_deep_bracket, nesting_depth, too_deep_message
+
 
 @dataclass(frozen=True)
 class Const:
@@ -111,7 +113,13 @@ def _parser() -> Lark:
 
 
 def parse_formula(text: str) -> Formula:
-    """Parse one formula; raises FormulaSyntaxError with the column and what was expected."""
+    """Parse one formula; raises FormulaSyntaxError with the column and what was expected.
+
+    A formula nested deeper than ``MAX_NESTING`` (``!!!...a`` 20,000 times, say) is refused here: the
+    transformation, ``literals``, ``_nnf`` and ``to_cnf`` recurse once per level."""
+    too_deep = first_too_deep_bracket(text)
+    if too_deep is not None:
+        raise FormulaSyntaxError(too_deep_message(), too_deep + 1)
     try:
         tree = _parser().parse(text)
     except UnexpectedInput as exc:
@@ -123,12 +131,19 @@ def parse_formula(text: str) -> Formula:
         found = text[exc.pos_in_stream:exc.pos_in_stream + 2].strip() or text[exc.pos_in_stream:][:1]
         raise FormulaSyntaxError(f"unexpected {found!r}{what}", exc.column) from None
     try:
-        return _ToAst().transform(tree)
+        formula = _ToAst().transform(tree)
+    except RecursionError:  # a long chain of binary operators
+        raise FormulaSyntaxError(too_deep_message(), None) from None
     except Exception as exc:  # lark wraps transformer errors in VisitError
         inner = getattr(exc, "orig_exc", exc)
         if isinstance(inner, FormulaSyntaxError):
             raise inner from None
+        if isinstance(inner, RecursionError):
+            raise FormulaSyntaxError(too_deep_message(), None) from None
         raise
+    if nesting_depth(formula) > MAX_NESTING:
+        raise FormulaSyntaxError(too_deep_message(), None)
+    return formula
 
 
 def literals(formula: Formula) -> list[Literal]:

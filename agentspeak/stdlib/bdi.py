@@ -182,33 +182,61 @@ def suspend(ctx, goal=None):
         except ValueError:
             pass
         agent._suspend(intention, "suspended")
-        intention.waiting = Suspend(reason="suspended")
+        before = intention.waiting
+        held = Suspend(reason="suspended", term=getattr(before, "term", None))
+        held.inner = before  # a wait in progress: it completes only once resumed
+        intention.waiting = held
+    if agent.plans.has_meta:
+        from agentspeak.program import Trigger
+        agent.goal_state(Trigger(ADD, ACHIEVE, goal), "suspended")
     return Suspend(reason="suspended") if current else True
 
 
 @internal_action(".resume", args=1)
 def resume(ctx, goal):
-    """Resume intentions suspended by ``.suspend`` that pursue ``goal``."""
+    """Resume intentions suspended by ``.suspend`` that pursue ``goal``. One that was waiting (``.wait``,
+    an action) goes on waiting; the resumed intention runs after the resuming one's next step (it is
+    queued at the next cycle, as Jason puts it back at the end of the intentions)."""
     agent = ctx.agent
     for intention, _ in list(_matching(agent, goal)):
         if intention.suspended == "suspended":
-            susp = intention.waiting
-            finish = getattr(susp, "finish", None)
-            if finish is not None:
-                finish(True)
-            else:
-                intention.waiting = None
-                agent._requeue(intention)
+            held = intention.waiting
+            agent.post_feedback(lambda i=intention, h=held: _resume(agent, i, h))
+            if agent.plans.has_meta:
+                from agentspeak.program import Trigger
+                agent.goal_state(Trigger(ADD, ACHIEVE, goal), "resumed")
+
+
+def _resume(agent, intention, held) -> None:
+    if intention.dropped or intention.waiting is not held:
+        return
+    complete = getattr(held, "complete", None)
+    inner = getattr(held, "inner", None)
+    if complete is not None:       # the wait ended meanwhile: go on after it
+        complete()
+    elif inner is not None:        # still waiting: the wait goes on
+        intention.waiting = inner
+        intention.suspended = inner.reason
+    else:
+        finish = getattr(held, "finish", None)
+        if finish is not None:
+            finish(True)
+        else:
+            intention.waiting = None
+            agent._requeue(intention)
 
 
 @internal_action(".suspended", args=2)
 def suspended(ctx, goal, reason):
+    """``.suspended(G, R)``: G is the goal of a suspended intention and R why (``wait(W)[time(T)]`` for a
+    ``.wait``, ``suspended`` for ``.suspend``, else the kind of wait)."""
     for intention in ctx.agent.intentions():
         if intention.suspended:
             for i in _goal_ims(intention, goal):
+                term = getattr(intention.waiting, "term", None)
                 mark = len(ctx.trail)
-                if ctx.unify(reason, Literal(intention.suspended)):
+                if ctx.unify(goal, resolve(intention.stack[i].plan.trigger.literal, intention.stack[i].b)) and \
+                        ctx.unify(reason, term if term is not None else Literal(intention.suspended)):
                     yield
+                    return
                 undo(ctx.b, ctx.trail, mark)
-
-

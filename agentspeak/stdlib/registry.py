@@ -66,6 +66,8 @@ class Suspend:
     event: Any = None
     reason: str = "suspended"
     on_event: Callable[[Any, Any], bool] | None = None
+    term: Any = None
+    """Why, as a term (``.suspended(G, R)`` gives it; Jason's ``wait(W)[time(T)]`` for ``.wait``)."""
 
 
 @dataclass(frozen=True)

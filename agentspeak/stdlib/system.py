@@ -35,20 +35,34 @@ def _rng(agent) -> _random.Random:
     return rng
 
 
-@internal_action(".random", args=(1, 2))
-def random(ctx, x, n=None):
-    """A random number in [0, 1); with a count N, backtracks over N values."""
+@internal_action(".random", args=(1, 3))
+def random(ctx, x, n=None, m=None):
+    """``.random(X)``: a number in [0, 1); ``.random(X, N)``: backtracks over N such numbers (0: no end);
+    ``.random(List, X[, N])``: a random element of List (N of them; 0: no end). As Jason 3."""
+    from agentspeak.terms import Cons, NIL, list_items
     rng = _rng(ctx.agent)
     if n is None:  # not a generator here: a function with ``yield`` would never bind X
         return ctx.unify(x, rng.random())
-    return _random_values(ctx, rng, x, n)
+    if isinstance(x, Cons) or x is NIL:
+        items = list_items(x)
+        if not items:
+            return False
+        count = 1 if m is None else m
+        if not isinstance(count, (int, float)):
+            raise wrong_arguments(".random(List, X, N): N is a number")
+        return _random_values(ctx, lambda: rng.choice(items), n, int(count))
+    if not isinstance(n, (int, float)):
+        raise wrong_arguments(".random(X, N): N is a number (or write .random(List, X))")
+    return _random_values(ctx, rng.random, x, int(n))
 
 
-def _random_values(ctx, rng, x, n):
+def _random_values(ctx, draw, x, n: int):
     from agentspeak.unify import undo
-    for _ in range(int(n)):
+    i = 0
+    while n == 0 or i < n:
+        i += 1
         mark = len(ctx.trail)
-        if ctx.unify(x, rng.random()):
+        if ctx.unify(x, draw()):
             yield
         undo(ctx.b, ctx.trail, mark)
 
@@ -63,8 +77,10 @@ def wait(ctx, what, timeout=None, elapsed=None):
     """``.wait(Ms)``, ``.wait({Event}[, Ms[, Elapsed]])`` or ``.wait(Condition[, Ms[, Elapsed]])``.
     With two arguments a timeout fails the goal; with three it does not (Elapsed says how long)."""
     started = time.monotonic()
+    from agentspeak.terms import Literal
     if isinstance(what, (int, float)):
-        return Suspend(timeout=max(0.0, what / 1000.0), on_timeout=lambda c: True, reason="wait")
+        return Suspend(timeout=max(0.0, what / 1000.0), on_timeout=lambda c: True, reason="wait",
+                       term=Literal("wait", (what,), (Literal("time", (what,)),)))
     seconds = None
     if timeout is not None:
         if not isinstance(timeout, (int, float)):
