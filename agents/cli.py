@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 from typing import Sequence
 
@@ -67,8 +68,21 @@ def add_logging_options(parser: argparse.ArgumentParser, top: bool = False) -> N
                         **({"default": None} if top else default))
 
 
+def plain_description(text: str | None) -> str | None:
+    """A description as a person reads it: without the usage line many modules' docstrings start with
+    (argparse prints the usage anyway), without reStructuredText quotes, a capital first and a full stop."""
+    if not text:
+        return text
+    text = re.sub(r"^``faultmas [^`]*``\s*[:.]?\s*", "", text.strip()).replace("``", "'")
+    if not text:
+        return None
+    text = text[0].upper() + text[1:]
+    return text if text.endswith((".", "!", "?", ")")) else text + "."
+
+
 def _with_logging_options(parser: argparse.ArgumentParser) -> None:
-    """Add the logging options to ``parser`` and to every parser below it."""
+    """Add the logging options to ``parser`` and to every parser below it (and make its description plain)."""
+    parser.description = plain_description(parser.description)
     names = {s for action in parser._actions for s in action.option_strings}
     if "--log-level" not in names and "-v" not in names:
         add_logging_options(parser)

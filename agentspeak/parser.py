@@ -26,6 +26,7 @@ from agentspeak.program import (
     Program, RemovePlan, Rule, Test, Trigger, TriggerInstr, UpdBel, While, For,
 )
 from agentspeak.stdlib.functions import FUNCTIONS, check_function_name, rule_function
+from agentspeak.stdlib.registry import set_program_reader
 from agentspeak.terms import (
     And, AnnotatedVar, Arith, ArithmeticError_, Func, Literal, Not, Or, Rel, Term, Var, is_ground, make_list,
     resolve,
@@ -779,3 +780,6 @@ def parse_body(text: str) -> tuple:
 
 def parse_plans(text: str, source_file: str = "<string>") -> list[Plan]:
     return parse_program(text, source_file).plans
+
+
+set_program_reader(parse_program)   # for .include (agentspeak/stdlib/system.py), without an import cycle

@@ -27,7 +27,7 @@ settle_wait(600).           // ms after a turn before the helper looks (the base
 outcome([], none).
 outcome([left_encoder, right_encoder], encoders).
 outcome([left_motor, right_motor], both_actuators).
-outcome([left_wheel, right_wheel], both_actuators).    // stuck wheels: the motors push, nothing turns
+outcome([left_wheel, right_wheel], stuck_wheels).      // the motors push (over-current), nothing turns
 outcome([left_motor], left_actuator).
 outcome([right_motor], right_actuator).
 

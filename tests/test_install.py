@@ -64,4 +64,4 @@ def test_plain_pip_install_with_ros2_extra_runs_or_refuses_with_the_fix(tmp_path
     again = _faultmas_run(venv, env)
     assert again.returncode == 0, again.stderr[-3000:]
     result = json.loads(again.stdout)
-    assert result["correct"] is True and result["diagnosis"] == "encoders"
+    assert result["correct"] is True and result["robots"][0]["diagnosis"] == "encoders"

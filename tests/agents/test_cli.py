@@ -80,3 +80,29 @@ def test_every_leaf_command_has_the_log_options() -> None:
             if not {"-v", "--log-level"} <= {s for a in p._actions for s in a.option_strings}:
                 missing.append(p.prog)
     assert missing == []
+
+
+def _all_parsers():
+    for name in cli.COMMANDS:
+        stack = [cli.build_parser(name)._subparsers._group_actions[0].choices[name]]
+        while stack:
+            parser = stack.pop()
+            for action in parser._actions:
+                if isinstance(action, argparse._SubParsersAction):
+                    stack.extend(action.choices.values())
+            yield parser
+
+
+def test_every_option_and_argument_has_help_and_descriptions_read_as_sentences() -> None:
+    missing, raw = [], []
+    for parser in _all_parsers():
+        missing += [f"{parser.prog} {a.option_strings or a.dest}" for a in parser._actions
+                    if a.help is None and not isinstance(a, argparse._SubParsersAction)]
+        if parser.description and ("``" in parser.description or not parser.description.endswith((".", ")"))):
+            raw.append(f"{parser.prog}: {parser.description}")
+    assert missing == [] and raw == []
+
+
+def test_plain_description_drops_the_usage_line_and_rst_quotes() -> None:
+    assert cli.plain_description("``faultmas router``: a Zenoh router for ``MAS`` use") == "A Zenoh router for 'MAS' use."
+    assert cli.plain_description("``faultmas diagnose MODEL --obs OBS.json``.") is None

@@ -46,9 +46,11 @@ def test_faultmas_run_json_contract_with_the_default_encoder_fault(tmp_path):
     picture = cv2.imread(str(image))
     assert picture is not None and picture.shape[0] > 200 and picture.std() > 0    # a real drawing
     report = json.loads(done.stdout)
-    assert report["fault"] == "encoders" and report["diagnosis"] == "encoders" and report["correct"] is True
-    assert set(report["steps"]) == {"fault_detection", "robot_detection", "diagnosis", "total"}
-    assert report["steps"]["total"] >= report["steps"]["fault_detection"] + report["steps"]["robot_detection"]
+    faulty = report["robots"][0]        # the schema of the team's report too (one entry per robot)
+    assert faulty["fault"] == "encoders" and faulty["diagnosis"] == "encoders" and report["correct"] is True
+    assert set(faulty["steps"]) == {"fault_detection", "robot_detection", "diagnosis", "total"}
+    assert faulty["steps"]["total"] >= faulty["steps"]["fault_detection"] + faulty["steps"]["robot_detection"] - 0.02
+    assert all(round(v, 2) == v for v in faulty["steps"].values())
     assert "robot detected" in done.stderr       # progress is shown as the steps happen
 
 
@@ -199,6 +201,7 @@ def test_a_team_of_two_at_the_default_seed_diagnoses_correctly_though_out_of_cam
     assert done.returncode == 0, done.stderr[-3000:]
     report = json.loads(done.stdout)
     assert report["correct"] is True and report["finished"] is True
+    assert sorted(r["fault"] != "none" for r in report["robots"]) == [False, True]   # same schema as the pair
     assert "I go near it" in done.stderr and "robot detected" in done.stderr
 
 
