@@ -40,12 +40,13 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
     from agents.transport.keys import check_name
     from agentspeak.errors import AslSyntaxError, SourceError
     from agentspeak.parser import parse_program
+    from agentspeak.source_text import read_source
 
     out, err = out or sys.stdout, err or sys.stderr
     try:
         check_name(project.name, "MAS name")
         for decl in project.agents:  # fail early, with file and line, before any process starts
-            parse_program(Path(decl.source).read_text(), decl.source, source_path=tuple(project.source_dirs))
+            parse_program(read_source(decl.source), decl.source, source_path=tuple(project.source_dirs))
     except OSError as exc:
         print(f"{project.file}: cannot read {exc.filename}: {exc.strerror or exc}", file=err)
         return 2

@@ -12,17 +12,21 @@ import re
 import threading
 from pathlib import Path
 
+from agentspeak.lark_loader import lalr_parser  # first: it refuses lark-parser 0.12 with the fix
 from lark import Lark, Token, Transformer
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from agentspeak.errors import AslSyntaxError
 from agentspeak.ground_terms import read_ground_term
+from agentspeak.source_text import read_source
+from agentspeak.nesting import MAX_NESTING, first_too_deep_bracket, nesting_depth, too_deep_message
 from agentspeak.program import (
     ACHIEVE, ADD, BEL, DEL, META, TEST, Achieve, AchieveNew, Action, AddBel, AddBelEnd, AddBelNew,
     AddPlan, Constraint, DelBel, DelBelNew, ExecVar, Fork, If, InternalAction, Plan, PlanTerm,
     Program, RemovePlan, Rule, Test, Trigger, TriggerInstr, UpdBel, While, For,
 )
 from agentspeak.stdlib.functions import FUNCTIONS, check_function_name, rule_function
+from agentspeak.stdlib.registry import set_program_reader
 from agentspeak.terms import (
     And, AnnotatedVar, Arith, ArithmeticError_, Func, Literal, Not, Or, Rel, Term, Var, is_ground, make_list,
     resolve,
@@ -338,6 +342,8 @@ class _ToProgram(Transformer):
         if "." in text or "e" in text or "E" in text:
             value = float(text)
             return int(value) if value.is_integer() and abs(value) < 2 ** 53 else value
+        if len(text) > _MAX_INT_DIGITS:  # Python refuses to convert longer ones (a ValueError)
+            raise _BadInput(f"integer literal of {len(text)} digits is too long (at most {_MAX_INT_DIGITS})")
         return int(text)
 
     def string(self, c):
@@ -445,6 +451,9 @@ def _binary(op: str, left: Term, right: Term) -> Term:
     return Rel(op, left, right)
 
 
+_MAX_INT_DIGITS = 4300  # CPython's limit on int(str) (sys.get_int_max_str_digits)
+
+
 class _BadInput(Exception):
     """A clause that parses but is not valid AgentSpeak (raised inside the transformer)."""
 
@@ -518,6 +527,14 @@ _CLAUSE_START = re.compile(r"^(?=[+\-@!^a-z~{])", re.M)
 def _parse(text: str, source_file: str, stop_at_first: bool) -> tuple[Program, list]:
     program = Program(source_file=source_file)
     errors: list[AslSyntaxError] = []
+    too_deep = first_too_deep_bracket(text)
+    if too_deep is not None:  # refused before the parser spends seconds on it (agentspeak/nesting.py)
+        line = text.count("\n", 0, too_deep) + 1
+        column = too_deep - (text.rfind("\n", 0, too_deep) + 1) + 1
+        source_line = text.split("\n")[line - 1]
+        errors.append(AslSyntaxError(too_deep_message(), source_file, line, column,
+                                     source_line[:200] if len(source_line) > 200 else source_line))
+        return program, errors
     offset_line = 0
     remaining = text
     while True:
@@ -575,7 +592,7 @@ def _parse_items(text: str, source_file: str) -> list:
     global _INLINE_PARSER
     with _PARSE_LOCK:
         if _INLINE_PARSER is None:
-            _INLINE_PARSER = Lark(_GRAMMAR.read_text(), parser="lalr", lexer="contextual",
+            _INLINE_PARSER = lalr_parser(_GRAMMAR, lexer="contextual",
                                   maybe_placeholders=True, transformer=_TRANSFORMER, **_speedups())
         t = _TRANSFORMER
         t.source_file, t.vars, t.line, t.trigger_line = source_file, {}, 0, 0
@@ -585,10 +602,15 @@ def _parse_items(text: str, source_file: str) -> list:
             return _INLINE_PARSER.parse(text)
         except _BadInput as exc:
             raise _BadInputAt(str(exc), t.line) from exc
+        except RecursionError:  # an expression nested so deeply that the parser's own recursion gave up
+            raise _BadInputAt(too_deep_message(), t.line) from None
 
 
 def _collect(items, program: Program, offset_line: int) -> None:
     for kind, value, line in items:
+        depth = nesting_depth(value)
+        if depth > MAX_NESTING:  # before anything walks it (agentspeak/nesting.py says why)
+            raise _BadInputAt(too_deep_message(), line)
         if kind == "belief":
             lit = value
             if not isinstance(lit, Literal):
@@ -647,9 +669,11 @@ def _expand_includes(program: Program, source_file: str, base_dir: str | None, s
         if os.path.abspath(path) in seen:
             continue
         try:
-            text = Path(path).read_text()
+            text = read_source(path)
         except OSError as exc:
             raise AslSyntaxError(f"cannot include '{rel}': {exc.strerror or exc}", source_file, line) from exc
+        except ValueError as exc:  # not UTF-8 (a SourceError), or a NUL byte in the path
+            raise AslSyntaxError(f"cannot include {rel!r}: {exc}", source_file, line) from None
         sub = parse_program(text, path, os.path.dirname(path), seen, source_path)
         for k, (target, items) in enumerate(((program.beliefs, sub.beliefs), (program.rules, sub.rules),
                                              (program.plans, sub.plans), (program.goals, sub.goals))):
@@ -760,3 +784,6 @@ def parse_body(text: str) -> tuple:
 
 def parse_plans(text: str, source_file: str = "<string>") -> list[Plan]:
     return parse_program(text, source_file).plans
+
+
+set_program_reader(parse_program)   # for .include (agentspeak/stdlib/system.py), without an import cycle

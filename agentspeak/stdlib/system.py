@@ -163,12 +163,12 @@ def stop_mas(ctx, delay=0, code=0):
 def include(ctx, path, namespace=None):
     """Load an .asl file now (beliefs, rules, plans, goals)."""
     import os
-    from agentspeak.parser import parse_program
+    from agentspeak.stdlib.registry import read_program
     if not isinstance(path, str):
         raise wrong_arguments(".include needs a file name")
     base = os.path.dirname(ctx.agent.source_file) if ctx.agent.source_file else "."
     full = path if os.path.isabs(path) else os.path.join(base, path)
     with open(full) as f:
-        ctx.agent.load(parse_program(f.read(), full))
+        ctx.agent.load(read_program(f.read(), full))
 
 
