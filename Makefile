@@ -8,14 +8,15 @@ PURE_PYTHON := FAULTMAS_PURE_PYTHON=1
 
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: run test bench install speedups browser clean
+.PHONY: run test test-install bench install speedups browser clean jason-tests
 
-$(STAMP): pyproject.toml Makefile setup.py
+# constraints.txt: the exact versions (pyproject.toml publishes ranges; issue 23). Installs go through it.
+$(STAMP): pyproject.toml constraints.txt Makefile setup.py
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	# The ROS 2 wheels first: they bring lark-parser 0.12, which overwrites Lark 1.x ...
 	# (not compiled here: `speedups` compiles the interpreter in place, once)
-	$(PURE_PYTHON) $(PY) -m pip install -q -e '.[ros2,dev]'
+	$(PURE_PYTHON) $(PY) -m pip install -q -c constraints.txt -e '.[ros2,dev]'
 	# ... so Lark 1.x is reinstalled last (see ../shared/notes/ros2-and-zenoh.md, 1.4).
 	$(PY) -m pip install -q --force-reinstall --no-deps 'lark==1.3.1'
 	$(PY) -c 'import lark, sys; sys.exit(0 if lark.__version__.startswith("1.") else "lark-parser 0.12 shadows Lark 1.x")'
@@ -43,6 +44,17 @@ test: speedups browser
 	$(PY) -m pytest -q -p no:cacheprovider
 	# the language suite again on the interpreter run from source (what runs without a C compiler)
 	$(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider tests/agentspeak
+
+# Jason 3.3.2's own AgentSpeak unit tests, run unchanged from ../shared (see tests/jason_suite): fails
+# unless every executed test passes, and prints executed/passed
+JASON_TESTS ?= ../shared/jason-unit-tests
+jason-tests: speedups
+	$(PY) -m tests.jason_suite $(abspath $(JASON_TESTS))
+
+# A user's install, slow (~2 min: a fresh venv, plain `pip install '.[ros2]'`, then `faultmas run`), so not
+# part of `make test`: tests/test_install.py (issue 23).
+test-install: $(STAMP)
+	FAULTMAS_INSTALL_TEST=1 $(PY) -m pytest -q -p no:cacheprovider tests/test_install.py
 
 bench: speedups
 	$(PY) -m benchmarks

@@ -23,8 +23,9 @@ from typing import Callable, TextIO
 
 FAULTS = ("none", "encoders", "both_actuators", "left_actuator", "right_actuator", "stuck_wheels")
 EXPECTED = {"none": "none", "encoders": "encoders", "both_actuators": "both_actuators",
-            "stuck_wheels": "both_actuators", "left_actuator": "left_actuator", "right_actuator": "right_actuator"}
-"""The outcome the plans must reach for each injected fault (stuck wheels count as both actuators)."""
+            "stuck_wheels": "stuck_wheels", "left_actuator": "left_actuator", "right_actuator": "right_actuator"}
+"""The outcome the plans must reach for each injected fault. Stuck wheels and dead motors both leave the
+robot still, but the model tells them apart by the motors' over-current flags (docs/cooperative.md)."""
 FINAL_STEPS = ("arrived", "diagnosed", "undiagnosed")
 STEP_NAMES = ("fault_detection", "robot_detection", "diagnosis", "total")
 
@@ -79,21 +80,34 @@ def random_pair_scenario(fault: str, seed: int) -> Scenario:
                     seed=seed, lighting=rng.uniform(0.6, 1.4))
 
 
-def team_scenario(robots: int, faulty: int, seed: int) -> Scenario:
-    """``robots`` robots at random places at least 1.6 m apart, ``faulty`` of them with random faults;
-    every robot runs ``team_robot.asl`` (its own task, and help for the others when free)."""
+TEAM_FAULTS = ("encoders", "both_actuators", "left_actuator", "right_actuator")
+"""The faults a team run draws from when none is given (``none`` needs a robot that raises a false alarm)."""
+TEAM_MARGIN = 0.8
+"""Metres kept between a robot's start and the arena's walls (its 0.5 m task leg must fit)."""
+
+
+def team_scenario(robots: int, faulty: int, seed: int, fault: str | None = None,
+                  arena: tuple[float, float, float, float] = (-5.0, -5.0, 5.0, 5.0)) -> Scenario:
+    """``robots`` robots at random places over the whole arena, at least 1.6 m apart, with any heading;
+    ``faulty`` of them with ``fault`` (random faults when None); every robot runs ``team_robot.asl`` (its
+    own task, and help for the others when free). Robots may start far beyond each other's camera range:
+    a help request says where the robot is (``start_pose`` + odometry, see plans/geometry.asl)."""
     if not 2 <= robots <= 12 or not 1 <= faulty < robots:
         raise ValueError(f"--robots must be 2..12 and --faulty 1..robots-1, got {robots} and {faulty}")
+    if fault is not None and fault not in FAULTS:
+        raise ValueError(f"unknown fault {fault!r}; expected one of {', '.join(FAULTS)}")
     rng = random.Random(seed)
+    xmin, ymin, xmax, ymax = arena
     spots: list[tuple[float, float]] = []
     while len(spots) < robots:
-        x, y = rng.uniform(-3.5, 3.5), rng.uniform(-3.5, 3.5)
+        x = rng.uniform(xmin + TEAM_MARGIN, xmax - TEAM_MARGIN)
+        y = rng.uniform(ymin + TEAM_MARGIN, ymax - TEAM_MARGIN)
         if all(math.hypot(x - a, y - b) >= 1.6 for a, b in spots):
             spots.append((x, y))
     broken = set(rng.sample(range(robots), faulty))
-    kinds = ("encoders", "both_actuators", "left_actuator", "right_actuator")
     setups = tuple(RobotSetup(f"robot{i + 1}", x, y, rng.uniform(-180.0, 180.0),
-                              rng.choice(kinds) if i in broken else "none", "team_robot.asl")
+                              (fault or rng.choice(TEAM_FAULTS)) if i in broken else "none", "team_robot.asl",
+                              false_alarm=i in broken and fault == "none")
                    for i, (x, y) in enumerate(spots))
     return Scenario(setups, seed=seed, destination=0.5)
 
@@ -251,8 +265,11 @@ def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float =
     return RunResult(scenario, log.results(), log.marks, log.done.is_set(), world)
 
 
-def _beliefs(scenario: Scenario) -> list[str]:
-    return [f"destination({scenario.destination})"]
+def _beliefs(scenario: Scenario, robot: RobotSetup) -> list[str]:
+    """What a robot is told at launch: its task, and its start pose in the team's shared frame (as a
+    localisation's initial pose), so that its help requests can say where it is."""
+    return [f"destination({scenario.destination})",
+            f"start_pose({round(robot.x, 3)}, {round(robot.y, 3)}, {round(robot.yaw_deg, 1)})"]
 
 
 def _run_in_process(scenario, world, bridges, timeout, out, echo) -> ProgressLog:
@@ -266,12 +283,12 @@ def _run_in_process(scenario, world, bridges, timeout, out, echo) -> ProgressLog
 
     runtime = LocalRuntime(printer=printer)
     log = ProgressLog(scenario, world, lambda: runtime.stop(0.2), echo)
-    beliefs = [parse_term(b) for b in _beliefs(scenario)]
     programs: dict[str, object] = {}
     for r in scenario.robots:
         path = plans_dir().joinpath(r.program)
         if r.program not in programs:
             programs[r.program] = parse_program(path.read_text(), str(path))
+        beliefs = [parse_term(b) for b in _beliefs(scenario, r)]
         runtime.add_agent(r.name, program=programs[r.program], source_file=str(path), extra_beliefs=beliefs,
                           arch=RobotArch(runtime, bridges[r.name], on_progress=log.record))
     runtime.run(timeout=timeout, stop_when_idle=False)
@@ -316,8 +333,8 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
     err = err or sys.stderr
     with tempfile.TemporaryDirectory(prefix="faultmas-run-") as tmp:
         project_file = Path(tmp) / f"{scenario.mas}.mas2j"
-        beliefs = ", ".join(_beliefs(scenario))
-        lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{beliefs}"];' for r in scenario.robots]
+        lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{", ".join(_beliefs(scenario, r))}"];'
+                 for r in scenario.robots]
         project_file.write_text(f"MAS {scenario.mas} {{\n  agents:\n" + "\n".join(lines) + "\n}\n")
         hub = ZenohTransport(scenario.mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
         stop_serving = serve(hub) if serve is not None else None
