@@ -123,7 +123,10 @@ def cmd_run(args: argparse.Namespace) -> int:
                               out=agent_lines, err=sys.stderr, echo=lambda m: _echo(m, show), inspector=inspector)
     if args.plot and result.world is not None:
         from robot_bridge.cli import plot
-        plot(result.world, args.plot)
+        tested = [r for r in result.robots if r.fault != "none"] or result.robots[:1]
+        plot(result.world, args.plot, title="; ".join(
+            f"{r.name}: fault {r.fault}, diagnosis {r.diagnosis or 'none reached'}" for r in tested)
+            + f" (seed {result.scenario.seed})")
         print(f"faultmas: trajectories drawn to {args.plot}", file=show)
     if args.json:
         print(json.dumps(_as_json(result)))
