@@ -3,6 +3,7 @@ include("team_robot.asl")."""
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -15,7 +16,7 @@ REPO = Path(__file__).resolve().parents[2]
 def test_list_shows_every_shipped_plan_with_what_it_is(capsys) -> None:
     assert main(["plans", "list"]) == 0
     out = capsys.readouterr().out
-    assert "team_robot.asl  A robot of a team" in out and "turtlebot_hardware.yaml" in out
+    assert re.search(r"^team_robot\.asl +A robot of a team", out, re.M) and "turtlebot_hardware.yaml" in out
 
 
 def test_copy_brings_a_plan_and_what_it_includes_and_never_overwrites(tmp_path: Path, capsys) -> None:
