@@ -8,7 +8,7 @@ PURE_PYTHON := FAULTMAS_PURE_PYTHON=1
 
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: run test test-install bench install speedups browser clean
+.PHONY: run test test-install bench install speedups browser clean jason-tests
 
 # constraints.txt: the exact versions (pyproject.toml publishes ranges; issue 23). Installs go through it.
 $(STAMP): pyproject.toml constraints.txt Makefile setup.py
@@ -44,6 +44,12 @@ test: speedups browser
 	$(PY) -m pytest -q -p no:cacheprovider
 	# the language suite again on the interpreter run from source (what runs without a C compiler)
 	$(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider tests/agentspeak
+
+# Jason 3.3.2's own AgentSpeak unit tests, run unchanged from ../shared (see tests/jason_suite): fails
+# unless every executed test passes, and prints executed/passed
+JASON_TESTS ?= ../shared/jason-unit-tests
+jason-tests: speedups
+	$(PY) -m tests.jason_suite $(abspath $(JASON_TESTS))
 
 # A user's install, slow (~2 min: a fresh venv, plain `pip install '.[ros2]'`, then `faultmas run`), so not
 # part of `make test`: tests/test_install.py (issue 23).

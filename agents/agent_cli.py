@@ -80,17 +80,20 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
         check_name(args.name)
         check_name(args.mas, "MAS name")
         source = read_source(args.file)
-        program = parse_program(source, args.file)
         declared: list[str] = [args.name]
         beliefs: list = []
         goals: list = []
+        source_dirs: list[str] = []
         if args.project:
+            # sources, includes and .create_agent resolve as in the in-process run of the project
             project = load_mas2j(args.project)
+            source_dirs = project.source_dirs
             declared = project.agent_names()
             for decl in project.agents:
                 if args.name in decl.instance_names():
                     beliefs = option_literals(decl.options.get("beliefs"), project.file)
                     goals = option_literals(decl.options.get("goals"), project.file)
+        program = parse_program(source, args.file, source_path=tuple(source_dirs))
         options = ZenohOptions(mode=args.mode, listen=tuple(args.listen) if args.listen else None,
                                connect=tuple(args.connect), config_file=args.config)
     except OSError as exc:
@@ -105,6 +108,7 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
         print(f"faultmas agent run: {exc}", file=sys.stderr)
         return 2
     runtime = LocalRuntime()
+    runtime.source_dirs = list(source_dirs)
     transport = ZenohTransport(args.mas, options, max_message_size=args.max_message_size or DEFAULT_MAX_SIZE)
     try:
         transport.open()

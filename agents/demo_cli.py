@@ -110,7 +110,11 @@ def cmd_run(args: argparse.Namespace) -> int:
         except ValueError as exc:
             print(f"faultmas run: {exc}", file=sys.stderr)
             return 2
-        inspector = LiveInspector(host, port, args.inspect_hold, args.allow_pause, out=show)
+        try:
+            inspector = LiveInspector(host, port, args.inspect_hold, args.allow_pause, out=show)
+        except OSError as exc:
+            print(f"faultmas run: cannot serve the inspector on {args.listen}: {exc.strerror or exc}", file=sys.stderr)
+            return 1
     for r in scenario.robots if args.bridge == "sim" else ():
         what = f"fault {r.fault}" + (" (a transient stall raises a false alarm)" if r.false_alarm else "")
         print(f"faultmas: {r.name:<8} at ({r.x:5.2f}, {r.y:5.2f}) heading {r.yaw_deg:6.1f} deg, {what}", file=show)

@@ -11,7 +11,7 @@ import importlib
 
 EXPERIMENTS: dict[str, tuple[str, str]] = {
     "imu": ("experiments.imu", "TU Graz use case: a faulty IMU found by an observer and switched off by a rule"),
-    "perfbugs": ("experiments.perfbugs", "Wienke & Wrede's Table I: learned detector of performance bugs vs One-Class SVM"),
+    "perfbugs": ("experiments.perfbugs", "Wienke & Wrede's Table I: learned detection of performance bugs vs OCSVM"),
 }
 
 

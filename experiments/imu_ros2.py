@@ -49,21 +49,18 @@ def node_specs(seed: int) -> list:
 class _Driver:
     """Everything of the run that lives in this process; callbacks run on the executor thread."""
 
-    def __init__(self, ros, setter_ros, fault: str, fault_time: float, duration: float) -> None:
+    def __init__(self, ros, parameters, fault: str, fault_time: float, duration: float) -> None:
         import rclpy
         from geometry_msgs.msg import Twist
         from nav_msgs.msg import Odometry
         from sensor_msgs.msg import Imu
 
         from robot_bridge.ros2.odometry import Increments
-        from robot_bridge.ros2.parameters import RosParameterSetter
 
         self.node = ros.add(rclpy.create_node("imu_experiment", namespace=f"/{ROBOT}", context=ros.context))
-        setter_node = setter_ros.add(rclpy.create_node("imu_experiment_parameters", namespace=f"/{ROBOT}",
-                                                      context=setter_ros.context))
-        # A node of its own context: set_parameter blocks its caller (an executor callback here) while
-        # the other context's thread spins the service answer.
-        self.setter = RosParameterSetter(setter_node, f"/{ROBOT}", timeout=10.0)
+        self.parameters = parameters
+        """``detection.taps.ros2_parameters.Ros2Parameters``: its own context, so a rule firing in
+        our executor's callback can wait for the service answer."""
         self.fault, self.fault_time, self.duration = fault, fault_time, duration
         self.lock = threading.Lock()
         self.latest: dict[str, object] = {}
@@ -98,7 +95,8 @@ class _Driver:
         self.latest[key] = msg
 
     def _set_parameter(self, node: str, name: str, value) -> None:
-        self.setter.set_parameter(node, name, value)
+        """The rule's action: the model's node names are the robot's nodes, in its namespace."""
+        self.parameters.set_parameter(f"/{ROBOT}/{node}", name, value)
         if self.switch_time is None:
             self.switch_time = self.now()
 
@@ -120,7 +118,7 @@ class _Driver:
         now = self.now()
         try:
             if not self.injected and now >= self.fault_time:
-                self.setter.set_parameter("fault_injector", "fault", self.fault)
+                self.parameters.set_parameter(f"/{ROBOT}/fault_injector", "fault", self.fault)
                 self.injected = True
         except Exception as exc:          # noqa: BLE001 - reported as the run's error, never lost
             self.errors.append(f"could not inject {self.fault}: {exc}")
@@ -136,8 +134,9 @@ class _Driver:
 def run(fault: str, fault_time: float, seed: int, duration: float, domain_id: int | None = None,
         ready_timeout: float = 60.0) -> RunResult:
     """Drive ``duration`` wall-clock seconds on the real nodes; raises ``RuntimeError`` if they fail."""
+    from detection.taps.ros2_parameters import Ros2Parameters
     from robot_bridge.ros2.launch import Supervisor
-    from robot_bridge.ros2.runtime import RosContext, wait_for
+    from robot_bridge.ros2.runtime import RosContext
 
     domain = default_domain_id() if domain_id is None else domain_id
     supervisor = Supervisor(node_specs(seed), domain)
@@ -147,26 +146,36 @@ def run(fault: str, fault_time: float, seed: int, duration: float, domain_id: in
         if missing or supervisor.dead():
             raise RuntimeError(f"ROS 2 nodes did not come up in domain {domain}: "
                                f"{', '.join(sorted(n for n, _ in missing)) or 'a node exited'}")
-        with RosContext(domain_id=domain) as setter_ros, RosContext(domain_id=domain) as ros:
-            driver = _Driver(ros, setter_ros, fault, fault_time, duration)
-            if not wait_for(driver.ready, 30.0):
-                raise RuntimeError(f"no messages from the robot's nodes in domain {domain} within 30 s "
-                                   f"(seen: {', '.join(driver.latest) or 'none'})")
-            driver.begin()
-            end = time.monotonic() + duration
-            while time.monotonic() < end:
-                if supervisor.dead():
-                    spec, code = supervisor.dead()[0]
-                    raise RuntimeError(f"{spec.node} exited with code {code} during the run")
-                time.sleep(0.2)
-            driver.timer.cancel()
-            driver.cmd.publish(driver.twist())
-            if driver.errors:
-                raise RuntimeError("; ".join(driver.errors))
-            detection, samples = driver.detection, list(driver.samples)
-            cpu, switch_time, reached = detection.cpu_seconds, driver.switch_time, driver.route.reached
-            detection.close()
+        parameters = Ros2Parameters(domain_id=domain, timeout=10.0)
+        try:
+            with RosContext(domain_id=domain) as ros:
+                driver = _Driver(ros, parameters, fault, fault_time, duration)
+                try:
+                    _drive(driver, supervisor, duration, domain)
+                finally:
+                    driver.detection.close()
+        finally:
+            parameters.close()
     finally:
         supervisor.stop()
-    return RunResult(fault, fault_time if fault != "none" else None, seed, samples, switch_time, cpu,
-                     duration, reached)
+    return RunResult(fault, fault_time if fault != "none" else None, seed, list(driver.samples),
+                     driver.switch_time, driver.detection.cpu_seconds, duration, driver.route.reached)
+
+
+def _drive(driver: _Driver, supervisor, duration: float, domain: int) -> None:
+    from robot_bridge.ros2.runtime import wait_for
+
+    if not wait_for(driver.ready, 30.0):
+        raise RuntimeError(f"no messages from the robot's nodes in domain {domain} within 30 s "
+                           f"(seen: {', '.join(driver.latest) or 'none'})")
+    driver.begin()
+    end = time.monotonic() + duration
+    while time.monotonic() < end:
+        if supervisor.dead():
+            spec, code = supervisor.dead()[0]
+            raise RuntimeError(f"{spec.node} exited with code {code} during the run")
+        time.sleep(0.2)
+    driver.timer.cancel()
+    driver.cmd.publish(driver.twist())
+    if driver.errors:
+        raise RuntimeError("; ".join(driver.errors))

@@ -4,5 +4,7 @@ Agent side (``publisher``): every agent of ``faultmas agent run`` answers a Zeno
 and, only while someone subscribes, streams it as it changes; an unwatched agent pays nothing per
 reasoning cycle. Viewer side (``hub`` + ``web``): one Zenoh session gathers the team (presence, state,
 robots' percepts, ``.progress`` steps) and a Starlette app serves the static page with server-sent
-events. Key expressions are in ``keys``; the JSON a mind is described with in ``snapshot``.
+events. Key expressions are in ``keys``; the JSON a mind is described with in ``snapshot``; pause and
+step in ``pause``; the observers' state in ``observers``; ``faultmas inspect`` in ``cli`` and
+``faultmas run --inspect`` in ``live``. See docs/inspector.md.
 """

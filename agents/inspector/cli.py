@@ -17,7 +17,10 @@ DISCOVERY = 3.0   # seconds to look for a MAS when --mas is not given
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("inspect", help="a live web view of a running MAS: agents' minds, robots, timeline",
-                       description=__doc__.splitlines()[0])
+                       description="A live local web page of a running MAS: its agents (alive or gone), each "
+                                   "agent's beliefs, events, intentions, plans and messages, the robots on a map, "
+                                   "the .diagnose calls and the timeline of the fault-plan steps. "
+                                   "See docs/inspector.md.")
     p.add_argument("--mas", default=None, help="the MAS to look at (default: the only one seen)")
     p.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
                    help="a Zenoh router or agent of the MAS, e.g. tcp/127.0.0.1:7447 (repeatable)")
@@ -55,7 +58,7 @@ def parse_listen(text: str, public: bool) -> tuple[str, int]:
 
 def cmd_inspect(args: argparse.Namespace) -> int:
     from agents.inspector.hub import TeamHub
-    from agents.inspector.web import WebServer
+    from agents.inspector.web import WebServer, listening_socket
     from agents.mas_cli import setup_logging
     from agents.transport.config import ZenohOptions, build_config
 
@@ -65,23 +68,26 @@ def cmd_inspect(args: argparse.Namespace) -> int:
     except ValueError as exc:
         print(f"faultmas inspect: {exc}", file=sys.stderr)
         return 2
+    try:
+        sock = listening_socket(host, port)
+    except OSError as exc:
+        print(f"faultmas inspect: cannot serve on {args.listen}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
     import zenoh
 
     try:
         session = zenoh.open(build_config(ZenohOptions(connect=tuple(args.connect), config_file=args.config)))
     except Exception as exc:  # zenoh.ZError or ValueError: bad endpoint or config
+        sock.close()
         print(f"faultmas inspect: cannot join the network: {exc}", file=sys.stderr)
         return 1
     try:
         mas = args.mas or _discover(session)
         if mas is None:
+            sock.close()
             return 1
         hub = TeamHub(session, mas).start()
-        try:
-            server = WebServer(hub, host, port)
-        except OSError as exc:
-            print(f"faultmas inspect: cannot serve on {args.listen}: {exc.strerror or exc}", file=sys.stderr)
-            return 1
+        server = WebServer(hub, sock)
         print(f"faultmas inspect: MAS {mas} at {server.url} (Ctrl-C to stop)", flush=True)
         server.serve_forever()
         hub.close()

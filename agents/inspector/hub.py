@@ -322,10 +322,8 @@ class TeamHub:
         """A JSON-ready picture: the team, the robots, timeline marks from ``timeline_from`` on, and
         the mind of ``agent`` if one is watched."""
         with self._lock:
-            team = [{"agent": name, "alive": e["alive"], **(e.get("summary") or {}), "agent_": name}
+            team = [{**(e.get("summary") or {}), "agent": name, "alive": e["alive"]}
                     for name, e in sorted(self.agents.items())]
-            for row in team:
-                row["agent"] = row.pop("agent_")
             robots = {name: {**r, "trail": list(self._trail(name, "odom").points),
                              "truth_trail": list(self._trail(name, "truth").points)}
                       for name, r in sorted(self.robots.items())}

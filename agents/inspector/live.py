@@ -18,7 +18,11 @@ class LiveInspector:
 
     def __init__(self, host: str, port: int, hold: float | None = None, allow_pause: bool = False,
                  out: TextIO | None = None) -> None:
-        self.host, self.port, self.hold_seconds, self.allow_pause = host, port, hold, allow_pause
+        """Binds ``host:port`` now, so a port in use fails before the run starts (``OSError``)."""
+        from agents.inspector.web import listening_socket
+
+        self.socket = listening_socket(host, port)
+        self.hold_seconds, self.allow_pause = hold, allow_pause
         self.out = out or sys.stderr
         self.url: str | None = None
 
@@ -35,11 +39,7 @@ class LiveInspector:
             def clock() -> float:
                 return world.time
         team = TeamHub(hub.session, hub.mas, clock=clock, truth=truth).start()
-        try:
-            server = WebServer(team, self.host, self.port).start()
-        except OSError:
-            team.close()
-            raise
+        server = WebServer(team, self.socket).start()
         self.url = server.url
         print(f"faultmas: inspector at {server.url}" + (" (pause/step allowed)" if self.allow_pause else ""),
               file=self.out, flush=True)

@@ -24,6 +24,7 @@ from collections import deque
 from typing import Any
 
 from agents.inspector import keys, snapshot
+from agents.inspector.observers import observers_of
 from agents.inspector.pause import PauseGate
 from agentspeak.terms import to_str
 
@@ -116,9 +117,11 @@ class MindPublisher:
     # -- what the page reads ---------------------------------------------------------------------
     def mind(self, name: str, plans: bool = False) -> dict:
         watched = self.agents[name]
-        return snapshot.mind(watched.agent, paused=watched.gate.paused, control=self.allow_control,
-                             plans=plans, messages=self._messages(watched),
-                             diagnoses=list(getattr(watched.agent, "diagnosis_calls", ())))
+        state = snapshot.mind(watched.agent, paused=watched.gate.paused, control=self.allow_control,
+                              plans=plans, messages=self._messages(watched),
+                              diagnoses=list(getattr(watched.agent, "diagnosis_calls", ())))
+        state["observers"] = observers_of(watched.agent)
+        return state
 
     def _on_state_query(self, watched: _Watched, query: Any) -> None:
         try:

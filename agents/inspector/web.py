@@ -98,21 +98,30 @@ async def _stream(request: Any, hub: TeamHub, agent: str | None):
             hub.unwatch(agent)
 
 
+def listening_socket(host: str, port: int):
+    """A TCP socket listening on ``host:port`` (0: a free port); ``OSError`` (port taken...) at once."""
+    import socket
+
+    sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM)
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((host, port))
+        sock.listen(128)        # a browser may connect before uvicorn's loop runs: it waits in the backlog
+    except OSError:
+        sock.close()
+        raise
+    return sock
+
+
 class WebServer:
-    """uvicorn serving ``build_app(hub)`` on ``host:port`` (0: a free port) in a thread of its own."""
+    """uvicorn serving ``build_app(hub)`` on ``sock`` (from ``listening_socket``) in a thread of its own."""
 
-    def __init__(self, hub: TeamHub, host: str = "127.0.0.1", port: int = 0) -> None:
-        import socket
-
+    def __init__(self, hub: TeamHub, sock) -> None:
         import uvicorn
 
         self.hub = hub
-        family = socket.AF_INET6 if ":" in host else socket.AF_INET
-        self.socket = socket.socket(family, socket.SOCK_STREAM)
-        self.socket.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        self.socket.bind((host, port))       # bound here, so a taken port fails now, with its reason
-        self.socket.listen(128)              # and a browser may connect before uvicorn's loop runs
-        self.host, self.port = host, self.socket.getsockname()[1]
+        self.socket = sock
+        self.host, self.port = sock.getsockname()[:2]
         config = uvicorn.Config(build_app(hub), log_level="warning", lifespan="off",
                                 timeout_graceful_shutdown=1)
         self.server = uvicorn.Server(config)

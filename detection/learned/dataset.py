@@ -12,6 +12,7 @@ import numpy as np
 
 from detection.learned.counters import TARGET_NAMES, targets_from_counters
 from detection.learned.features import feature_names, window_features
+from detection.learned.record import event_times
 
 
 class DatasetError(ValueError):
@@ -73,9 +74,9 @@ def component_channels(manifest: dict, component: str) -> list[tuple[str, list[s
 def features_for_run(arrays, channels: list[tuple[str, list[str]]], ticks: np.ndarray) -> np.ndarray:
     parts = []
     for topic, columns in channels:
-        key = f"events/{topic}/t"
-        if key in arrays:
-            times, values = arrays[key], arrays[f"events/{topic}/x"].astype(np.float64)
+        times = event_times(arrays, topic)
+        if times is not None:
+            values = arrays[f"events/{topic}/x"].astype(np.float64)
         else:                                         # silent in this run
             times, values = np.empty(0), np.empty((0, len(columns)))
         parts.append(window_features(times, values, ticks))

@@ -113,9 +113,12 @@ def plot_roc(evaluation: Evaluation, path: str | Path, title: str = "") -> None:
         if scores.label.any() and not scores.label.all():
             fpr, tpr, _ = roc_curve(scores.label, scores.score)
             axes.plot(fpr, tpr, label=f"{name} (AUC {evaluation.rows[name]['auc']:.3f})")
-    axes.plot([0, 1], [0, 1], color="grey", linestyle=":", linewidth=1)
+    chance = np.logspace(-3, 0, 50)
+    axes.plot(chance, chance, color="grey", linestyle=":", linewidth=1)
+    axes.set_xscale("log")                      # the operating range is FPR < 2 %: spread it out
+    axes.set_xlim(1e-3, 1.0)
     axes.axvline(evaluation.target_fpr, color="grey", linestyle="--", linewidth=1, label=f"target FPR {evaluation.target_fpr:g}")
-    axes.set_xlabel("false-positive rate")
+    axes.set_xlabel("false-positive rate (log scale)")
     axes.set_ylabel("true-positive rate")
     axes.set_title(title or "Performance bugs: ROC, all (component, run, second) samples")
     axes.legend(loc="lower right")

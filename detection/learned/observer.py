@@ -23,6 +23,7 @@ import numpy as np
 from detection.learned.counters import TARGET_NAMES, read_counters, targets_from_counters
 from detection.learned.features import ChannelBuffer
 from detection.learned.model import ComponentModel, ModelFileError
+from detection.learned.record import event_times
 from detection.observation import Observation
 
 DEFAULT_CONFIRM = (3, 5)
@@ -119,8 +120,9 @@ def replay(observer: LearnedResourceObserver, run_file: str | Path,
         arrays = {key: data[key] for key in data.files}
     events = []
     for topic in observer.buffers:
-        if f"events/{topic}/t" in arrays:
-            times, values = arrays[f"events/{topic}/t"], arrays[f"events/{topic}/x"].astype(np.float64)
+        times = event_times(arrays, topic)
+        if times is not None:
+            values = arrays[f"events/{topic}/x"].astype(np.float64)
             events += [(t, topic, v) for t, v in zip(times, values)]
     events.sort(key=lambda e: e[0])
     emitted: list[Observation] = []

@@ -9,8 +9,10 @@ from __future__ import annotations
 import re
 from typing import Callable, Iterable
 
+from detection.learned.encoding import RosEncoder
+from detection.learned.features import feature_names
 from detection.learned.model import ComponentModel, ModelFileError
-from detection.learned.observer import LearnedResourceObserver, node_processes
+from detection.learned.observer import LearnedResourceObserver, model_channels, node_processes
 from detection.learned.ros_tap import Component, RawTap, discover
 from detection.observation import Observation
 
@@ -40,7 +42,10 @@ class LiveLearnedObserver:
     """Runs a ``LearnedResourceObserver`` on a ROS 2 domain until ``close()``."""
 
     def __init__(self, models: dict[str, ComponentModel], namespaces: list[str], emit: Callable[[list[Observation]], object],
-                 domain_id: int | None = None, confirm: tuple[int, int] = (3, 5), settle_s: float = 2.0) -> None:
+                 domain_id: int | None = None, confirm: tuple[int, int] = (3, 5), settle_s: float = 2.0,
+                 skip_unfit: bool = False) -> None:
+        """``skip_unfit``: watch only the components whose model fits the live system (the others are
+        listed in ``unfit``) instead of refusing with a ``ModelFileError``."""
         import time
 
         import rclpy
@@ -55,24 +60,30 @@ class LiveLearnedObserver:
             missing = sorted(set(models) - set(self.components))
             if missing:
                 raise ModelFileError(f"models for components not running here: {', '.join(missing)}")
+            columns = {t: RosEncoder.for_type(ty).columns for t, ty in topic_types.items()}
+            self.unfit = {c: reason for c, m in models.items() if (reason := self._unfit(c, m, self.components[c], columns))}
+            if self.unfit and not skip_unfit:
+                raise ModelFileError("; ".join(self.unfit.values()))
+            models = {c: m for c, m in models.items() if c not in self.unfit}
             processes = node_processes([self.components[c] for c in models])
             self.observer = LearnedResourceObserver(models, processes, emit, confirm)
             self.tap = RawTap(node, {t: ty for t, ty in topic_types.items()
                                      if t in self.observer.buffers}, self.observer.on_event)
-            self._check_columns(models)
             node.create_timer(1.0, lambda: self.observer.tick())     # the executor's thread: no race with the tap
         except BaseException:
             self.ros.close()
             raise
 
-    def _check_columns(self, models: dict[str, ComponentModel]) -> None:
-        from detection.learned.features import feature_names
-        columns = {t: e.columns for t, e in self.tap.encoders.items()}
-        for c, model in models.items():
-            live = [n for topic, _ in self.observer.channels[c] for n in feature_names(topic, columns.get(topic, []))]
-            if live != model.features:
-                raise ModelFileError(f"model of {c!r} does not fit the live system: its channels or their "
-                                     "message types differ from the training data; train it again")
+    @staticmethod
+    def _unfit(name: str, model: ComponentModel, component: Component, columns: dict[str, list[str]]) -> str:
+        """Why ``model`` cannot watch ``component`` as it runs now ('' when it can)."""
+        live = [n for topic in component.channels for n in feature_names(topic, columns.get(topic, []))]
+        if live == model.features:
+            return ""
+        trained = {topic for topic, _ in model_channels(model)}
+        return (f"model of {name!r} does not fit the live system (channels now: {len(component.channels)}, "
+                f"in training: {len(trained)}; new: {sorted(set(component.channels) - trained)[:3]}, "
+                f"gone: {sorted(trained - set(component.channels))[:3]}, or other message types); train it again")
 
     def close(self) -> None:
         self.ros.close()

@@ -15,7 +15,8 @@ Parameters besides the pose and ``seed``: ``left_radius_scale``, ``right_radius_
 ``gyro_bias`` (rad/s), ``gyro_scale`` (relative): the gyro's calibration residuals.
 
 The physics is :func:`robot_bridge.sim.kobuki.step`, the same step function as the embedded
-simulator; a fixed ``1/rate`` s per timer tick keeps runs reproducible for a given ``seed``.
+simulator; a fixed ``1/rate`` s per timer tick keeps runs reproducible for a given ``seed``, and the
+header stamps count that physics time (from the node's start), as a real base's stamps count real time.
 """
 from __future__ import annotations
 
@@ -30,6 +31,7 @@ import numpy as np  # noqa: E402
 from geometry_msgs.msg import Twist  # noqa: E402
 from nav_msgs.msg import Odometry  # noqa: E402
 from rclpy.node import Node  # noqa: E402
+from rclpy.time import Time  # noqa: E402
 from sensor_msgs.msg import Imu, JointState  # noqa: E402
 from std_msgs.msg import Empty, String  # noqa: E402
 
@@ -60,6 +62,10 @@ class KobukiSim(Node):
         self.heading = 0.0
         """The gyro's integrated heading (rad), as the Kobuki's inertial heading."""
         self.state = kobuki.BaseState(x=float(p["x"]), y=float(p["y"]), yaw=float(p["yaw"]))
+        self._epoch_ns = self.get_clock().now().nanoseconds
+        """Header stamps are this plus the physics' own time, so that a consumer integrating over
+        stamps (the odometry node, with the gyro) sees the ``dt`` the physics stepped, even when
+        the timer runs late under load; they follow the wall clock while it keeps up."""
         self.fault = faults.NO_FAULT
         self.ticks = kobuki.encoder_ticks(self.state)
         self.odom = dead_reckoning.Odometry(ticks=self.ticks)
@@ -101,7 +107,7 @@ class KobukiSim(Node):
         self._publish()
 
     def _publish(self) -> None:
-        stamp = self.get_clock().now().to_msg()
+        stamp = Time(nanoseconds=self._epoch_ns + round(self.state.time * 1e9)).to_msg()
         s, o = self.state, self.odom
         self._pub_odom.publish(odometry(o.x, o.y, o.yaw, o.speed[0], o.speed[1], stamp))
         v, w = kobuki.wheels_to_twist(kobuki.WheelSpeeds(s.left_speed, s.right_speed))

@@ -141,3 +141,42 @@ def test_listen_is_loopback_unless_public_is_given(capsys):
         parse_listen("8470", False)
     assert parse_listen("0.0.0.0:8470", True) == ("0.0.0.0", 8470)
     assert "WARNING serving on 0.0.0.0, not loopback" in capsys.readouterr().err
+
+
+def test_the_mind_shows_what_the_agents_observers_see(tmp_path):
+    from agents.inspector.observers import observers_of
+    from tests.detection.test_agent_actions import AGENT, MODEL, OBSERVERS, RULES, record_slowing_scan
+
+    (tmp_path / "obs.yaml").write_text(OBSERVERS)
+    (tmp_path / "nav.yaml").write_text(MODEL)
+    (tmp_path / "nav.rules.yaml").write_text(RULES)
+    record_slowing_scan(tmp_path / "run")
+    runtime = LocalRuntime(printer=lambda name, text: None)
+    agent = runtime.add_agent("robot", AGENT, source_file=str(tmp_path / "robot.asl"))
+    runtime.run(timeout=30)          # the bag replayed: the scan slowed down, the rule asked for a repair
+    [seen] = observers_of(agent)
+    assert seen["config"] == "obs.yaml" and seen["obs"] == ["~hz(scan)"]
+    assert seen["possibly_faulty"] == ["laser_driver"]
+    assert [f["rule"] for f in seen["fired"]] == ["ask_for_repair"]
+    assert [(v["observation"], v["holds"]) for v in seen["verdicts"]] == [("hz(scan)", False)]
+
+
+def test_the_commands_refuse_a_taken_port_or_a_public_address_before_anything_starts():
+    import socket
+
+    from tests.agents.distributed_fixtures import Proc
+
+    taken = socket.socket()
+    taken.bind(("127.0.0.1", 0))
+    taken.listen(1)
+    port = taken.getsockname()[1]
+    try:
+        run = Proc(["run", "--inspect", "--listen", f"127.0.0.1:{port}"])
+        assert run.finish(60) == 1
+        assert f"cannot serve the inspector on 127.0.0.1:{port}: Address already in use" in "\n".join(run.err)
+        assert not any(line.startswith("[faulty]") for line in run.out)          # no run started
+    finally:
+        taken.close()
+    public = Proc(["inspect", "--listen", "0.0.0.0:8470"])
+    assert public.finish(60) == 2
+    assert "not a loopback address; add --public" in "\n".join(public.err)

@@ -5,8 +5,10 @@ step change the cycle count by exactly one; a killed agent greys; a team of 10 w
 in docs/inspector.png is made here."""
 from __future__ import annotations
 
+import json
 import signal
 import time
+import urllib.request
 
 import psutil
 import pytest
@@ -88,6 +90,9 @@ def test_page_shows_the_main_job_as_it_runs(main_job):
     assert [m for m in marks if m[0] == "faulty"][-1] == ["faulty", "diagnosed"], marks
 
     assert pages["faulty"].query_selector_all("#plans li")   # the plan library, with source lines
+    exported = json.load(urllib.request.urlopen(url + "api/timeline.json", timeout=10))   # the export link
+    assert exported["clock"] == "simulated"
+    assert [m["step"] for m in exported["marks"] if m["agent"] == "faulty"][-1] == "diagnosed"
 
 
 def test_pause_and_step_change_the_cycle_count_by_exactly_one(main_job):

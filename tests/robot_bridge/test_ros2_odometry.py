@@ -73,12 +73,17 @@ def robot():
         supervisor.stop()
 
 
-def _set(listener: Listener, node: str, name: str, value) -> None:
-    from robot_bridge.ros2.parameters import RosParameterSetter
-    RosParameterSetter(listener.node, "/r", timeout=15.0).set_parameter(node, name, value)
+@pytest.fixture(scope="module")
+def parameters(robot):
+    from detection.taps.ros2_parameters import Ros2Parameters    # what a rule's set_parameter uses
+    setter = Ros2Parameters(domain_id=DOMAIN, timeout=15.0)
+    try:
+        yield setter
+    finally:
+        setter.close()
 
 
-def test_fused_odometry_follows_the_gyro_then_the_encoders_after_use_imu_false(robot):
+def test_fused_odometry_follows_the_gyro_then_the_encoders_after_use_imu_false(robot, parameters):
     ros, listener = robot
     wheel0, fused0 = listener.yaw("odom"), listener.yaw("odometry/fused")
     listener.turn(1.0)
@@ -87,13 +92,13 @@ def test_fused_odometry_follows_the_gyro_then_the_encoders_after_use_imu_false(r
     assert wheel_turn > 0.5
     assert fused_turn == pytest.approx(wheel_turn / 1.05, rel=0.03)     # the gyro: the true rotation
 
-    _set(listener, "fault_injector", "fault", "imu_stuck")
+    parameters.set_parameter("/r/fault_injector", "fault", "imu_stuck")
     assert wait_for(lambda: listener.latest["sensors/imu_data"].angular_velocity.z == 0.0, 10)
     fused1 = listener.yaw("odometry/fused")
     listener.turn(1.0)
     assert listener.yaw("odometry/fused") == pytest.approx(fused1, abs=1e-6)     # stuck gyro: no rotation
 
-    _set(listener, "odometry", "use_imu", False)
+    parameters.set_parameter("/r/odometry", "use_imu", False)
     wheel2, fused2 = listener.yaw("odom"), listener.yaw("odometry/fused")
     listener.turn(1.0)
     wheel_turn = listener.yaw("odom") - wheel2
@@ -101,11 +106,7 @@ def test_fused_odometry_follows_the_gyro_then_the_encoders_after_use_imu_false(r
     assert listener.yaw("odometry/fused") - fused2 == pytest.approx(wheel_turn, abs=0.01)   # the encoders'
 
 
-def test_use_imu_refuses_a_non_bool(robot):
-    from robot_bridge.ros2.parameters import ParameterError
-    _, listener = robot
-    with pytest.raises(ParameterError, match="refused"):
-        _set(listener, "odometry", "use_imu", "maybe")
-    with pytest.raises(ParameterError, match="no set_parameters service"):
-        from robot_bridge.ros2.parameters import RosParameterSetter
-        RosParameterSetter(listener.node, "/r", timeout=1.0).set_parameter("nobody", "use_imu", False)
+def test_use_imu_refuses_a_non_bool(robot, parameters):
+    from diagnosis.actions import ActionError
+    with pytest.raises(ActionError, match="refused"):
+        parameters.set_parameter("/r/odometry", "use_imu", "maybe")

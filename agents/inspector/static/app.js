@@ -106,6 +106,14 @@ function renderMind(mind) {
     el("div", { text: "observations: " + Object.entries(d.observations).map(([k, v]) => (v ? "" : "~") + k).join(", ") }),
     el("div", { text: "result: " + JSON.stringify(d.result) }))));
   if (!mind.diagnoses.length) diag.append(el("p", { class: "hint", text: `${mind.agent} has made no .diagnose call yet` }));
+  for (const o of mind.observers || []) {   // the agent's .observe sessions (detection/)
+    diag.append(el("div", { class: "observers" },
+      el("div", { text: `observers of ${o.config}: Obs ${o.obs.join(", ") || "-"}` }),
+      el("div", { text: "diagnoses: " + JSON.stringify(o.diagnoses) + "  PosAb: " + JSON.stringify(o.possibly_faulty) }),
+      el("div", { text: "rules fired: " + (o.fired.map((f) => f.rule + (f.error ? ` (${f.error})` : "")).join(", ") || "-") }),
+      el("ul", { class: "terms" }, ...o.verdicts.map((v) => el("li", { class: v.holds === false ? "bad" : "",
+        text: `${v.holds === null ? "?" : v.holds ? "" : "~"}${v.observation}  ${v.measured === null ? "" : "measured " + Number(v.measured).toPrecision(3)}` })))));
+  }
 }
 
 // Odometry starts at zero where each robot stood; with the simulator's ground truth (origin) it is drawn

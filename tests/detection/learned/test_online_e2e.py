@@ -48,8 +48,12 @@ def test_a_live_leak_makes_the_diagnoser_name_the_leaking_node(smoke_evaluation,
         assert supervisor.wait_ready(90) == set()
         with RosContext(domain_id=DOMAIN) as work:
             Workload(work.add(rclpy.create_node("perfbugs_workload", context=work.context)), ROBOTS, seed=11)
-            live = LiveLearnedObserver(smoke_evaluation.models, [f"/{r}" for r in ROBOTS], emit, DOMAIN)
+            live = LiveLearnedObserver(smoke_evaluation.models, [f"/{r}" for r in ROBOTS], emit, DOMAIN,
+                                       skip_unfit=True)
             try:
+                # a node that changed since the smoke data was recorded is left out, with the reason (the
+                # data then needs 'faultmas experiment perfbugs --generate' again); the leaking one must fit
+                assert LEAKING in live.observer.models, live.unfit
                 model = load_architecture(YamlSource("<discovered>", architecture_yaml("team", live.components.values())))
                 with lock:
                     pipeline = Pipeline(model)
