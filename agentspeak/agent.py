@@ -36,6 +36,8 @@ from agentspeak.unify import undo, unify
 log = logging.getLogger("faultmas.agentspeak")
 
 _TRUE = Literal("true")
+_JAG_SLEEPING = Literal("jag_sleeping")
+_JAG_AWAKING = Literal("jag_awaking")
 _new = object.__new__
 """Hot paths build objects with ``_new(Class)`` (or ``Class.__new__(Class)`` for the classes that the
 compiled build makes C types, see agent.pxd: ``object.__new__`` refuses those) and slot stores: a class
@@ -101,6 +103,7 @@ class Agent:
         self.failures_unhandled = 0
         self.dropped: dict[str, int] = {}
         self.current_intention: Intention | None = None  # the intention of the event or formula at hand
+        self.sleeping_evt = False  # +jag_sleeping was posted and nothing woke the agent since
         if program is not None:
             self.load(program)
 
@@ -206,6 +209,8 @@ class Agent:
         self.cycles += 1
         if self.arch is not self._arch_seen:
             self._see_arch(self.arch)
+        if self.plans.has_jag and self.sleeping_evt:
+            self._awaking()
         if self._perceive is not None or self.feedback or self.timers:
             did = self.sense()
         elif self.mailbox:  # sense() with only a message to read, inlined
@@ -220,7 +225,89 @@ class Agent:
             did = True
         if self.condition_waiters:
             self._check_conditions()
+        if self.plans.has_goal_conditions:
+            self._check_goal_conditions()
+        if self.plans.has_jag and not self.sleeping_evt and not (
+                self.events or self.running or self.mailbox or self.feedback):
+            # nothing left to do: Jason's +jag_sleeping (once, until something wakes the agent)
+            self.sleeping_evt = True
+            self.post_external(Trigger(ADD, BEL, _JAG_SLEEPING))
         return did
+
+    # ------------------------------------------------------------------ deadlines and goal conditions
+    def _check_deadline(self, goal: Literal, intention: Intention) -> None:
+        """``!g[hard_deadline(MS)]``: if g is still pursued MS milliseconds later, it fails with
+        ``error(deadline_reached)`` (Jason's TransitionSystem.checkHardDeadline)."""
+        for a in goal.annots:
+            if type(a) is Literal and a.functor == "hard_deadline" and len(a.args) == 1 \
+                    and type(a.args[0]) in (int, float):
+                size = len(intention.stack)
+                self.add_timer(a.args[0] / 1000.0, lambda: self._deadline(goal, intention, size))
+                return
+
+    def _deadline(self, goal: Literal, intention: Intention, size: int) -> None:
+        if intention.dropped or len(intention.stack) < size:
+            return
+        im = intention.stack[size - 1] if size else None
+        if im is None or im.event_literal is not goal:
+            return
+        del intention.stack[size:]
+        im.frames[:] = [im.frames[0]]
+        intention.waiting = None  # a wait in progress is abandoned
+        self.running_remove(intention)
+        intention.suspended = None
+        self.suspended.pop(intention.id, None)
+        self._fail(intention, "deadline_reached", f"hard deadline of {to_str(goal)} reached")
+        if intention.suspended is None and not intention.dropped:
+            self._requeue(intention)
+
+    def running_remove(self, intention: Intention) -> None:
+        try:
+            self.running.remove(intention)
+        except ValueError:
+            pass
+
+    def _check_goal_conditions(self) -> None:
+        """Jason 3.2's ``+!g <: C``: a goal whose condition holds is achieved at once (applyClrSatInt)."""
+        for intention in self.intentions():
+            stack = intention.stack
+            for idx, im in enumerate(stack):
+                gc = im.plan.goal_condition
+                if gc is None:
+                    continue
+                if solve_first(self, gc, dict(im.b)):
+                    del stack[idx + 1:]
+                    im.frames[:] = [im.frames[0]]
+                    im.frames[0].pc = len(im.frames[0].body)
+                    intention.waiting = None
+                    intention.suspended = None
+                    self.suspended.pop(intention.id, None)
+                    self.event_waiters = [w for w in self.event_waiters if w[1] is not intention]
+                    self.condition_waiters = [w for w in self.condition_waiters if w[0] is not intention]
+                    self.running_remove(intention)
+                    self.clr_int(intention)
+                    if not intention.dropped and intention.stack:
+                        self.running.append(intention)
+                    break
+
+    def _awaking(self) -> None:
+        """Something other than the +jag_sleeping plan woke the agent: +jag_awaking (Jason's rule)."""
+        awake = bool(self.mailbox)
+        if not awake:
+            for ev in self.events:
+                lit = ev.trigger.literal
+                if not (type(lit) is Literal and lit.functor == "jag_sleeping"):
+                    awake = True
+                    break
+        if not awake:
+            for i in self.running:
+                if not any(type(im.event_literal) is Literal and im.event_literal.functor == "jag_sleeping"
+                           for im in i.stack):
+                    awake = True
+                    break
+        if awake:
+            self.sleeping_evt = False
+            self.post_external(Trigger(ADD, BEL, _JAG_AWAKING))
 
     def has_work(self) -> bool:
         return bool(self.events or self.running or self.mailbox or self.feedback)
@@ -358,8 +445,11 @@ class Agent:
                 self.running.append(new)
             else:
                 self.push_im(ev, plan, b)
-            if self.plans.has_meta and trigger.op == ADD and trigger.kind == ACHIEVE:
-                self.goal_state(trigger, "executing")
+            if trigger.op == ADD and trigger.kind == ACHIEVE:
+                if self.plans.has_meta:
+                    self.goal_state(trigger, "executing")
+                if type(lit) is Literal and lit.annots is not None and len(lit.annots) > 1:
+                    self._check_deadline(lit, intention if intention is not None else self.running[-1])
             return True
         self._no_plan(ev, "no_applicable", f"found a goal for which there is no applicable plan: {trigger}")
         return True
@@ -376,6 +466,14 @@ class Agent:
                                 self.name, trigger, intention)
                     self.drop_intention(intention)
             return
+        if intention is None and type(trigger.literal) is Literal and trigger.literal.functor == "kqml_received" \
+                and len(trigger.literal.args) == 4:
+            held = getattr(self, "kqml_messages", None)
+            msg = held.pop(trigger.literal.args[3], None) if held else None
+            if msg is not None:  # no user plan applies: the default semantics (Jason's kqmlPlans.asl)
+                from agentspeak.communication import receive_by_default
+                receive_by_default(self, msg)
+                return
         if intention is None:
             # an external goal (.at, !!g, a message) without a plan: Jason posts -!g when a plan is
             # relevant for it (generateGoalDeletionFromEvent), else it warns
@@ -560,6 +658,9 @@ class Agent:
                 continue
             if not stack:
                 break
+            if im.plan.trigger.kind == BEL:
+                # a plan reacting to the caller's +b/-b: the caller had already moved past that formula
+                continue
             caller = stack[-1]
             instr = caller.current()
             value = resolve(im.result, im.b)
@@ -705,9 +806,11 @@ class Agent:
                 return
             done[0] = True
             held = intention.waiting
-            if held is not susp and held is not None and getattr(held, "inner", None) is susp:
-                # suspended by .suspend while waiting (Jason keeps it pending): .resume completes this
-                held.complete = lambda: complete(ok, error, message, extra)
+            if held is not susp:
+                if held is not None and getattr(held, "inner", None) is susp:
+                    # suspended by .suspend while waiting (Jason keeps it pending): .resume completes this
+                    held.complete = lambda: complete(ok, error, message, extra)
+                # else the wait was abandoned (its goal failed or succeeded meanwhile)
                 return
             complete(ok, error, message, extra)
 

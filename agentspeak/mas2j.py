@@ -10,6 +10,7 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from agentspeak.lark_loader import lalr_parser  # first: it refuses lark-parser 0.12 with the fix
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedInput
 
@@ -57,7 +58,7 @@ class MasProject:
 def _parser() -> Lark:
     global _PARSER
     if _PARSER is None:
-        _PARSER = Lark(_GRAMMAR.read_text(), parser="lalr", maybe_placeholders=True)
+        _PARSER = lalr_parser(_GRAMMAR, maybe_placeholders=True)
     return _PARSER
 
 

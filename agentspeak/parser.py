@@ -12,6 +12,7 @@ import re
 import threading
 from pathlib import Path
 
+from agentspeak.lark_loader import lalr_parser  # first: it refuses lark-parser 0.12 with the fix
 from lark import Lark, Token, Transformer
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
@@ -25,6 +26,7 @@ from agentspeak.program import (
     Program, RemovePlan, Rule, Test, Trigger, TriggerInstr, UpdBel, While, For,
 )
 from agentspeak.stdlib.functions import FUNCTIONS, check_function_name, rule_function
+from agentspeak.stdlib.registry import set_program_reader
 from agentspeak.terms import (
     And, AnnotatedVar, Arith, ArithmeticError_, Func, Literal, Not, Or, Rel, Term, Var, is_ground, make_list,
     resolve,
@@ -586,7 +588,7 @@ def _parse_items(text: str, source_file: str) -> list:
     global _INLINE_PARSER
     with _PARSE_LOCK:
         if _INLINE_PARSER is None:
-            _INLINE_PARSER = Lark(_GRAMMAR.read_text(), parser="lalr", lexer="contextual",
+            _INLINE_PARSER = lalr_parser(_GRAMMAR, lexer="contextual",
                                   maybe_placeholders=True, transformer=_TRANSFORMER, **_speedups())
         t = _TRANSFORMER
         t.source_file, t.vars, t.line, t.trigger_line = source_file, {}, 0, 0
@@ -778,3 +780,6 @@ def parse_body(text: str) -> tuple:
 
 def parse_plans(text: str, source_file: str = "<string>") -> list[Plan]:
     return parse_program(text, source_file).plans
+
+
+set_program_reader(parse_program)   # for .include (agentspeak/stdlib/system.py), without an import cycle

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from agentspeak.terms import (
-    Bindings, Literal, Term, Var, rename, resolve, to_str, variables,
+    NIL, And, Arith, Bindings, Cons, Func, Literal, Not, Or, Rel, Term, Var, rename, resolve, to_str, variables,
 )
 
 # trigger operators and types, as Jason names them
@@ -346,11 +346,15 @@ class Plan:
         return p
 
     def resolved(self, b: Bindings) -> "Plan":
-        return Plan(self.trigger.resolve(b),
-                    resolve(self.context, b) if self.context is not None else None,
-                    map_body(self.body, lambda t: resolve(t, b)),
-                    resolve(self.label, b) if self.label is not None else None,
-                    self.source_file, self.line)
+        """The plan with the bindings applied; nothing in it is evaluated (a plan is code: its
+        ``math.random`` runs when the formula runs, not when the plan is handed around as a term)."""
+        p = Plan(Trigger(self.trigger.op, self.trigger.kind, substitute(self.trigger.literal, b)),
+                 substitute(self.context, b) if self.context is not None else None,
+                 map_body(self.body, lambda t: substitute(t, b)),
+                 substitute(self.label, b) if self.label is not None else None,
+                 self.source_file, self.line)
+        p.goal_condition = substitute(self.goal_condition, b) if self.goal_condition is not None else None
+        return p
 
     def __str__(self) -> str:
         text = ""
@@ -437,9 +441,9 @@ class PlanTerm:
         if self.plan is not None:
             return PlanTerm(plan=self.plan.resolved(b))
         if self.body is not None:
-            return PlanTerm(body=map_body(self.body, lambda t: resolve(t, b)))
+            return PlanTerm(body=map_body(self.body, lambda t: substitute(t, b)))
         r = self.rule
-        return PlanTerm(rule=Rule(resolve(r.head, b), resolve(r.body, b), r.source_file, r.line))
+        return PlanTerm(rule=Rule(substitute(r.head, b), substitute(r.body, b), r.source_file, r.line))
 
     def rename(self, mapping: dict) -> "PlanTerm":
         if self.plan is not None:
@@ -521,6 +525,48 @@ class PlanTerm:
 
 
 _TRUE = Literal("true")
+
+
+def substitute(t: Term, b: Bindings) -> Term:
+    """``t`` with the bindings applied, evaluating nothing (``resolve`` computes arithmetic and calls
+    functions; inside a plan term those are code that runs later)."""
+    tt = type(t)
+    if tt is Var:
+        v = b.get(t)
+        while type(v) is Var:
+            t, v = v, b.get(v)
+        return t if v is None else substitute(v, b)
+    if tt is Literal:
+        if not t.args and t.annots is None and t.annot_tail is None:
+            return t
+        if t.annot_tail is not None and b.get(t.annot_tail) is not None:
+            return resolve(t, b)
+        return Literal(t.functor, tuple(substitute(a, b) for a in t.args),
+                       tuple(substitute(a, b) for a in t.annots) if t.annots else None, t.neg, t.annot_tail)
+    if tt is Func:
+        return Func(t.name, tuple(substitute(a, b) for a in t.args), t.spec)
+    if tt is Arith:
+        return Arith(t.op, substitute(t.left, b), substitute(t.right, b) if t.right is not None else None)
+    if tt is Rel:
+        return Rel(t.op, substitute(t.left, b), substitute(t.right, b))
+    if tt is And:
+        return And(substitute(t.left, b), substitute(t.right, b))
+    if tt is Or:
+        return Or(substitute(t.left, b), substitute(t.right, b))
+    if tt is Not:
+        return Not(substitute(t.arg, b))
+    if tt is Cons:
+        heads = []
+        while type(t) is Cons:
+            heads.append(substitute(t.head, b))
+            t = t.tail
+            while type(t) is Var and b.get(t) is not None:
+                t = b[t]
+        tail = substitute(t, b) if t is not NIL else NIL
+        for h in reversed(heads):
+            tail = Cons(h, tail)
+        return tail
+    return resolve(t, b)
 
 
 def _formula_term(instr) -> Term:

@@ -87,6 +87,7 @@ class LocalRuntime:
         self.undeliverable = 0
         self.source_dirs: list[str] = []     # where .create_agent and includes look (a project's aslSourcePath)
         self._yield_turn = False             # end the running agent's turn now (it created an agent)
+        self._yield_to: Agent | None = None  # ... and run this one next, then the creator again
 
     # -- set-up
     def add_agent(self, name: str, source: str | None = None, source_file: str = "<string>",
@@ -139,7 +140,20 @@ class LocalRuntime:
         # the creator's turn ends after this cycle, so the new agent starts before the creator goes on
         # (Jason starts it on a thread of its own at once; a creator that loops must not starve it)
         self._yield_turn = True
+        self._yield_to = self.agents[unique]
         return unique
+
+    def _run_next(self, first: Agent, then: Agent) -> None:
+        """Put ``first`` then ``then`` at the head of the ready queue (a new agent starts at once, and
+        its creator goes on right after it, as if each had a thread of its own)."""
+        for agent in (then, first):
+            if agent.name in self._ready_set:
+                try:
+                    self.ready.remove(agent)
+                except ValueError:
+                    pass
+            self._ready_set.add(agent.name)
+            self.ready.appendleft(agent)
 
     def kill_agent(self, name: str) -> bool:
         """Remove an agent (Jason's ``.kill_agent``): its intentions stop, later messages to it are
@@ -267,6 +281,9 @@ class LocalRuntime:
                             or self._stop_at is not None or self._yield_turn:
                         self._yield_turn = False
                         break
+                if self._yield_to is not None:
+                    self._run_next(self._yield_to, agent)
+                    self._yield_to = None
                 if agent.timers:
                     timed.add(agent)  # timers are only set by the agent itself, during its turn
                     if agent.timers[0][0] <= monotonic():

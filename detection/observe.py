@@ -34,6 +34,8 @@ def observe(args: argparse.Namespace) -> int:
     try:
         if args.bag:
             return _replay(args)
+        if args.zenoh:
+            return _zenoh(args)
         return _live(args)
     except SourceError as exc:
         print(f"faultmas observe: {exc}", file=sys.stderr)
@@ -77,17 +79,8 @@ def _live(args: argparse.Namespace) -> int:
         environment.parameters = Ros2Parameters(args.domain_id)
         session.pipeline.add_listener(info_publisher(tap))
         session.pipeline.add_listener(show)
-        stop = threading.Event()
-        signal.signal(signal.SIGTERM, lambda *_: stop.set())
         tap.start()
-        end = None if args.duration is None else time.monotonic() + args.duration
-        try:
-            while not stop.is_set() and (end is None or time.monotonic() < end):
-                if table is not None:
-                    table.draw()
-                stop.wait(0.25)
-        except KeyboardInterrupt:
-            pass
+        _run_until_stopped(args, table)
     except TapError as exc:
         print(f"faultmas observe: {args.config}: {exc}", file=sys.stderr)
         return 2
@@ -96,6 +89,43 @@ def _live(args: argparse.Namespace) -> int:
             tap.close()
         if environment.parameters is not None:
             environment.parameters.close()
+        session.close()
+    _report_errors(session)
+    return 0
+
+
+def _run_until_stopped(args: argparse.Namespace, table) -> None:
+    """Until Ctrl-C, SIGTERM or ``--duration``; the table (if any) redrawn four times a second."""
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    end = None if args.duration is None else time.monotonic() + args.duration
+    try:
+        while not stop.is_set() and (end is None or time.monotonic() < end):
+            if table is not None:
+                table.draw()
+            stop.wait(0.25)
+    except KeyboardInterrupt:
+        pass
+
+
+def _zenoh(args: argparse.Namespace) -> int:
+    from detection.taps.zenoh import ZenohTap
+
+    if args.record:
+        print("faultmas observe: --record records ROS 2 topics; it cannot be used with --zenoh", file=sys.stderr)
+        return 2
+    session = open_session(args.config, args.model, args.rules)
+    tap = None
+    try:
+        show, table = _printer(args, session)
+        tap = ZenohTap(session.config, session.observers, session.pipeline.observe, connect=args.connect)
+        session.pipeline.add_listener(tap.info_publisher())
+        session.pipeline.add_listener(show)
+        tap.start()
+        _run_until_stopped(args, table)
+    finally:
+        if tap is not None:
+            tap.close()
         session.close()
     _report_errors(session)
     return 0

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import re
 
-from agentspeak.program import ACHIEVE, ADD, PlanTerm, Plan, Trigger, body_variables
+from agentspeak.program import ACHIEVE, ADD, PlanTerm, Plan, Trigger, body_variables, substitute
 from agentspeak.stdlib.registry import IAError, internal_action, wrong_arguments
 from agentspeak.terms import Literal, Var, make_list, resolve, to_print_str
 from agentspeak.unify import undo
@@ -111,9 +111,9 @@ def _types(x) -> list[str]:
     tx = type(x)
     if (tx is int or tx is float) and tx is not bool:
         out.append("number")
-    if tx is Literal and not x.args and not x.neg and x.functor not in ("",):
+    if tx is Literal and not x.args and not x.neg and x.annots is None and x.annot_tail is None:
         out.append("atom")
-    if tx is Literal or tx is Cons or x is NIL:
+    if tx is Literal:
         out.append("literal")
     if tx is str:
         out.append("string")
@@ -162,13 +162,18 @@ def _remaining_body(im) -> tuple:
 def im_term(im) -> Literal:
     """``im(Label, {Trigger}, {Body still to run}, [map(Var, Value), ...])`` (Jason's IntendedMeans
     as a term); the body and trigger with the intended means' bindings applied."""
+    from agentspeak.terms import rename
     b = im.b
+    fresh: dict = {}  # the term shares no variable with the running plan (Jason makes them anonymous)
+
+    def copy(t):
+        return rename(substitute(t, b), fresh)
     trig = im.plan.trigger
     literal = im.event_literal if im.event_literal is not None else trig.literal
-    trigger = PlanTerm(plan=Plan(Trigger(trig.op, trig.kind, resolve(literal, b))))
-    body = PlanTerm(body=tuple(instr.map_terms(lambda t: resolve(t, b)) if hasattr(instr, "term") else instr
+    trigger = PlanTerm(plan=Plan(Trigger(trig.op, trig.kind, copy(literal))))
+    body = PlanTerm(body=tuple(instr.map_terms(copy) if hasattr(instr, "term") else instr
                                for instr in _remaining_body(im)))
-    unifier = make_list([Literal("map", (v, resolve(v, b))) for v in body_variables(im.plan.body)
+    unifier = make_list([Literal("map", (Var(v.name), copy(v))) for v in body_variables(im.plan.body)
                          if v in b and not v.name.startswith("_")])
     return Literal("im", (_label_term(im.plan), trigger, body, unifier))
 
@@ -291,3 +296,16 @@ def namespace_get_prop(ctx, ns, key, value=None, default=None):
         if ctx.unify(key, k) and (value is None or ctx.unify(value, v)):
             yield
         undo(ctx.b, ctx.trail, mark)
+
+
+@internal_action(".add_nested_source", args=3)
+def add_nested_source(ctx, lit, source, result):
+    """``.add_nested_source(p[a], bob, R)``: R is ``p[source(bob)[a]]`` (a list: each of its literals)."""
+    from agentspeak.communication import nested_source
+    from agentspeak.terms import Cons, NIL, list_items
+    if isinstance(lit, Cons) or lit is NIL:
+        return ctx.unify(result, make_list([nested_source(x, source) if isinstance(x, Literal) else x
+                                            for x in list_items(lit)]))
+    if not isinstance(lit, Literal):
+        raise wrong_arguments(".add_nested_source needs a literal")
+    return ctx.unify(result, nested_source(lit, source))

@@ -58,7 +58,7 @@ def remove_plan(ctx, labels, source=None):
         if isinstance(label, str):
             label = Literal(label[1:] if label.startswith("@") else label)
         if isinstance(label, Literal):
-            ctx.agent.plans.remove(label)
+            ctx.agent.plans.remove(label, source)
 
 
 @internal_action(".relevant_plans", args=(2, 3))

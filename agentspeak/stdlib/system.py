@@ -28,10 +28,56 @@ def nano_time(ctx, t):
     return ctx.unify(t, time.perf_counter_ns())
 
 
+class JavaRandom(_random.Random):
+    """``java.util.Random``'s generator (a 48-bit linear congruential one), so that a seeded program
+    (``.set_random_seed(20)``) draws the numbers it draws under Jason."""
+
+    _MULT, _MASK = 0x5DEECE66D, (1 << 48) - 1
+
+    def seed(self, a=None, version=2) -> None:  # noqa: D102 - random.Random's signature
+        if a is None:
+            a = time.time_ns()
+        self._seed = (int(a) ^ self._MULT) & self._MASK
+
+    def _next(self, bits: int) -> int:
+        self._seed = (self._seed * self._MULT + 0xB) & self._MASK
+        r = self._seed >> (48 - bits)
+        return r - (1 << 32) if r >= 1 << 31 else r  # Java's (int) cast
+
+    def random(self) -> float:
+        return ((self._next(26) << 27) + self._next(27)) * (1.0 / (1 << 53))
+
+    def getrandbits(self, k: int) -> int:
+        out, got = 0, 0
+        while got < k:
+            out |= (self._next(32) & 0xFFFFFFFF) << got
+            got += 32
+        return out & ((1 << k) - 1)
+
+    def next_int(self, bound: int) -> int:
+        """Java's ``nextInt(bound)``."""
+        if bound & -bound == bound:
+            return (bound * self._next(31)) >> 31
+        while True:
+            bits = self._next(31)
+            val = bits % bound
+            if bits - val + (bound - 1) < (1 << 31):
+                return val
+
+    def choice(self, seq):
+        return seq[self.next_int(len(seq))]
+
+    def getstate(self):
+        return self._seed
+
+    def setstate(self, state) -> None:
+        self._seed = state
+
+
 def _rng(agent) -> _random.Random:
     rng = getattr(agent, "_rng", None)
     if rng is None:
-        rng = agent._rng = _random.Random()
+        rng = agent._rng = JavaRandom()
     return rng
 
 
@@ -117,12 +163,12 @@ def stop_mas(ctx, delay=0, code=0):
 def include(ctx, path, namespace=None):
     """Load an .asl file now (beliefs, rules, plans, goals)."""
     import os
-    from agentspeak.parser import parse_program
+    from agentspeak.stdlib.registry import read_program
     if not isinstance(path, str):
         raise wrong_arguments(".include needs a file name")
     base = os.path.dirname(ctx.agent.source_file) if ctx.agent.source_file else "."
     full = path if os.path.isabs(path) else os.path.join(base, path)
     with open(full) as f:
-        ctx.agent.load(parse_program(f.read(), full))
+        ctx.agent.load(read_program(f.read(), full))
 
 
