@@ -62,6 +62,7 @@ class LearnedResourceObserver:
         self.ok: dict[str, bool | None] = {c: None for c in models}        # None: not known yet
         self.last_distance: dict[str, float] = {}
         self.tick_seconds: list[float] = []
+        self.tick_cpu_seconds: list[float] = []
 
     def on_event(self, t: float, topic: str, vector: np.ndarray) -> None:
         buffer = self.buffers.get(topic)
@@ -77,7 +78,7 @@ class LearnedResourceObserver:
         ``counters`` (component → ``COUNTER_NAMES`` sample) replaces reading the processes: a recorded
         run replayed through this very code (``replay``)."""
         now = time.time() if now is None else now
-        started = time.perf_counter()
+        started, started_cpu = time.perf_counter(), time.thread_time()
         samples = {}
         for c, process in self.processes.items():
             if counters is not None:
@@ -106,6 +107,7 @@ class LearnedResourceObserver:
                 self.ok[c] = ok
                 changes.append(Observation(f"resource({c})", ok, now, measured=distance, source=SOURCE))
         self.tick_seconds.append(time.perf_counter() - started)
+        self.tick_cpu_seconds.append(time.thread_time() - started_cpu)     # what a busy machine does not inflate
         if changes:
             self.emit(changes)
         return changes
