@@ -116,8 +116,8 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: runtime.stop())
     try:
-        bridge = TransportBridge(runtime, transport, declared=declared,
-                                 allowed_code_senders=args.allow_code_from).attach()
+        bridge = TransportBridge(runtime, transport, declared=declared, allowed_code_senders=args.allow_code_from,
+                                 members=declared if args.project else None).attach()
         if args.wait_for_peers > 0 and not transport.wait_for_agents(declared, args.wait_for_peers):
             missing = sorted(set(declared) - transport.alive_agents())
             log.warning("agent %s: still missing after %.0f s: %s; starting anyway", args.name,

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import logging
 import os
+import secrets
 import subprocess
 import sys
 import threading
@@ -20,6 +21,7 @@ import time
 from pathlib import Path
 from typing import IO
 
+from agents.zenoh_arch import LAUNCHER_TOKEN_ENV
 from robot_bridge.processes import ESCALATION, stop_processes
 
 log = logging.getLogger("faultmas.agents")
@@ -80,6 +82,7 @@ class Launcher:
         self.project, self.hub, self.out, self.err = project, hub, out, err
         self.extra_args = list(extra_args or ())
         self.names = project.agent_names()
+        self.token = secrets.token_hex(16)
         self.children: dict[str, subprocess.Popen] = {}
         self.relays: list[threading.Thread] = []
         self.statuses: dict = {}
@@ -94,7 +97,9 @@ class Launcher:
         self.statuses[status.agent] = status
 
     def start(self) -> None:
-        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        # the children accept the launcher's stop by this token (agents.zenoh_arch.LAUNCHER_TOKEN_ENV):
+        # a stop that merely claims to come from the launcher is refused
+        env = dict(os.environ, PYTHONUNBUFFERED="1", **{LAUNCHER_TOKEN_ENV: self.token})
         endpoint = self.hub.endpoints[0]
         for decl in self.project.agents:
             for name in decl.instance_names():
@@ -150,7 +155,7 @@ class Launcher:
         """Ask every child to stop, then insist: control message, SIGINT, SIGTERM, SIGKILL."""
         running = [c for c in self.children.values() if c.poll() is None]
         if running:
-            self.hub.publish_control("stop", by="launcher", delay=0.0)
+            self.hub.publish_control("stop", by="launcher", delay=0.0, token=self.token)
         stop_processes(running, GRACE, (None, *ESCALATION))
         for relay in self.relays:
             relay.join(5.0)

@@ -110,7 +110,8 @@ def _run_networked(runtime, project, args) -> int:
 
     options = ZenohOptions(listen=tuple(args.listen) if args.listen else None, connect=tuple(args.connect))
     with ZenohTransport(project.name, options) as transport:
-        bridge = TransportBridge(runtime, transport, declared=project.agent_names()).attach()
+        bridge = TransportBridge(runtime, transport, declared=project.agent_names(),
+                                 members=project.agent_names()).attach()
         why = bridge.run(timeout=args.timeout)
         bridge.detach()
     return 124 if why == "timeout" else 0
