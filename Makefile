@@ -6,7 +6,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.faultmas-installed
 PURE_PYTHON := FAULTMAS_PURE_PYTHON=1
 
-.PHONY: run test bench install speedups clean
+.PHONY: run test bench install speedups clean campaign
 
 $(STAMP): pyproject.toml Makefile setup.py
 	$(PYTHON) -m venv $(VENV)
@@ -34,6 +34,12 @@ test: speedups
 	$(PY) -m pytest -q -p no:cacheprovider
 	# the language suite again on the interpreter run from source (what runs without a C compiler)
 	$(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider tests/agentspeak
+
+# The reliability campaign (docs/reliability.md): every input boundary fuzzed with FAULTMAS_FUZZ_EXAMPLES
+# inputs each (default 20,000; `make test` runs 40), compiled and from source. Hours at the default.
+campaign: speedups
+	FAULTMAS_FUZZ_PROFILE=campaign $(PY) -m pytest -q -p no:cacheprovider tests/hardening/test_fuzz_boundaries.py
+	FAULTMAS_FUZZ_PROFILE=campaign $(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider tests/hardening/test_fuzz_boundaries.py
 
 bench: speedups
 	$(PY) -m benchmarks
