@@ -205,6 +205,7 @@ class TransportBridge:
             self._refuse(agent, envelope, "forged_sender", f"{sender} is an agent of this process")
             return
         if (self.members is not None and sender not in self.members and envelope.performative in MEMBERS_ONLY
+                and envelope.performative not in CODE_PERFORMATIVES  # plans: 'untrusted_code' below
                 and envelope.in_reply_to not in agent.pending_asks):
             self._refuse(agent, envelope, "not_a_member", f"{envelope.performative} only from agents of the MAS")
             return

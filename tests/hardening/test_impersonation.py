@@ -45,4 +45,6 @@ def test_an_outsider_process_cannot_plant_plans_goals_or_stop_the_mas():
     assert "hello[source(mallory)]" in beliefs                # anyone may tell
     assert not any("evil" in b or "did(act,mallory)" in b or "did(act,bob)" in b for b in beliefs), beliefs
     assert not any("evil" in str(plan) for plan in runtime.agents["bob"].plans.plans), "a planted plan"
-    assert dict(transport.dropped) == {"forged_sender": 2, "not_a_member": 2 + 2, "duplicate_field": 1}
+    # the stranger's plan is 'untrusted_code' (as before), its goal and both stops 'not_a_member'
+    assert dict(transport.dropped) == {"forged_sender": 2, "untrusted_code": 1, "not_a_member": 1 + 2,
+                                       "duplicate_field": 1}
