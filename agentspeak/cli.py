@@ -10,11 +10,16 @@ from pathlib import Path
 def add_parser(sub: argparse._SubParsersAction) -> None:
     asl = sub.add_parser("asl", help="check or run AgentSpeak programs")
     asl_sub = asl.add_subparsers(dest="asl_command", metavar="ACTION")
-    check = asl_sub.add_parser("check", help="report every syntax error in the files (exit 2 if any)")
-    check.add_argument("files", nargs="+")
+    check = asl_sub.add_parser("check", help="report every syntax error, unknown internal action and wrong arity "
+                                             "in the files (exit 2 if any)")
+    check.add_argument("files", nargs="+", metavar="FILE", help=".asl (or .mas2j) files to check")
     check.set_defaults(func=cmd_check)
-    run = asl_sub.add_parser("run", help="run one agent until .stopMAS or until it is idle")
-    run.add_argument("file")
+    run = asl_sub.add_parser("run", help="run one agent until .stopMAS or until it is idle",
+                             description="Run one agent until .stopMAS or until it is idle. The exit status is 0 "
+                                         "even when a goal failed without a failure plan: as in Jason, the failure "
+                                         "is reported on stderr and the agent goes on with its other intentions; "
+                                         "2 for a file that cannot be read or parsed.")
+    run.add_argument("file", metavar="FILE.asl", help="the agent's program")
     run.add_argument("--name", help="agent name (default: the file's stem)")
     run.add_argument("--timeout", type=float, default=None, help="stop after S seconds")
     run.set_defaults(func=cmd_run)
@@ -52,6 +57,9 @@ def cmd_check(args) -> int:
                 failed += 1
             continue
         program, errors = parse_program_all_errors(text, file)
+        if not errors:      # names and arities of internal actions, against the registry an agent runs with
+            from agentspeak.lint import internal_action_problems
+            errors = internal_action_problems(program)
         for err in errors:
             print(err, file=sys.stderr)
         for warning in program.warnings:

@@ -10,6 +10,7 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from agentspeak.lark_loader import lalr_parser  # first: it refuses lark-parser 0.12 with the fix
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedInput
 
@@ -46,6 +47,9 @@ class MasProject:
     infrastructure: str | None = None
     source_paths: list[str] = field(default_factory=list)
     file: str = ""
+    source_dirs: list[str] = field(default_factory=list)
+    """Where includes and ``.create_agent`` look (absolute): each ``aslSourcePath`` entry against the
+    working directory (as Jason), then against the project file's folder, then that folder."""
 
     def agent_names(self) -> list[str]:
         return [n for a in self.agents for n in a.instance_names()]
@@ -54,7 +58,7 @@ class MasProject:
 def _parser() -> Lark:
     global _PARSER
     if _PARSER is None:
-        _PARSER = Lark(_GRAMMAR.read_text(), parser="lalr", maybe_placeholders=True)
+        _PARSER = lalr_parser(_GRAMMAR, maybe_placeholders=True)
     return _PARSER
 
 
@@ -87,9 +91,9 @@ def parse_mas2j(text: str, file: str = "<mas2j>") -> MasProject:
         elif section.data == "source_path":
             project.source_paths = [str(s)[1:-1] for s in section.children]
     _check_unique_names(project, file, text)
-    paths = [os.path.join(base, p) for p in project.source_paths] + [base]
+    project.source_dirs = source_dirs(project.source_paths, base)
     for decl in project.agents:
-        decl.source = _find_source(decl.source, paths)
+        decl.source = _find_source(decl.source, project.source_dirs)
     return project
 
 
@@ -111,14 +115,28 @@ def _check_unique_names(project: MasProject, file: str, text: str) -> None:
             seen.add(name)
 
 
+def source_dirs(entries: list[str], base: str) -> list[str]:
+    """The folders of an ``aslSourcePath``, absolute: Jason reads a relative entry against the working
+    directory; an entry found only beside the project file is taken from there (what users of earlier
+    faultmas versions wrote), and the project's folder comes last."""
+    out: list[str] = []
+    for entry in entries:
+        for candidate in ([entry] if os.path.isabs(entry) else [entry, os.path.join(base, entry)]):
+            if os.path.isdir(candidate):
+                out.append(os.path.abspath(candidate))
+                break
+    out.append(os.path.abspath(base))
+    return list(dict.fromkeys(out))
+
+
 def _agent(tree: Tree, file: str = "<mas2j>", text: str = "") -> AgentDecl:
     name = str(tree.children[0])
     file_part, options_part = tree.children[1], tree.children[2]
     source = f"{name}.asl"
     if file_part is not None:
         tok = file_part.children[0]
-        text = str(tok)
-        source = text[1:-1] if tok.type == "STRING" else text
+        written = str(tok)
+        source = written[1:-1] if tok.type == "STRING" else written
         if not source.endswith(".asl"):
             source += ".asl"
         if "\0" in source:
@@ -128,7 +146,7 @@ def _agent(tree: Tree, file: str = "<mas2j>", text: str = "") -> AgentDecl:
         for opt in options_part.children:
             key, value = opt.children
             v = str(value)
-            options[str(key)] = v[1:-1] if isinstance(value, Token) and value.type == "STRING" else v
+            options[str(key)] = _unescape(v[1:-1]) if isinstance(value, Token) and value.type == "STRING" else v
     instances = 0
     for child in tree.children[3:]:
         if isinstance(child, Tree) and child.data == "instances":
@@ -141,6 +159,22 @@ def _agent(tree: Tree, file: str = "<mas2j>", text: str = "") -> AgentDecl:
                 raise _error_at(count, f"instance count {str(count)[:30]} is out of range (1 to {MAX_INSTANCES})",
                                 file, text)
     return AgentDecl(name, source, options, instances, token=tree.children[0])
+
+
+def _unescape(text: str) -> str:
+    """A string option's escapes as Java reads them: ``\\"`` is ``"``, ``\\\\`` is ``\\``."""
+    out = []
+    i = 0
+    while i < len(text):
+        ch = text[i]
+        if ch == "\\" and i + 1 < len(text):
+            nxt = text[i + 1]
+            out.append({"n": "\n", "t": "\t"}.get(nxt, nxt))
+            i += 2
+            continue
+        out.append(ch)
+        i += 1
+    return "".join(out)
 
 
 def _class_text(tree: Tree) -> str:

@@ -11,12 +11,15 @@ import sys
 import time
 
 BENCHMARKS: dict[str, str] = {
+    "startup": "benchmarks.bench_startup",     # whole process: --help, hello world, vs baselines (issue 23)
     "asl": "benchmarks.bench_asl",
     "zenoh": "benchmarks.bench_zenoh",
     "agents": "benchmarks.bench_agents_zenoh",
     "diagnosis": "benchmarks.bench_diagnosis",
     "sim": "benchmarks.bench_sim",
     "perception": "benchmarks.bench_perception",
+    "perfbugs": "benchmarks.bench_perfbugs",
+    "inspect": "benchmarks.bench_inspect",
 }
 
 

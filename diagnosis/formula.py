@@ -10,8 +10,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 from typing import Callable, Union
 
+from agentspeak.lark_loader import lalr_parser  # first: it refuses lark-parser 0.12 with the fix
 from lark import Lark, Transformer, v_args
 from lark.exceptions import UnexpectedEOF, UnexpectedInput
 
@@ -107,7 +109,7 @@ _TOKEN_NAMES = {"LPAR": "'('", "RPAR": "')'", "NAME": "a name", "NOT": "'!'", "C
 
 @lru_cache(maxsize=1)
 def _parser() -> Lark:
-    return Lark.open_from_package("diagnosis", "formula.lark", parser="lalr", maybe_placeholders=False)
+    return lalr_parser(Path(__file__).with_name("formula.lark"), maybe_placeholders=False)
 
 
 def parse_formula(text: str) -> Formula:

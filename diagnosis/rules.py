@@ -1,13 +1,21 @@
 """The fast rule engine of the paper's section V: rules react to observations and PosAb.
 
-A rule ``(posObs, negObs, posPosAb, negPosAb, action)`` fires when the four set tests hold:
-``posObs ⊆ Obs``, ``negObs ∩ Obs = ∅``, ``posPosAb ⊆ PosAb``, ``negPosAb ∩ PosAb = ∅``, where Obs is
-the set of observation literals currently known (``hz(scan)`` when observed true, ``~hz(scan)`` when
-observed false) and PosAb the components possibly faulty. Unknown observations are neither in Obs nor
-contradict anything. Rules are evaluated only when Obs or PosAb change, and each rule fires at most
-once per change.
+A rule ``(posObs, negObs, posPosAb, negPosAb, action)`` reacts to Obs, the set of observation literals
+currently known (``hz(scan)`` when observed true, ``~hz(scan)`` when observed false), and PosAb, the
+components possibly faulty. Two semantics:
+
+* ``paper`` (default, the paper's section V): a rule fires unless its conditions are *contradicted*:
+  no ``po`` in posObs has its complement in Obs (``~hz(scan)`` required, ``hz(scan)`` known), no
+  literal of negObs is in Obs, and, once PosAb is known, no component of posPosAb is outside it and no
+  component of negPosAb inside it. A missing observation blocks nothing; with no diagnosis yet
+  (PosAb unknown, ``None``) the PosAb conditions block nothing either.
+* ``strict`` (``semantics: strict`` in the file): the four set tests ``posObs ⊆ Obs``,
+  ``negObs ∩ Obs = ∅``, ``posPosAb ⊆ PosAb``, ``negPosAb ∩ PosAb = ∅``.
+
+Rules are evaluated only when Obs or PosAb change, and each rule fires at most once per change.
 
 ```yaml
+semantics: paper                        # optional: paper (default) or strict
 rules:                                  # next to the model: nav.yaml -> nav.rules.yaml
   - name: restart_laser
     posObs: [~hz(scan)]
@@ -35,6 +43,7 @@ from diagnosis.yaml_source import YamlSource
 
 log = logging.getLogger("faultmas.diagnosis.rules")
 ACTION_KEYS = ("log", "call", "command", "set_parameter", "post")
+SEMANTICS = ("paper", "strict")
 RULE_KEYS = ("name", "posObs", "negObs", "posPosAb", "negPosAb", "timeout", *ACTION_KEYS)
 
 
@@ -47,11 +56,21 @@ class Rule:
     neg_posab: frozenset[str]
     action: Action
     line: int | None = None
+    strict: bool = False
 
-    def applies(self, obs: frozenset[str], posab: frozenset[str]) -> bool:
-        """The paper's four set tests."""
-        return (self.pos_obs <= obs and not (self.neg_obs & obs)
-                and self.pos_posab <= posab and not (self.neg_posab & posab))
+    def applies(self, obs: frozenset[str], posab: frozenset[str] | None) -> bool:
+        """Strict: the four set tests. Paper: no condition is contradicted by Obs or a known PosAb."""
+        if self.strict:
+            posab = posab or frozenset()
+            return (self.pos_obs <= obs and not (self.neg_obs & obs)
+                    and self.pos_posab <= posab and not (self.neg_posab & posab))
+        if any(_complement(lit) in obs for lit in self.pos_obs) or self.neg_obs & obs:
+            return False
+        return posab is None or (self.pos_posab <= posab and not (self.neg_posab & posab))
+
+
+def _complement(literal: str) -> str:
+    return literal[1:] if literal.startswith("~") else f"~{literal}"
 
 
 @dataclass(frozen=True)
@@ -75,8 +94,10 @@ class RuleEngine:
         self._obs: frozenset[str] | None = None
         self._posab: frozenset[str] | None = None
 
-    def update(self, observations: Mapping[str, bool], possibly_faulty: Iterable[str]) -> list[Firing]:
-        obs, posab = known_literals(observations), frozenset(possibly_faulty)
+    def update(self, observations: Mapping[str, bool], possibly_faulty: Iterable[str] | None) -> list[Firing]:
+        """Run the rules if Obs or PosAb changed; ``possibly_faulty`` None: no diagnosis known yet."""
+        obs = known_literals(observations)
+        posab = None if possibly_faulty is None else frozenset(possibly_faulty)
         if obs == self._obs and posab == self._posab:
             return []
         self._obs, self._posab = obs, posab
@@ -84,7 +105,7 @@ class RuleEngine:
         fired = []
         for rule in self.rules:
             if rule.applies(obs, posab):
-                ctx = RuleContext(rule.name, ctx_obs, posab)
+                ctx = RuleContext(rule.name, ctx_obs, posab or frozenset())
                 try:
                     fired.append(Firing(rule, rule.action.run(ctx, self.environment)))
                 except ActionError as exc:
@@ -103,16 +124,22 @@ def load_rules(path: str | Path, model: SystemModel | None = None, text: str | N
     """Rules from YAML; with a model, every observation and component they name must exist in it."""
     source = YamlSource(path, text)
     top = source.mapping(source.root, "a rules file")
-    source.check_keys(top, ("rules",), "a rules file")
+    source.check_keys(top, ("semantics", "rules"), "a rules file")
     if "rules" not in top:
         source.error(source.root, "a rules file has a 'rules' list")
+    strict = False
+    if "semantics" in top:
+        mode = source.scalar(top["semantics"][1], "semantics")
+        if mode not in SEMANTICS:
+            source.error(top["semantics"][1], f"semantics is {' or '.join(SEMANTICS)}, not {mode!r}")
+        strict = mode == "strict"
     rules = []
     for i, node in enumerate(source.sequence(top["rules"][1], "rules")):
-        rules.append(_rule(source, node, i, model))
+        rules.append(_rule(source, node, i, model, strict))
     return rules
 
 
-def _rule(source: YamlSource, node: Node, index: int, model: SystemModel | None) -> Rule:
+def _rule(source: YamlSource, node: Node, index: int, model: SystemModel | None, strict: bool) -> Rule:
     entries = source.mapping(node, "a rule")
     source.check_keys(entries, RULE_KEYS, "a rule")
     name = source.scalar(entries["name"][1], "name") if "name" in entries else f"rule{index + 1}"
@@ -137,7 +164,7 @@ def _rule(source: YamlSource, node: Node, index: int, model: SystemModel | None)
         source.error(node, f"rule {name}: give exactly one action among {', '.join(ACTION_KEYS)}")
     action = _action(source, kinds[0], entries[kinds[0]][1], entries, name)
     return Rule(name, sets["posObs"], sets["negObs"], sets["posPosAb"], sets["negPosAb"], action,
-                node.start_mark.line + 1)
+                node.start_mark.line + 1, strict)
 
 
 def _literal(text: str) -> str:

@@ -59,6 +59,34 @@ def test_four_set_tests(setup):
     assert posts == [("leader", "+fault(amcl)")]
 
 
+def test_paper_semantics_a_missing_observation_blocks_nothing(write):
+    """Section V: a rule fires unless Obs or a known PosAb contradicts it."""
+    model = load_model(write("nav.yaml", MODEL))
+    rules = {r.name: r for r in load_rules(write("nav.rules.yaml", RULES), model)}
+    restart, tell = rules["restart_laser"], rules["tell_the_team"]
+    assert restart.applies(frozenset(), frozenset({"laser"}))              # hz(scan) unknown: not contradicted
+    assert not restart.applies(frozenset({"hz(scan)"}), frozenset({"laser"}))   # hz(scan) seen true
+    assert restart.applies(frozenset({"hz(pose)"}), None)                  # no diagnosis yet: PosAb blocks nothing
+    assert not restart.applies(frozenset(), frozenset())                   # laser known not possibly faulty
+    assert not restart.applies(frozenset(), frozenset({"laser", "amcl"}))  # negPosAb contradicted
+    assert tell.applies(frozenset({"hz(scan)"}), frozenset())              # negObs ~hz(scan) not in Obs
+    assert not tell.applies(frozenset({"~hz(scan)"}), frozenset())
+
+
+def test_strict_semantics_is_an_option_of_the_rules_file(write):
+    model = load_model(write("nav.yaml", MODEL))
+    strict = {r.name: r for r in load_rules(write("s.rules.yaml", "semantics: strict\n" + RULES), model)}
+    assert all(r.strict for r in strict.values())
+    assert not strict["restart_laser"].applies(frozenset(), frozenset({"laser"}))       # posObs must be in Obs
+    assert strict["restart_laser"].applies(frozenset({"~hz(scan)"}), frozenset({"laser"}))
+    assert not strict["restart_laser"].applies(frozenset({"~hz(scan)"}), None)          # unknown PosAb: empty
+    engine = RuleEngine(strict.values(), ActionEnvironment(callables={"restart": lambda ctx: None}))
+    assert engine.update({"hz(pose)": True}, {"laser"}) == []
+    paper = RuleEngine(load_rules(write("p.rules.yaml", RULES), model),
+                       ActionEnvironment(callables={"restart": lambda ctx: None}))
+    assert [f.rule.name for f in paper.update({"hz(pose)": True}, {"laser"})] == ["restart_laser"]
+
+
 def test_rules_run_only_when_obs_or_posab_change_and_once_per_change(setup):
     engine, calls, _ = setup
     assert len(engine.update({"hz(scan)": False}, ["laser"])) == 1
@@ -71,8 +99,8 @@ def test_rules_run_only_when_obs_or_posab_change_and_once_per_change(setup):
 def test_log_action_formats_the_message(setup, caplog):
     engine, _, _ = setup
     with caplog.at_level(logging.WARNING, logger="faultmas.diagnosis.rules"):
-        fired = engine.update({}, {"amcl"})
-    assert fired[0].result == "amcl may be faulty (amcl)"
+        fired = {f.rule.name: f for f in engine.update({}, {"amcl"})}
+    assert fired["note"].result == "amcl may be faulty (amcl)"
     assert "amcl may be faulty (amcl)" in caplog.text
 
 
@@ -119,6 +147,7 @@ rules:
     ("rules:\n  - name: a\n    log: x\n    call: f\n", 2, "exactly one action"),
     ("rules:\n  - name: a\n    command: ros2 run x\n", 3, "argument list"),
     ("rules:\n  - name: a\n    when: x\n    log: x\n", 3, "unknown key 'when'"),
+    ("semantics: lenient\nrules: []\n", 1, "semantics is paper or strict, not 'lenient'"),
 ])
 def test_bad_rules_name_file_line_and_reason(write, text, line, fragment):
     model = load_model(write("nav.yaml", MODEL))

@@ -1,0 +1,64 @@
+"""One observing run: the configuration, its observers, and the pipeline to the diagnoser and the rules.
+
+Shared by ``faultmas observe``, the tests and the benchmark, live or over a bag.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from detection.config import ObserverConfig, load_observers
+from detection.observer_set import ObserverSet
+from detection.pipeline import Pipeline, Update
+from diagnosis.actions import ActionEnvironment
+
+
+@dataclass
+class Session:
+    config: ObserverConfig
+    observers: ObserverSet
+    pipeline: Pipeline
+
+    def close(self) -> None:
+        self.pipeline.close()
+
+
+def open_session(config_path: str | Path, model_path: str | Path | None = None,
+                 rules_path: str | Path | None = None, environment: ActionEnvironment | None = None) -> Session:
+    """Load everything (``SourceError`` on bad input). Without ``rules_path`` the model's neighbour
+    ``NAME.rules.yaml`` is used when it exists."""
+    from diagnosis.rules import load_rules, rules_path_for
+
+    config = load_observers(config_path)
+    model = None
+    if model_path is not None:
+        from diagnosis.loader import load_model
+        model = load_model(model_path)
+        if rules_path is None and rules_path_for(model_path).is_file():
+            rules_path = rules_path_for(model_path)
+    rules = load_rules(rules_path, model) if rules_path is not None else []
+    return Session(config, config.build(), Pipeline(model, rules, environment))
+
+
+def replay_bag(session: Session, bag: str | Path) -> list[Update]:
+    """Every message of the bag through the observers and the pipeline; the updates, in order.
+
+    The clock starts where the live run that recorded the bag started (else at the first message) and
+    runs to the last message."""
+    from detection.taps.bag import replay, start_time_ns
+
+    updates: list[Update] = []
+    start = start_time_ns(bag)
+    last = None
+    for msg in replay(bag, session.config.topics):
+        if session.observers.t0_ns is None:
+            session.observers.start(start if start is not None else msg.t_ns)
+        update = session.pipeline.observe(session.observers.feed(msg))
+        if update is not None:
+            updates.append(update)
+        last = msg.t_ns
+    if last is not None:
+        update = session.pipeline.observe(session.observers.advance(last))
+        if update is not None:
+            updates.append(update)
+    return updates

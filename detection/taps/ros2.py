@@ -1,0 +1,130 @@
+"""The live ROS 2 tap: raw rclpy subscriptions, the node graph and psutil samples, on one executor thread.
+
+Messages are taken raw (``raw=True``: no deserialization unless an observer reads a field) and stamped
+with the receive time in the callback; a timer advances the observers' clock (so silence is noticed),
+polls the graph for ``activated`` and samples processes for ``resource``. Everything runs on one
+SingleThreadedExecutor, so messages reach the observers in receive-time order. A topic without a
+configured ``msg_type`` is subscribed to as soon as the graph shows it.
+"""
+from __future__ import annotations
+
+import importlib
+import logging
+import time
+from typing import Callable
+
+from detection.config import ObserverConfig
+from detection.observation import Observation
+from detection.observer_set import ObserverSet
+from detection.taps import codec
+from detection.taps.live import LiveTap
+
+log = logging.getLogger("faultmas.detection")
+GRAPH_PERIOD = 0.1          # seconds between graph polls (activated reacts within this + one evaluation)
+
+
+class TapError(ValueError):
+    """A configuration the live tap cannot serve (e.g. an unknown message type)."""
+
+
+def message_class(msgtype: str):
+    """``sensor_msgs/msg/Imu`` -> the rclpy class; ``TapError`` when no installed package has it."""
+    parts = msgtype.split("/")
+    if len(parts) == 2:
+        parts = [parts[0], "msg", parts[1]]
+    try:
+        return getattr(importlib.import_module(f"{parts[0]}.{parts[1]}"), parts[2])
+    except (ImportError, AttributeError, IndexError):
+        raise TapError(f"unknown topic type {msgtype!r}: no installed ROS 2 package defines it") from None
+
+
+class Ros2Tap(LiveTap):
+    """Feeds ``observers`` from a live ROS 2 graph; ``on_observations`` gets what changed."""
+
+    def __init__(self, config: ObserverConfig, observers: ObserverSet,
+                 on_observations: Callable[[list[Observation]], None], *, domain_id: int | None = None,
+                 recorder=None, clock: Callable[[], int] = time.time_ns) -> None:
+        for msgtype in config.topics.values():         # fail before touching the network
+            if msgtype:
+                message_class(msgtype)
+        super().__init__(config, observers, on_observations, recorder=recorder, clock=clock)
+        from robot_bridge.ros2.runtime import RosContext
+
+        self.types: dict[str, str] = {}
+        self._decoders: dict[str, Callable] = {}
+        self.ros = RosContext(domain_id=domain_id)
+        import rclpy.node
+
+        self.node = self.ros.add(rclpy.node.Node("faultmas_observers", context=self.ros.context))
+        self._subscriptions: dict[str, object] = {}
+        self._last_graph = 0.0
+
+    def start(self) -> "Ros2Tap":
+        self.begin()
+        for topic, msgtype in self.config.topics.items():
+            if msgtype:
+                self._subscribe(topic, msgtype)
+        self.node.create_timer(1.0 / max(self.config.rate_hz, 1.0) / 2, self._tick)
+        self.ros.start()
+        return self
+
+    def close(self) -> None:
+        self.ros.close()
+        self.close_recorder()
+
+    def _subscribe(self, topic: str, msgtype: str) -> None:
+        from rclpy.qos import qos_profile_sensor_data
+
+        cls = message_class(msgtype)
+        if topic in self.config.decoded:
+            try:
+                self._decoders[topic] = codec.decoder(msgtype)
+            except codec.UnknownType as exc:
+                raise TapError(f"{topic}: {exc}") from None
+        self.types[topic] = msgtype
+        decode = self._decoders.get(topic)
+        self._subscriptions[topic] = self.node.create_subscription(
+            cls, topic, lambda raw, t=topic, d=decode, m=msgtype: self.feed(t, raw=raw, decode=d, msgtype=m),
+            qos_profile_sensor_data, raw=True)
+        log.info("observing %s (%s)", topic, msgtype)
+
+    # -- the timer (executor thread) ----------------------------------------------------------------
+    def _tick(self) -> None:
+        wall = time.monotonic()
+        if wall - self._last_graph >= GRAPH_PERIOD:
+            self._last_graph = wall
+            self._poll_graph()
+        self.tick()
+
+    def _poll_graph(self) -> None:
+        if self.config.nodes:
+            self.graph(frozenset(f"{ns.rstrip('/')}/{name}" for name, ns in self.node.get_node_names_and_namespaces()))
+        pending = [t for t in self.config.topics if t not in self._subscriptions]
+        if pending:
+            present = dict(self.node.get_topic_names_and_types())
+            for topic in pending:
+                types = present.get(topic)
+                if types:
+                    try:
+                        self._subscribe(topic, types[0])
+                    except TapError as exc:
+                        log.error("%s", exc)
+                        self._subscriptions[topic] = None      # reported once, not retried
+
+
+INFO_TOPIC = "/observers/info"
+
+
+def info_publisher(tap: Ros2Tap, topic: str = INFO_TOPIC):
+    """A pipeline listener publishing each ``Update`` as JSON in a ``std_msgs/String`` on ``topic``."""
+    import json
+
+    from rclpy.qos import QoSDurabilityPolicy, QoSProfile
+    from std_msgs.msg import String
+
+    qos = QoSProfile(depth=100, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)   # late joiners get the state
+    pub = tap.node.create_publisher(String, topic, qos)
+
+    def publish(update) -> None:
+        pub.publish(String(data=json.dumps(update.to_json())))
+    return publish

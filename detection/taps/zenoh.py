@@ -1,0 +1,97 @@
+"""The live Zenoh tap: a subscriber per topic key expression, liveliness tokens for ``activated``.
+
+A configured topic ``/robot1/scan`` is the key expression ``robot1/scan``; payloads are decoded as JSON
+only when an observer reads a field (``score``, ``movement``; ``timestamp`` reads ``header.stamp``).
+``activated(node)`` holds while a liveliness token whose key is the node's name, or ends with
+``/<name>``, is alive (e.g. ``faultmas/<mas>/alive/<agent>``). Messages and a timer may come on
+Zenoh's threads: the shared ``LiveTap`` keeps them in order.
+"""
+from __future__ import annotations
+
+import json
+import threading
+import time
+from typing import Callable, Sequence
+
+from detection.config import ObserverConfig
+from detection.observation import Observation
+from detection.observer_set import ObserverSet
+from detection.taps.live import LiveTap
+
+INFO_KEY = "faultmas/observers/info"
+
+
+def zenoh_config(connect: Sequence[str] = (), listen: Sequence[str] = ()):
+    """A peer on loopback unless told otherwise; never multicast scouting."""
+    import zenoh
+
+    config = zenoh.Config()
+    config.insert_json5("mode", json.dumps("peer"))
+    config.insert_json5("scouting/multicast/enabled", "false")
+    config.insert_json5("listen/endpoints", json.dumps(list(listen) or ["tcp/127.0.0.1:0"]))
+    if connect:
+        config.insert_json5("connect/endpoints", json.dumps(list(connect)))
+    return config
+
+
+def key_of(topic: str) -> str:
+    return topic.strip("/")
+
+
+class ZenohTap(LiveTap):
+    def __init__(self, config: ObserverConfig, observers: ObserverSet,
+                 on_observations: Callable[[list[Observation]], None], *, session=None,
+                 connect: Sequence[str] = (), clock: Callable[[], int] = time.time_ns) -> None:
+        super().__init__(config, observers, on_observations, clock=clock)
+        import zenoh
+
+        self._owns = session is None
+        self.session = session if session is not None else zenoh.open(zenoh_config(connect))
+        self._declared: list = []
+        self._alive: set[str] = set()
+        self._stop = threading.Event()
+        self._timer: threading.Thread | None = None
+
+    def start(self) -> "ZenohTap":
+        self.begin()
+        for topic in self.config.topics:
+            self._declared.append(self.session.declare_subscriber(
+                key_of(topic), lambda sample, t=topic: self.feed(t, raw=sample.payload.to_bytes(), decode=json.loads)))
+        if self.config.nodes:
+            self._declared.append(self.session.liveliness().declare_subscriber("**", self._on_token, history=True))
+            self.graph(frozenset())
+        self._timer = threading.Thread(target=self._ticks, daemon=True, name="faultmas-zenoh-tap")
+        self._timer.start()
+        return self
+
+    def _on_token(self, sample) -> None:
+        import zenoh
+
+        key = str(sample.key_expr)
+        with self._lock:
+            (self._alive.add if sample.kind == zenoh.SampleKind.PUT else self._alive.discard)(key)
+            names = frozenset(n for k in self._alive for n in ("/" + k, "/" + k.rsplit("/", 1)[-1]))
+        self.graph(names)
+
+    def _ticks(self) -> None:
+        period = 0.5 / max(self.config.rate_hz, 1.0)
+        while not self._stop.wait(period):
+            self.tick()
+
+    def info_publisher(self, key: str = INFO_KEY):
+        """A pipeline listener putting each ``Update`` as JSON on ``key``."""
+        pub = self.session.declare_publisher(key)
+        self._declared.append(pub)
+        return lambda update: pub.put(json.dumps(update.to_json()))
+
+    def close(self) -> None:
+        self._stop.set()
+        if self._timer is not None:
+            self._timer.join(2.0)
+        for d in self._declared:
+            try:
+                d.undeclare()
+            except Exception:       # already gone with the session
+                pass
+        if self._owns:
+            self.session.close()

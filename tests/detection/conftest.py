@@ -1,0 +1,34 @@
+"""Shared helpers for the detection tests: files in a temporary folder, message streams at given rates."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable, Iterator
+
+import pytest
+
+from detection.message import Message
+
+
+@pytest.fixture
+def write(tmp_path: Path) -> Callable[[str, str], Path]:
+    """write(name, text) -> path of a new file in the test's temporary folder."""
+    def _write(name: str, text: str) -> Path:
+        path = tmp_path / name
+        path.write_text(text, encoding="utf-8")
+        return path
+    return _write
+
+
+def stream(channel: str, rate_hz: float, start: float, end: float, data=None) -> Iterator[Message]:
+    """Messages on ``channel`` at ``rate_hz`` from ``start`` to ``end`` seconds (``data(t)`` per message)."""
+    n = 0
+    while True:
+        t = start + n / rate_hz
+        if t >= end:
+            return
+        yield Message(channel, int(round(t * 1e9)), data(t) if data else None)
+        n += 1
+
+
+def merged(*streams: Iterator[Message]) -> list[Message]:
+    return sorted((m for s in streams for m in s), key=lambda m: m.t_ns)

@@ -1,0 +1,79 @@
+"""The Zenoh tap on a real Zenoh session: a publisher peer in another process (loopback TCP, no multicast);
+hz and score from its key expression, activated from its liveliness token, info on a Zenoh key."""
+from __future__ import annotations
+
+import json
+import socket
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import pytest
+
+from detection.config import load_observers
+from detection.pipeline import Pipeline
+from robot_bridge.ros2.runtime import wait_for
+
+zenoh = pytest.importorskip("zenoh")
+
+HERE = Path(__file__).resolve().parent
+CONFIG = """\
+start_up_time: 0.5
+setup:
+  - type: hz
+    topics:
+      - name: /robot1/scan
+        filter: {type: median, window_size: 5}
+        states: [{state: nominal, frequency: {type: gauss, mean: 20, std_deviation: 2}}]
+  - type: score
+    topics:
+      - {name: /robot1/scan, literal: score(battery), states: [{state: ok, score: {type: greater_than, greater_than: 11}}]}
+  - type: activated
+    nodes: [{name: zpub}]
+"""
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_zenoh_key_expressions_and_liveliness(write):
+    from detection.taps.zenoh import INFO_KEY, ZenohTap
+
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    pub = subprocess.Popen([sys.executable, str(HERE / "zenoh_publisher.py"), endpoint, "robot1/scan", "20", "zpub"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert pub.stdout.readline().strip() == "ready", pub.stderr.read()
+        config = load_observers(write("obs.yaml", CONFIG))
+        pipeline = Pipeline()
+        tap = ZenohTap(config, config.build(), pipeline.observe, connect=[endpoint])
+        infos, lock = [], threading.Lock()
+
+        def on_info(sample):
+            with lock:
+                infos.append(json.loads(sample.payload.to_string()))
+        listener = tap.session.declare_subscriber(INFO_KEY, on_info)
+        pipeline.add_listener(tap.info_publisher())
+        tap.start()
+        try:
+            assert wait_for(lambda: {"hz(robot1_scan)", "score(battery)", "activated(zpub)"}
+                            <= {n for n, o in pipeline.observations.items() if o.holds}, 20), pipeline.observations
+            assert pipeline.observations["hz(robot1_scan)"].measured == pytest.approx(20, rel=0.25)
+            pub.terminate()
+            pub.wait(10)
+            assert wait_for(lambda: not pipeline.observations["activated(zpub)"].holds, 10)
+            assert wait_for(lambda: not pipeline.observations["hz(robot1_scan)"].holds, 10)
+            with lock:
+                literals = [c["literal"] for i in infos for c in i["changed"]]
+            assert "~activated(zpub)" in literals and "hz(robot1_scan)" in literals
+        finally:
+            listener.undeclare()
+            tap.close()
+    finally:
+        if pub.poll() is None:
+            pub.kill()
+            pub.wait()
