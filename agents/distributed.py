@@ -19,7 +19,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import IO
+from typing import IO, Callable
 
 from agents.zenoh_arch import LAUNCHER_TOKEN_ENV
 from robot_bridge.processes import ESCALATION, stop_processes
@@ -123,8 +123,12 @@ class Launcher:
                 sink.write(line)
                 sink.flush()
 
-    def wait(self, timeout: float | None, stop_when_idle: bool = True) -> str:
-        """Block until the MAS ends; the reason ('stopped', 'idle', 'timeout' or 'failed')."""
+    def wait(self, timeout: float | None, stop_when_idle: bool = True,
+             fatal: Callable[[str], bool] | None = None) -> str:
+        """Block until the MAS ends; the reason ('stopped', 'idle', 'timeout' or 'failed').
+        ``fatal(name)``: 'failed' as soon as a child for which it is true ends with a non-zero status or a
+        signal (``failures`` names it), not only once all have ended (a run whose agent was killed must
+        not wait for its timeout)."""
         from agents.transport.status import quiescent, totals
 
         deadline = None if timeout is None else time.monotonic() + timeout
@@ -134,7 +138,7 @@ class Launcher:
                 return "stopped"
             if deadline is not None and time.monotonic() >= deadline:
                 return "timeout"
-            if self._check_children():
+            if self._check_children() or (fatal is not None and any(fatal(name) for name, _ in self.failures)):
                 return "failed"
             statuses = [self.statuses.get(name) for name in self.names]
             snapshot = None
