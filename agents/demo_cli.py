@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import signal
 import statistics
 import sys
 
@@ -137,7 +138,23 @@ def cmd_run(args: argparse.Namespace) -> int:
         print(json.dumps(_as_json(result)))
     else:
         print(_summary(result))
-    return 0 if result.correct else 1
+    return RUN_EXIT_CODES[result.outcome]
+
+
+#: Exit codes of ``faultmas run`` by outcome: a scripted campaign must tell a dead agent from a timeout
+#: from a wrong diagnosis (issue 22).
+RUN_EXIT_CODES = {"correct": 0, "wrong": 1, "died": 3, "timeout": 124}
+
+
+def died_text(agent: str, status: int) -> str:
+    """``Faulty: killed by SIGKILL (exit -9)`` / ``Helper: exited with status 1``."""
+    if status < 0:
+        try:
+            name = signal.Signals(-status).name
+        except ValueError:
+            name = f"signal {-status}"
+        return f"{agent}: killed by {name} (exit {status})"
+    return f"{agent}: exited with status {status}"
 
 
 def _echo(mark, stream) -> None:
@@ -154,7 +171,9 @@ def _seconds(steps: dict) -> dict:
 def _as_json(result) -> dict:
     """One schema for the pair and the team: the run's verdict and one entry per robot that had a task or a
     fault (``fault``, ``diagnosis``: strings; steps in simulated and wall seconds)."""
-    return {"correct": result.correct, "finished": result.finished, "seed": result.scenario.seed,
+    return {"correct": result.correct, "finished": result.finished, "outcome": result.outcome,
+            "died": [{"agent": agent, "exit": status} for agent, status in result.died],
+            "seed": result.scenario.seed,
             "robots": [{"robot": r.name, "fault": r.fault, "expected": r.expected, "diagnosis": r.diagnosis,
                         "correct": r.correct, "steps": _seconds(r.steps_sim), "steps_wall": _seconds(r.steps_wall)}
                        for r in result.robots]}
@@ -173,7 +192,9 @@ def _summary(result) -> str:
     for r in result.robots:
         for step in STEP_NAMES:
             lines.append(f"| {r.name} | {step} | {_fmt(r.steps_sim[step])} | {_fmt(r.steps_wall[step])} |")
-    if not result.finished:
+    for agent, status in result.died:
+        lines.append(f"\nthe run ended early: agent {died_text(agent, status)}")
+    if not result.finished and not result.died:
         lines.append("\nthe run did not finish in time")
     return "\n".join(lines)
 
