@@ -17,6 +17,7 @@ BENCHMARKS: dict[str, str] = {
     "diagnosis": "benchmarks.bench_diagnosis",
     "sim": "benchmarks.bench_sim",
     "perception": "benchmarks.bench_perception",
+    "observers": "benchmarks.bench_observers",
 }
 
 
