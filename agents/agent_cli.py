@@ -23,7 +23,7 @@ def add_agent_parser(sub: argparse._SubParsersAction) -> None:
     agent = sub.add_parser("agent", help="run one agent that joins a MAS over Zenoh")
     agent_sub = agent.add_subparsers(dest="agent_command", metavar="ACTION")
     run = agent_sub.add_parser("run", help="run FILE.asl as agent NAME of MAS M")
-    run.add_argument("file", metavar="FILE.asl")
+    run.add_argument("file", metavar="FILE.asl", help="the agent's program")
     run.add_argument("--name", required=True, help="the agent's name")
     run.add_argument("--mas", required=True, help="the MAS to join (its namespace on the network)")
     run.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
@@ -48,14 +48,24 @@ def add_agent_parser(sub: argparse._SubParsersAction) -> None:
                      help="an option for the bridge (repeatable; numbers are converted)")
     run.add_argument("--bridge-timeout", type=float, default=30.0, metavar="S",
                      help="seconds the robot gets to answer at start (default %(default)s)")
+    run.add_argument("--allow-pause", action="store_true",
+                     help="let `faultmas inspect` pause and step this agent (read-only otherwise)")
     run.set_defaults(func=cmd_agent_run)
     agent.set_defaults(func=lambda args: (agent.print_help(), 2)[1])
+
+
+def option_literals(text: str | None, file: str) -> list:
+    """The literals of a ``beliefs=``/``goals=`` option of a project file."""
+    if not text:
+        return []
+    from agentspeak.parser import parse_term
+    from agentspeak.terms import list_items
+    return list_items(parse_term(f"[{text}]"))
 
 
 def cmd_agent_run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from agents.mas_cli import option_literals, setup_logging
     from agents.transport import ZenohOptions, ZenohTransport
     from agents.transport.envelope import DEFAULT_MAX_SIZE
     from agents.transport.keys import check_name
@@ -64,23 +74,26 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
     from agentspeak.mas2j import load_mas2j
     from agentspeak.parser import parse_program
     from agentspeak.runtime import LocalRuntime
+    from agentspeak.source_text import read_source
 
-    setup_logging()
     try:
         check_name(args.name)
         check_name(args.mas, "MAS name")
-        source = Path(args.file).read_text()
-        program = parse_program(source, args.file)
+        source = read_source(args.file)
         declared: list[str] = [args.name]
         beliefs: list = []
         goals: list = []
+        source_dirs: list[str] = []
         if args.project:
+            # sources, includes and .create_agent resolve as in the in-process run of the project
             project = load_mas2j(args.project)
+            source_dirs = project.source_dirs
             declared = project.agent_names()
             for decl in project.agents:
                 if args.name in decl.instance_names():
                     beliefs = option_literals(decl.options.get("beliefs"), project.file)
                     goals = option_literals(decl.options.get("goals"), project.file)
+        program = parse_program(source, args.file, source_path=tuple(source_dirs))
         options = ZenohOptions(mode=args.mode, listen=tuple(args.listen) if args.listen else None,
                                connect=tuple(args.connect), config_file=args.config)
     except OSError as exc:
@@ -95,6 +108,7 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
         print(f"faultmas agent run: {exc}", file=sys.stderr)
         return 2
     runtime = LocalRuntime()
+    runtime.source_dirs = list(source_dirs)
     transport = ZenohTransport(args.mas, options, max_message_size=args.max_message_size or DEFAULT_MAX_SIZE)
     try:
         transport.open()
@@ -117,11 +131,14 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
     try:
         bridge = TransportBridge(runtime, transport, declared=declared,
                                  allowed_code_senders=args.allow_code_from).attach()
+        from agents.inspector.publisher import MindPublisher  # state on demand for `faultmas inspect`
+        inspected = MindPublisher(transport, runtime, bridge, allow_control=args.allow_pause).start()
         if args.wait_for_peers > 0 and not transport.wait_for_agents(declared, args.wait_for_peers):
             missing = sorted(set(declared) - transport.alive_agents())
             log.warning("agent %s: still missing after %.0f s: %s; starting anyway", args.name,
                         args.wait_for_peers, ", ".join(missing))
         why = bridge.run(timeout=args.timeout)
+        inspected.close()
         bridge.detach()
     finally:
         if robot is not None:

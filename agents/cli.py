@@ -1,51 +1,155 @@
 """The ``faultmas`` command: one sub-command per job, each owned by the package that does the job.
 
-The table below is the whole list (explicit, no module scanning). Each module has
-``add_parser(subparsers)``; it imports heavy libraries (OpenCV, rclpy, Zenoh) only inside the
-function that runs, so ``faultmas --help`` stays fast and works without ROS.
+``COMMANDS`` below is the whole list (explicit, no module scanning). A module named there has
+``add_parser(subparsers)`` and is imported only when one of its sub-commands runs (or shows its own
+``--help``), so ``faultmas --help`` imports none of them and answers at once. The modules in turn import
+heavy libraries (OpenCV, rclpy, Zenoh) only inside the function that runs.
 """
 from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 from typing import Sequence
 
-SUBCOMMAND_MODULES: tuple[str, ...] = (
-    "agentspeak.cli",          # faultmas asl check|run
-    "agents.mas_cli",          # faultmas mas run, faultmas agent run, faultmas router
-    "diagnosis.cli",           # faultmas diagnose
-    "detection.cli",           # faultmas observe
-    "perception.cli",          # faultmas perceive
-    "robot_bridge.cli",        # faultmas ros launch, faultmas sim ...
-    "agents.demo_cli",         # faultmas run, faultmas eval
-)
+COMMANDS: dict[str, tuple[str, str]] = {
+    # ADDING A SUB-COMMAND IS ONE LINE HERE: "name": ("module with add_parser(subparsers)", "one-line help").
+    # The line's help is what `faultmas --help` shows without importing the module; the module registers
+    # the sub-command itself (with the same help: tests/agents/test_cli.py checks that they agree).
+    "asl": ("agentspeak.cli", "check or run AgentSpeak programs"),
+    "mas": ("agents.mas_cli", "run a multi-agent system from a Jason project file"),
+    "agent": ("agents.mas_cli", "run one agent that joins a MAS over Zenoh"),
+    "router": ("agents.mas_cli", "run a Zenoh router for multi-host MAS"),
+    "diagnose": ("diagnosis.cli", "all minimal diagnoses of a model given observations"),
+    "perceive": ("perception.cli", "find a robot by its two coloured cylinders in one RGB-D frame"),
+    "ros": ("robot_bridge.cli", "run the ROS 2 Jazzy nodes (extra 'ros2')"),
+    "sim": ("robot_bridge.cli", "the embedded simulator: scripted runs with faults"),
+    "run": ("agents.demo_cli", "the main job: two robots diagnose an injected fault together"),
+    "eval": ("agents.demo_cli", "every fault scenario R times: success rates and step latencies"),
+    "observe": ("detection.cli", "watch a running system: observers, diagnosis and rules"),
+    "experiment": ("experiments.cli", "run an experiment that reproduces a paper's table"),
+    "inspect": ("agents.inspector.cli", "a live web view of a running MAS: agents' minds, robots, timeline"),
+}
+
+DESCRIPTION = ("faultmas: BDI agents in AgentSpeak with which a team of robots detects, diagnoses and reacts to "
+               "its own faults. Each command has its own --help.")
+LOG_LEVELS = ("DEBUG", "INFO", "WARNING", "ERROR")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="faultmas", description=__doc__.splitlines()[0])
+class _VersionAction(argparse.Action):
+    """``--version``: the installed distribution's version, read only when asked (importlib.metadata is slow)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"faultmas {version()}")
+        parser.exit()
+
+
+def version() -> str:
+    """The installed faultmas version (``unknown`` when run from a tree that was never installed)."""
+    from importlib.metadata import PackageNotFoundError, version as dist_version
+    try:
+        return dist_version("faultmas")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def add_logging_options(parser: argparse.ArgumentParser, top: bool = False) -> None:
+    """``-v`` (INFO; ``-vv`` DEBUG) and ``--log-level``, on the top level and on every sub-command.
+    Below the top level the defaults are suppressed, so ``faultmas -v run`` and ``faultmas run -v`` agree."""
+    default = {} if top else {"default": argparse.SUPPRESS}
+    parser.add_argument("-v", "--verbose", action="count", help="more log lines: -v info, -vv debug",
+                        **({"default": 0} if top else default))
+    parser.add_argument("--log-level", choices=LOG_LEVELS, type=str.upper, metavar="LEVEL",
+                        help=f"log level, one of {', '.join(LOG_LEVELS)} (default WARNING)",
+                        **({"default": None} if top else default))
+
+
+def plain_description(text: str | None) -> str | None:
+    """A description as a person reads it: without the usage line many modules' docstrings start with
+    (argparse prints the usage anyway), without reStructuredText quotes, a capital first and a full stop."""
+    if not text:
+        return text
+    text = re.sub(r"^``faultmas [^`]*``\s*[:.]?\s*", "", text.strip()).replace("``", "'")
+    if not text:
+        return None
+    text = text[0].upper() + text[1:]
+    return text if text.endswith((".", "!", "?", ")")) else text + "."
+
+
+def _with_logging_options(parser: argparse.ArgumentParser) -> None:
+    """Add the logging options to ``parser`` and to every parser below it (and make its description plain)."""
+    parser.description = plain_description(parser.description)
+    names = {s for action in parser._actions for s in action.option_strings}
+    if "--log-level" not in names and "-v" not in names:
+        add_logging_options(parser)
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in set(action.choices.values()):
+                _with_logging_options(child)
+
+
+def command_of(argv: Sequence[str]) -> str | None:
+    """The sub-command named in ``argv`` (its first word that is one), or None."""
+    return next((word for word in argv if word in COMMANDS), None)
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser; only ``command``'s module is imported (None: none, e.g. for ``faultmas --help``)."""
+    parser = argparse.ArgumentParser(prog="faultmas", description=DESCRIPTION)
+    parser.add_argument("--version", action=_VersionAction, help="print the installed version and exit")
+    add_logging_options(parser, top=True)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in SUBCOMMAND_MODULES:
+    if command is not None:
+        module_name = COMMANDS[command][0]
         try:
-            module = importlib.import_module(name)
+            module = importlib.import_module(module_name)
         except ModuleNotFoundError as exc:
-            if exc.name != name:      # a real missing dependency: say so, do not hide it
+            if exc.name != module_name:      # a real missing dependency: say so, do not hide it
                 raise
-            continue                  # that part of the framework is not built yet
+            parser.error(f"'{command}' is not part of this installation ({module_name} is missing)")
         module.add_parser(sub)
+        for chosen in {name for name, (owner, _) in COMMANDS.items() if owner == module_name} & set(sub.choices):
+            _with_logging_options(sub.choices[chosen])
+    for name, (_, help_text) in COMMANDS.items():
+        if name not in sub.choices:              # listed for --help and the usage line; never parsed here
+            sub.add_parser(name, help=help_text, add_help=False)
     return parser
 
 
+def setup_logging(args: argparse.Namespace) -> None:
+    """The root logger at the level asked (WARNING unless ``-v`` or ``--log-level``), lines on stderr."""
+    import logging
+
+    level = args.log_level or {0: "WARNING", 1: "INFO"}.get(args.verbose, "DEBUG")
+    root = logging.getLogger()
+    if not root.handlers:
+        logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr)
+    elif args.log_level or args.verbose:    # logging set up by the caller (tests, an embedding program)
+        root.setLevel(level)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 2
+    argv = list(sys.argv[1:] if argv is None else argv)
     try:
+        parser = build_parser(command_of(argv))
+        args = parser.parse_args(argv)
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return 2
+        setup_logging(args)
+        import agentspeak.lark_loader  # noqa: F401  every command refuses a replaced Lark 1.x at once, in one line
         return int(args.func(args) or 0)
     except KeyboardInterrupt:
         return 130
+    except ImportError as exc:
+        if type(exc).__name__ != "WrongLarkError":     # agentspeak.lark_loader's: Lark 0.12 replaced Lark 1.x
+            raise
+        print(exc, file=sys.stderr)     # one line ("faultmas needs Lark 1.x ..."), with the command that fixes it
+        return 2
 
 
 if __name__ == "__main__":

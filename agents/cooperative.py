@@ -23,8 +23,9 @@ from typing import Callable, TextIO
 
 FAULTS = ("none", "encoders", "both_actuators", "left_actuator", "right_actuator", "stuck_wheels")
 EXPECTED = {"none": "none", "encoders": "encoders", "both_actuators": "both_actuators",
-            "stuck_wheels": "both_actuators", "left_actuator": "left_actuator", "right_actuator": "right_actuator"}
-"""The outcome the plans must reach for each injected fault (stuck wheels count as both actuators)."""
+            "stuck_wheels": "stuck_wheels", "left_actuator": "left_actuator", "right_actuator": "right_actuator"}
+"""The outcome the plans must reach for each injected fault. Stuck wheels and dead motors both leave the
+robot still, but the model tells them apart by the motors' over-current flags (docs/cooperative.md)."""
 FINAL_STEPS = ("arrived", "diagnosed", "undiagnosed")
 STEP_NAMES = ("fault_detection", "robot_detection", "diagnosis", "total")
 
@@ -79,21 +80,34 @@ def random_pair_scenario(fault: str, seed: int) -> Scenario:
                     seed=seed, lighting=rng.uniform(0.6, 1.4))
 
 
-def team_scenario(robots: int, faulty: int, seed: int) -> Scenario:
-    """``robots`` robots at random places at least 1.6 m apart, ``faulty`` of them with random faults;
-    every robot runs ``team_robot.asl`` (its own task, and help for the others when free)."""
+TEAM_FAULTS = ("encoders", "both_actuators", "left_actuator", "right_actuator")
+"""The faults a team run draws from when none is given (``none`` needs a robot that raises a false alarm)."""
+TEAM_MARGIN = 0.8
+"""Metres kept between a robot's start and the arena's walls (its 0.5 m task leg must fit)."""
+
+
+def team_scenario(robots: int, faulty: int, seed: int, fault: str | None = None,
+                  arena: tuple[float, float, float, float] = (-5.0, -5.0, 5.0, 5.0)) -> Scenario:
+    """``robots`` robots at random places over the whole arena, at least 1.6 m apart, with any heading;
+    ``faulty`` of them with ``fault`` (random faults when None); every robot runs ``team_robot.asl`` (its
+    own task, and help for the others when free). Robots may start far beyond each other's camera range:
+    a help request says where the robot is (``start_pose`` + odometry, see plans/geometry.asl)."""
     if not 2 <= robots <= 12 or not 1 <= faulty < robots:
         raise ValueError(f"--robots must be 2..12 and --faulty 1..robots-1, got {robots} and {faulty}")
+    if fault is not None and fault not in FAULTS:
+        raise ValueError(f"unknown fault {fault!r}; expected one of {', '.join(FAULTS)}")
     rng = random.Random(seed)
+    xmin, ymin, xmax, ymax = arena
     spots: list[tuple[float, float]] = []
     while len(spots) < robots:
-        x, y = rng.uniform(-3.5, 3.5), rng.uniform(-3.5, 3.5)
+        x = rng.uniform(xmin + TEAM_MARGIN, xmax - TEAM_MARGIN)
+        y = rng.uniform(ymin + TEAM_MARGIN, ymax - TEAM_MARGIN)
         if all(math.hypot(x - a, y - b) >= 1.6 for a, b in spots):
             spots.append((x, y))
     broken = set(rng.sample(range(robots), faulty))
-    kinds = ("encoders", "both_actuators", "left_actuator", "right_actuator")
     setups = tuple(RobotSetup(f"robot{i + 1}", x, y, rng.uniform(-180.0, 180.0),
-                              rng.choice(kinds) if i in broken else "none", "team_robot.asl")
+                              (fault or rng.choice(TEAM_FAULTS)) if i in broken else "none", "team_robot.asl",
+                              false_alarm=i in broken and fault == "none")
                    for i, (x, y) in enumerate(spots))
     return Scenario(setups, seed=seed, destination=0.5)
 
@@ -227,8 +241,12 @@ def build_world(scenario: Scenario, speed: float = 0.0):
 def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float = 120.0,
                  out: TextIO | None = None, err: TextIO | None = None,
                  echo: Callable[[Mark], None] | None = None,
-                 on_mark: Callable[[Mark, Callable[[str], None]], None] | None = None) -> RunResult:
+                 on_mark: Callable[[Mark, Callable[[str], None]], None] | None = None,
+                 inspector=None) -> RunResult:
     """Run ``scenario`` to the end (or ``timeout`` wall seconds); agents' lines go to ``out``.
+
+    ``inspector``: an ``agents.inspector.live.LiveInspector`` that serves the web view on the run's hub
+    (only with ``processes``) and holds the agents alive at the end.
 
     ``on_mark(mark, kill)``: called on every step; ``kill(name)`` SIGKILLs that agent's process (for
     robustness tests: a helper or a faulty robot that dies mid-way); a true return ends the run.
@@ -237,7 +255,7 @@ def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float =
     world, bridges = build_world(scenario)
     try:
         if processes:
-            finished = _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark)
+            finished = _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark, inspector)
         else:
             finished = _run_in_process(scenario, world, bridges, timeout, out, echo)
     finally:
@@ -247,8 +265,11 @@ def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float =
     return RunResult(scenario, log.results(), log.marks, log.done.is_set(), world)
 
 
-def _beliefs(scenario: Scenario) -> list[str]:
-    return [f"destination({scenario.destination})"]
+def _beliefs(scenario: Scenario, robot: RobotSetup) -> list[str]:
+    """What a robot is told at launch: its task, and its start pose in the team's shared frame (as a
+    localisation's initial pose), so that its help requests can say where it is."""
+    return [f"destination({scenario.destination})",
+            f"start_pose({round(robot.x, 3)}, {round(robot.y, 3)}, {round(robot.yaw_deg, 1)})"]
 
 
 def _run_in_process(scenario, world, bridges, timeout, out, echo) -> ProgressLog:
@@ -262,35 +283,42 @@ def _run_in_process(scenario, world, bridges, timeout, out, echo) -> ProgressLog
 
     runtime = LocalRuntime(printer=printer)
     log = ProgressLog(scenario, world, lambda: runtime.stop(0.2), echo)
-    beliefs = [parse_term(b) for b in _beliefs(scenario)]
     programs: dict[str, object] = {}
     for r in scenario.robots:
         path = plans_dir().joinpath(r.program)
         if r.program not in programs:
             programs[r.program] = parse_program(path.read_text(), str(path))
+        beliefs = [parse_term(b) for b in _beliefs(scenario, r)]
         runtime.add_agent(r.name, program=programs[r.program], source_file=str(path), extra_beliefs=beliefs,
                           arch=RobotArch(runtime, bridges[r.name], on_progress=log.record))
     runtime.run(timeout=timeout, stop_when_idle=False)
     return log
 
 
-def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=None) -> ProgressLog:
+def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=None, inspector=None) -> ProgressLog:
     from robot_bridge.sim.server import SimServer
 
     def serve(hub) -> Callable[[], None]:
-        return SimServer(hub.session, scenario.mas, bridges).start().stop
-    return run_agent_processes(scenario, ["--bridge", "zenoh"], timeout, world=world, out=out, err=err,
-                               echo=echo, on_mark=on_mark, serve=serve)
+        stop_sim = SimServer(hub.session, scenario.mas, bridges).start().stop
+        if inspector is None:
+            return stop_sim
+        stop_inspector = inspector.serve(hub, world)
+        return lambda: (stop_inspector(), stop_sim())
+    extra = ["--bridge", "zenoh"] + (["--allow-pause"] if inspector is not None and inspector.allow_pause else [])
+    return run_agent_processes(scenario, extra, timeout, world=world, out=out, err=err, echo=echo,
+                               on_mark=on_mark, serve=serve, hold=inspector.hold if inspector is not None else None)
 
 
 def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: float, *, world=None,
                         clock: Callable[[], float] | None = None, out: TextIO | None = None,
                         err: TextIO | None = None, echo: Callable[[Mark], None] | None = None,
                         on_mark: Callable[[Mark, Callable[[str], None]], bool | None] | None = None,
-                        serve: Callable[[object], Callable[[], None]] | None = None) -> ProgressLog:
+                        serve: Callable[[object], Callable[[], None]] | None = None,
+                        hold: Callable[[], None] | None = None) -> ProgressLog:
     """One ``faultmas agent run ... EXTRA_ARGS`` process per robot of ``scenario`` over a Zenoh hub on
     loopback; ``serve(hub)`` starts what the robots need on the hub (returns its stop). The progress
-    reports the agents publish are recorded until every robot is done, ``on_mark`` says stop, or ``timeout``."""
+    reports the agents publish are recorded until every robot is done, ``on_mark`` says stop, or ``timeout``;
+    then ``hold()`` runs (the agents still alive) before they are stopped."""
     import os
     import sys
     import tempfile
@@ -305,8 +333,8 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
     err = err or sys.stderr
     with tempfile.TemporaryDirectory(prefix="faultmas-run-") as tmp:
         project_file = Path(tmp) / f"{scenario.mas}.mas2j"
-        beliefs = ", ".join(_beliefs(scenario))
-        lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{beliefs}"];' for r in scenario.robots]
+        lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{", ".join(_beliefs(scenario, r))}"];'
+                 for r in scenario.robots]
         project_file.write_text(f"MAS {scenario.mas} {{\n  agents:\n" + "\n".join(lines) + "\n}\n")
         hub = ZenohTransport(scenario.mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
         stop_serving = serve(hub) if serve is not None else None
@@ -332,6 +360,8 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
         try:
             launcher.start()
             launcher.wait(timeout, stop_when_idle=False)
+            if hold is not None:
+                hold()
         finally:
             launcher.stop_all()
             if stop_serving is not None:

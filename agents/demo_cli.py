@@ -21,6 +21,8 @@ import sys
 from agents.cooperative import EXPECTED, FAULTS, STEP_NAMES
 
 EVAL_FAULTS = ("none", "encoders", "both_actuators", "left_actuator", "right_actuator")
+EVAL_TEAMS = (2, 4, 8, 12)
+"""Team sizes ``faultmas eval`` runs by default (robots start anywhere in the arena, often out of sight)."""
 STEP_LABELS = {"started": "started its task", "fault_detected": "fault detected", "ambiguous": "ambiguous alone",
                "help_requested": "asks for help", "helper_found": "helper chosen", "searching": "searching for",
                "robot_found": "robot detected:", "found_by": "found by", "lost_sight": "lost sight of",
@@ -29,26 +31,51 @@ STEP_LABELS = {"started": "started its task", "fault_detected": "fault detected"
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     run = sub.add_parser("run", help="the main job: two robots diagnose an injected fault together",
-                         description=__doc__.splitlines()[2])
-    run.add_argument("--fault", choices=FAULTS, default="encoders", help="fault of the faulty robot (default %(default)s)")
-    run.add_argument("--seed", type=int, default=1)
-    run.add_argument("--robots", type=int, default=None, metavar="N", help="a team of N robots (random places)")
-    run.add_argument("--faulty", type=int, default=1, metavar="K", help="with --robots: K of them faulty (random faults)")
+                         description="The main job: Faulty and Helper side by side 1.5 m apart (or a team with "
+                                     "--robots), one agent process each over Zenoh, on the embedded simulator, "
+                                     "with a fault injected. Shows the steps as they happen, then the diagnosis "
+                                     "and a table of step latencies in simulated and wall seconds.")
+    run.add_argument("--fault", choices=FAULTS, default=None,
+                     help="fault injected into the faulty robot(s) (default: encoders; with --robots: a random "
+                          "fault per faulty robot)")
+    run.add_argument("--seed", type=int, default=1, help="seed of placement and sensor noise (default %(default)s)")
+    run.add_argument("--robots", type=int, default=None, metavar="N",
+                     help="a team of N robots (2-12) at random places over the whole arena, instead of the pair")
+    run.add_argument("--faulty", type=int, default=None, metavar="K",
+                     help="with --robots: K of them faulty (default 1)")
     run.add_argument("--bridge", choices=("sim", "ros2"), default="sim", help="robots: embedded simulator or ROS 2 nodes")
     run.add_argument("--in-process", action="store_true", help="all agents in this process (no Zenoh)")
     run.add_argument("--json", action="store_true", help="print one JSON object (agents' lines go to stderr)")
     run.add_argument("--plot", metavar="PNG", help="draw ground-truth and believed trajectories to this file")
     run.add_argument("--quiet", action="store_true", help="do not show the agents' own lines")
     run.add_argument("--timeout", type=float, default=120.0, help="wall seconds before giving up (default %(default)s)")
+    run.add_argument("--inspect", action="store_true",
+                     help="serve the live web view (faultmas inspect) of this run; wait at its end until Ctrl-C")
+    run.add_argument("--inspect-hold", type=float, default=None, metavar="S",
+                     help="with --inspect: wait S seconds at the end instead of until Ctrl-C (0: not at all)")
+    run.add_argument("--allow-pause", action="store_true", help="with --inspect: let the page pause and step agents")
+    from agents.inspector.cli import add_listen_arguments  # stdlib only: keeps --help fast
+    add_listen_arguments(run)
     run.set_defaults(func=cmd_run)
 
-    ev = sub.add_parser("eval", help="every fault scenario R times: success rates and step latencies")
-    ev.add_argument("--runs", type=int, default=10, metavar="R")
-    ev.add_argument("--seed", type=int, default=1)
-    ev.add_argument("--faults", default=",".join(EVAL_FAULTS), help="comma-separated scenarios (default: all five)")
+    ev = sub.add_parser("eval", help="every fault scenario R times: success rates and step latencies",
+                        description="Run every fault scenario R times with random placement, lighting and noise "
+                                    "(pairs, and teams over the whole arena), agents in-process, spread over "
+                                    "--jobs worker processes; print success rates and step latencies.")
+    ev.add_argument("--runs", type=int, default=10, metavar="R", help="runs per scenario (default %(default)s)")
+    ev.add_argument("--seed", type=int, default=1,
+                    help="seed of the runs' placements, lighting and noise (default %(default)s)")
+    ev.add_argument("--faults", default=",".join(EVAL_FAULTS),
+                    help="comma-separated pair scenarios, among " + ", ".join(FAULTS) + " (default: all but "
+                         "stuck_wheels); '' for teams only")
+    ev.add_argument("--teams", default=",".join(map(str, EVAL_TEAMS)), metavar="SIZES",
+                    help="comma-separated team sizes (2-12) run as team scenarios: random places over the whole "
+                         "arena, N//4 (at least 1) faulty robots with random faults (default %(default)s); "
+                         "'none' for pairs only")
     ev.add_argument("--jobs", type=int, default=2, help="worker processes (default %(default)s)")
-    ev.add_argument("--json", action="store_true")
-    ev.add_argument("--timeout", type=float, default=90.0, help="wall seconds per run")
+    ev.add_argument("--json", action="store_true", help="print one JSON object: every run and the table")
+    ev.add_argument("--timeout", type=float, default=150.0,
+                    help="wall seconds per run before it counts as failed (default %(default)s)")
     ev.set_defaults(func=cmd_eval)
 
 
@@ -60,13 +87,34 @@ def cmd_run(args: argparse.Namespace) -> int:
     from agents.cooperative import paper_scenario, run_scenario, team_scenario
 
     _setup_logging()
+    if args.faulty is not None and args.robots is None:
+        print("faultmas run: --faulty K needs --robots N (the pair has one faulty robot)", file=sys.stderr)
+        return 2
     try:
-        scenario = team_scenario(args.robots, args.faulty, args.seed) if args.robots else \
-            paper_scenario(args.fault, args.seed)
+        scenario = team_scenario(args.robots, args.faulty or 1, args.seed, fault=args.fault) if args.robots \
+            else paper_scenario(args.fault or "encoders", args.seed)
     except ValueError as exc:
         print(f"faultmas run: {exc}", file=sys.stderr)
         return 2
     show = sys.stderr if args.json else sys.stdout
+    inspector = None
+    if args.inspect:
+        from agents.inspector.cli import parse_listen
+        from agents.inspector.live import LiveInspector
+        if args.in_process or args.bridge != "sim":
+            print("faultmas run: --inspect needs the agents in their own processes on the simulator "
+                  "(not --in-process, not --bridge ros2: use `faultmas inspect --connect` there)", file=sys.stderr)
+            return 2
+        try:
+            host, port = parse_listen(args.listen, args.public)
+        except ValueError as exc:
+            print(f"faultmas run: {exc}", file=sys.stderr)
+            return 2
+        try:
+            inspector = LiveInspector(host, port, args.inspect_hold, args.allow_pause, out=show)
+        except OSError as exc:
+            print(f"faultmas run: cannot serve the inspector on {args.listen}: {exc.strerror or exc}", file=sys.stderr)
+            return 1
     for r in scenario.robots if args.bridge == "sim" else ():
         what = f"fault {r.fault}" + (" (a transient stall raises a false alarm)" if r.false_alarm else "")
         print(f"faultmas: {r.name:<8} at ({r.x:5.2f}, {r.y:5.2f}) heading {r.yaw_deg:6.1f} deg, {what}", file=show)
@@ -76,7 +124,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         result = run_on_ros2(scenario, timeout=args.timeout, out=agent_lines, echo=lambda m: _echo(m, show))
     else:
         result = run_scenario(scenario, processes=not args.in_process, timeout=args.timeout,
-                              out=agent_lines, err=sys.stderr, echo=lambda m: _echo(m, show))
+                              out=agent_lines, err=sys.stderr, echo=lambda m: _echo(m, show), inspector=inspector)
     if args.plot and result.world is not None:
         from robot_bridge.cli import plot
         plot(result.world, args.plot)
@@ -94,16 +142,18 @@ def _echo(mark, stream) -> None:
     stream.flush()
 
 
+def _seconds(steps: dict) -> dict:
+    """Step latencies rounded to what they mean (10 ms: the simulator steps at 20 ms)."""
+    return {step: None if value is None else round(value, 2) for step, value in steps.items()}
+
+
 def _as_json(result) -> dict:
-    robots = [{"robot": r.name, "fault": r.fault, "diagnosis": r.diagnosis, "correct": r.correct,
-               "steps": r.steps_sim, "steps_wall": r.steps_wall} for r in result.robots]
-    tested = [r for r in robots if r["fault"] != "none" or len(result.robots) == 1] or robots
-    if len(result.scenario.robots) == 2:
-        main = robots[0]
-        return {"fault": main["fault"], "diagnosis": main["diagnosis"], "correct": result.correct,
-                "steps": main["steps"], "steps_wall": main["steps_wall"], "finished": result.finished}
-    return {"fault": [r["fault"] for r in tested], "diagnosis": [r["diagnosis"] for r in tested],
-            "correct": result.correct, "finished": result.finished, "robots": robots}
+    """One schema for the pair and the team: the run's verdict and one entry per robot that had a task or a
+    fault (``fault``, ``diagnosis``: strings; steps in simulated and wall seconds)."""
+    return {"correct": result.correct, "finished": result.finished, "seed": result.scenario.seed,
+            "robots": [{"robot": r.name, "fault": r.fault, "expected": r.expected, "diagnosis": r.diagnosis,
+                        "correct": r.correct, "steps": _seconds(r.steps_sim), "steps_wall": _seconds(r.steps_wall)}
+                       for r in result.robots]}
 
 
 def _fmt(value) -> str:
@@ -125,15 +175,37 @@ def _summary(result) -> str:
 
 
 # ---- evaluation ------------------------------------------------------------------------------------
-def _one_run(job: tuple[str, int, float]) -> dict:
-    from agents.cooperative import random_pair_scenario, run_scenario
+def team_label(size: int) -> str:
+    return f"team of {size}"
 
-    fault, seed, timeout = job
+
+def eval_scenario(name: str, seed: int):
+    """The scenario of one evaluation run: a pair with fault ``name``, or ``team of N``."""
+    from agents.cooperative import random_pair_scenario, team_scenario
+
+    if name.startswith("team of "):
+        size = int(name.rsplit(" ", 1)[1])
+        return team_scenario(size, max(1, size // 4), seed)
+    return random_pair_scenario(name, seed)
+
+
+def _one_run(job: tuple[str, int, float]) -> dict:
+    """One evaluation run; a team's steps are the means over its faulty robots."""
+    from agents.cooperative import run_scenario
+
+    name, seed, timeout = job
     logging.disable(logging.WARNING)
-    result = run_scenario(random_pair_scenario(fault, seed), processes=False, timeout=timeout)
-    robot = result.robots[0]
-    return {"fault": fault, "seed": seed, "diagnosis": robot.diagnosis, "correct": result.correct,
-            "steps": robot.steps_sim, "steps_wall": robot.steps_wall}
+    result = run_scenario(eval_scenario(name, seed), processes=False, timeout=timeout)
+    tested = [r for r in result.robots if r.fault != "none"] or result.robots[:1]
+
+    def mean(clock: str) -> dict:
+        values = {step: [getattr(r, clock)[step] for r in tested if getattr(r, clock)[step] is not None]
+                  for step in STEP_NAMES}
+        return {step: statistics.fmean(v) if v else None for step, v in values.items()}
+    diagnosis = tested[0].diagnosis if len(tested) == 1 and not name.startswith("team") else \
+        [r.diagnosis for r in tested]
+    return {"fault": name, "seed": seed, "diagnosis": diagnosis, "correct": result.correct,
+            "steps": mean("steps_sim"), "steps_wall": mean("steps_wall")}
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
@@ -141,18 +213,29 @@ def cmd_eval(args: argparse.Namespace) -> int:
 
     faults = [f.strip() for f in args.faults.split(",") if f.strip()]
     unknown = [f for f in faults if f not in EXPECTED]
-    if unknown or args.runs < 1 or args.jobs < 1:
-        print(f"faultmas eval: unknown scenario(s) {unknown}" if unknown else "faultmas eval: --runs and --jobs must be >= 1",
-              file=sys.stderr)
+    try:
+        sizes = [int(s) for s in args.teams.split(",") if s.strip()] if args.teams != "none" else []
+    except ValueError:
+        sizes = [0]
+    if unknown or args.runs < 1 or args.jobs < 1 or any(not 2 <= s <= 12 for s in sizes):
+        why = (f"unknown scenario(s) {unknown}" if unknown else "--runs and --jobs must be >= 1"
+               if args.runs < 1 or args.jobs < 1 else f"--teams {args.teams!r}: sizes must be numbers 2..12")
+        print(f"faultmas eval: {why}", file=sys.stderr)
         return 2
+    faults += [team_label(s) for s in sizes]
     jobs = [(f, args.seed * 100_000 + i, args.timeout) for f in faults for i in range(args.runs)]
     runs: list[dict] = []
-    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+    from tqdm import tqdm
+
+    # runs done / total, elapsed and ETA on stderr while it works (a terminal only: no bar in a log file)
+    with ProcessPoolExecutor(max_workers=args.jobs) as pool, \
+            tqdm(total=len(jobs), unit="run", desc="faultmas eval", file=sys.stderr, disable=None) as bar:
         for done in pool.map(_one_run, jobs):
             runs.append(done)
+            bar.update(1)
             if not args.json:
-                print(f"  {done['fault']:<15} seed {done['seed']}: {done['diagnosis']} "
-                      f"({'ok' if done['correct'] else 'WRONG'})", file=sys.stderr, flush=True)
+                bar.write(f"  {done['fault']:<15} seed {done['seed']}: {done['diagnosis']} "
+                          f"({'ok' if done['correct'] else 'WRONG'})", file=sys.stderr)
     table = eval_table(runs, faults)
     if args.json:
         print(json.dumps({"runs": runs, "table": table}))

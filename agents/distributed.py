@@ -40,12 +40,13 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
     from agents.transport.keys import check_name
     from agentspeak.errors import AslSyntaxError, SourceError
     from agentspeak.parser import parse_program
+    from agentspeak.source_text import read_source
 
     out, err = out or sys.stdout, err or sys.stderr
     try:
         check_name(project.name, "MAS name")
         for decl in project.agents:  # fail early, with file and line, before any process starts
-            parse_program(Path(decl.source).read_text(), decl.source)
+            parse_program(read_source(decl.source), decl.source, source_path=tuple(project.source_dirs))
     except OSError as exc:
         print(f"{project.file}: cannot read {exc.filename}: {exc.strerror or exc}", file=err)
         return 2
@@ -93,14 +94,17 @@ class Launcher:
         self.statuses[status.agent] = status
 
     def start(self) -> None:
-        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        # each agent starts in the user's working directory (relative sources, aslSourcePath and
+        # .create_agent resolve as in the in-process run) and finds this package where it is installed
+        path = os.pathsep.join(p for p in (str(REPO), os.environ.get("PYTHONPATH", "")) if p)
+        env = dict(os.environ, PYTHONUNBUFFERED="1", PYTHONPATH=path)
         endpoint = self.hub.endpoints[0]
         for decl in self.project.agents:
             for name in decl.instance_names():
                 command = [sys.executable, "-m", "agents", "agent", "run", decl.source, "--name", name,
                            "--mas", self.project.name, "--connect", endpoint, "--project", self.project.file,
                            "--wait-for-peers", str(START_TIMEOUT), *self.extra_args]
-                child = subprocess.Popen(command, cwd=REPO, env=env, text=True, stdin=subprocess.DEVNULL,
+                child = subprocess.Popen(command, cwd=os.getcwd(), env=env, text=True, stdin=subprocess.DEVNULL,
                                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
                 self.children[name] = child
                 for stream, sink in ((child.stdout, self.out), (child.stderr, self.err)):

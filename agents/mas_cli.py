@@ -10,7 +10,7 @@ import argparse
 import logging
 import sys
 
-from agents.agent_cli import add_agent_parser
+from agents.agent_cli import add_agent_parser, option_literals
 from agents.router import add_router_parser
 
 
@@ -18,7 +18,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     mas = sub.add_parser("mas", help="run a multi-agent system from a Jason project file")
     mas_sub = mas.add_subparsers(dest="mas_command", metavar="ACTION")
     run = mas_sub.add_parser("run", help="run every agent of PROJECT.mas2j")
-    run.add_argument("project")
+    run.add_argument("project", metavar="PROJECT.mas2j", help="the Jason project file")
     run.add_argument("--timeout", type=float, default=None, help="stop after S seconds (always wins; exit code 124)")
     run.add_argument("--processes", action="store_true", help="one OS process per agent, over Zenoh")
     run.add_argument("--listen", action="append", default=None, metavar="ENDPOINT",
@@ -41,14 +41,16 @@ def build_local_mas(project, printer=None):
 
     from agentspeak.parser import parse_program
     from agentspeak.runtime import LocalRuntime
+    from agentspeak.source_text import read_source
 
     runtime = LocalRuntime(printer=printer)
     runtime.trusted_senders = set(project.agent_names())
+    runtime.source_dirs = list(project.source_dirs)
     programs: dict[str, object] = {}
     for decl in project.agents:
         if decl.source not in programs:
             try:
-                text = Path(decl.source).read_text()
+                text = read_source(decl.source)
             except OSError as exc:
                 from agentspeak.errors import SourceError
                 raise SourceError(f"agent '{decl.name}': cannot read {decl.source}: {exc.strerror or exc}",
@@ -58,19 +60,11 @@ def build_local_mas(project, printer=None):
         goals = option_literals(decl.options.get("goals"), project.file)
         for name in decl.instance_names():
             # each instance gets its own parse: plans hold per-agent labels and state
-            program = parse_program(programs[decl.source], decl.source)
+            program = parse_program(programs[decl.source], decl.source,
+                                    source_path=tuple(project.source_dirs))
             runtime.add_agent(name, source_file=decl.source, program=program,
                               extra_beliefs=beliefs, extra_goals=goals)
     return runtime
-
-
-def option_literals(text: str | None, file: str) -> list:
-    """The literals of a ``beliefs=``/``goals=`` option of a project file."""
-    if not text:
-        return []
-    from agentspeak.parser import parse_term
-    from agentspeak.terms import list_items
-    return list_items(parse_term(f"[{text}]"))
 
 
 def cmd_mas_run(args) -> int:
@@ -110,6 +104,9 @@ def _run_networked(runtime, project, args) -> int:
     options = ZenohOptions(listen=tuple(args.listen) if args.listen else None, connect=tuple(args.connect))
     with ZenohTransport(project.name, options) as transport:
         bridge = TransportBridge(runtime, transport, declared=project.agent_names()).attach()
+        from agents.inspector.publisher import MindPublisher  # state on demand for `faultmas inspect`
+        inspected = MindPublisher(transport, runtime, bridge).start()
         why = bridge.run(timeout=args.timeout)
+        inspected.close()
         bridge.detach()
     return 124 if why == "timeout" else 0

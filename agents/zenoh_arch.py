@@ -133,6 +133,9 @@ class TransportBridge:
         self.mas = transport.mas
         self.policy = TrustPolicy(transport.mas, frozenset(declared), frozenset(allowed_code_senders))
         self.published_idle: bool | None = None
+        self.on_message = None
+        """``on_message(direction, agent, message)``: sees each message to ('out', a ``Message``) or
+        from ('in', an ``Envelope``) another process (the inspector keeps the last few)."""
         self._attached = False
 
     # -- set-up --------------------------------------------------------------------------------
@@ -176,6 +179,8 @@ class TransportBridge:
             log.warning("[%s] cannot send %s to %s: %s", message.sender, message.performative,
                         message.receiver, bad)
             return True  # reported here; not an unknown receiver
+        if self.on_message is not None:
+            self.on_message("out", message.sender, message)
         return not self.transport.send(envelope)
 
     def stop_mas(self, by: str, delay: float = 0.0) -> None:
@@ -199,6 +204,8 @@ class TransportBridge:
             detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             self._refuse(agent, envelope, "unparsable_content", detail[:100])
             return
+        if self.on_message is not None:
+            self.on_message("in", agent.name, envelope)
         # no wake per message: the transport calls agent.wake once per batch
         agent.deliver(Message(envelope.sender, agent.name, envelope.performative, content,
                               msg_id=envelope.message_id, in_reply_to=envelope.in_reply_to), wake=False)

@@ -23,17 +23,13 @@ This module must import only the standard library: ``setup.py`` reads it before 
 from __future__ import annotations
 
 import hashlib
-import importlib.abc
 import importlib.machinery
-import importlib.util
-import json
-import logging
 import os
-import shlex
-import shutil
 import sys
-import sysconfig
 from pathlib import Path
+
+# Imported where used, not here: this module runs at every start of faultmas (issue 23: start-up time), and
+# json, logging, shlex, shutil, sysconfig and importlib.util are needed only by the build or on a stale build.
 
 # The interpreter's modules, compiled when a C compiler and Cython are at hand. Left out: the parser (a
 # Lark transformer, already served by lark-cython), the command line and the project-file reader (cold
@@ -54,7 +50,6 @@ MANIFEST = "_speedups.json"
 PURE_ENV = "FAULTMAS_PURE_PYTHON"
 REBUILD = "make speedups (or: python setup.py build_ext --inplace)"
 
-log = logging.getLogger("faultmas.speedups")
 _PACKAGE_DIR = Path(__file__).resolve().parent
 
 
@@ -79,6 +74,10 @@ def pure_requested() -> bool:
 def c_compiler_available() -> bool:
     """Whether ``setup.py`` can compile here: the C compiler that setuptools would call (``$CC``, else the one
     Python was built with) is on the path. Without one the build leaves everything to the sources."""
+    import shlex
+    import shutil
+    import sysconfig
+
     command = shlex.split(os.environ.get("CC") or sysconfig.get_config_var("CC") or "")
     return bool(command) and shutil.which(command[0]) is not None
 
@@ -98,6 +97,8 @@ def compiled_files(package_dir: Path) -> dict[str, Path]:
 
 def built_digests(package_dir: Path = _PACKAGE_DIR) -> dict[str, str]:
     """The source digests the last build recorded, by module (empty: no build, or an unreadable record)."""
+    import json
+
     try:
         built = json.loads((package_dir / MANIFEST).read_text())
     except (OSError, ValueError):
@@ -122,13 +123,16 @@ def modules_to_load_from_source(package_dir: Path = _PACKAGE_DIR) -> tuple[dict[
     return (present if stale else {}), stale
 
 
-class _FromSource(importlib.abc.MetaPathFinder):
-    """Imports the listed modules from their ``.py`` file, ahead of the compiled file beside it."""
+class _FromSource:
+    """Imports the listed modules from their ``.py`` file, ahead of the compiled file beside it (a meta path
+    finder: ``find_spec`` is all the protocol asks)."""
 
     def __init__(self, sources: dict[str, Path]) -> None:
         self.sources = sources
 
     def find_spec(self, fullname, path=None, target=None):
+        import importlib.util
+
         source = self.sources.get(fullname)
         return None if source is None else importlib.util.spec_from_file_location(fullname, source)
 
@@ -137,7 +141,9 @@ def install() -> None:
     """Called once by ``agentspeak/__init__.py``, before any compiled module can be imported."""
     sources, stale = modules_to_load_from_source()
     if stale:
-        log.warning("compiled %s not built from the source on disk (edited since, left by an older build, or "
+        import logging
+
+        logging.getLogger("faultmas.speedups").warning("compiled %s not built from the source on disk (edited since, left by an older build, or "
                     "not compiled by the last one): %s; the interpreter runs from source until you run %s",
                     "module" if len(stale) == 1 else "modules", ", ".join(stale), REBUILD)
     if sources:

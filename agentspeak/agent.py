@@ -25,7 +25,7 @@ from agentspeak import program as P
 from agentspeak.beliefs import SELF, SOURCE_PERCEPT, SOURCE_SELF, BeliefBase, has_source
 from agentspeak.communication import receive_message
 from agentspeak.intentions import Event, Frame, IntendedMeans, Intention, PlanLibrary, _intention_ids
-from agentspeak.program import ACHIEVE, ADD, BEL, DEL, TEST, Plan, PlanTerm, Program, Trigger, plan_matcher
+from agentspeak.program import ACHIEVE, ADD, BEL, DEL, META, TEST, Plan, PlanTerm, Program, Trigger, plan_matcher
 from agentspeak.solver import _COMPILED, SolveError, _true_k, compiled, solve, solve_first
 from agentspeak.stdlib.registry import STDLIB, IAError, Registry, Suspend, yields_solutions
 from agentspeak.terms import (
@@ -36,6 +36,8 @@ from agentspeak.unify import undo, unify
 log = logging.getLogger("faultmas.agentspeak")
 
 _TRUE = Literal("true")
+_JAG_SLEEPING = Literal("jag_sleeping")
+_JAG_AWAKING = Literal("jag_awaking")
 _new = object.__new__
 """Hot paths build objects with ``_new(Class)`` (or ``Class.__new__(Class)`` for the classes that the
 compiled build makes C types, see agent.pxd: ``object.__new__`` refuses those) and slot stores: a class
@@ -100,6 +102,8 @@ class Agent:
         self.cycles = 0
         self.failures_unhandled = 0
         self.dropped: dict[str, int] = {}
+        self.current_intention: Intention | None = None  # the intention of the event or formula at hand
+        self.sleeping_evt = False  # +jag_sleeping was posted and nothing woke the agent since
         if program is not None:
             self.load(program)
 
@@ -172,6 +176,8 @@ class Agent:
     def post_external(self, trigger: Trigger, force: bool = False) -> None:
         """An event that starts a new intention (percepts, messages, ``!!g``, initial goals)."""
         self._notify_waiters(trigger)
+        if self.plans.has_meta and trigger.kind == ACHIEVE and trigger.op == ADD:
+            self.goal_state(trigger, "pending")
         if force or self.plans.relevant(trigger):
             self.events.append(Event(trigger))
         elif trigger.kind != BEL:
@@ -203,6 +209,8 @@ class Agent:
         self.cycles += 1
         if self.arch is not self._arch_seen:
             self._see_arch(self.arch)
+        if self.plans.has_jag and self.sleeping_evt:
+            self._awaking()
         if self._perceive is not None or self.feedback or self.timers:
             did = self.sense()
         elif self.mailbox:  # sense() with only a message to read, inlined
@@ -217,7 +225,89 @@ class Agent:
             did = True
         if self.condition_waiters:
             self._check_conditions()
+        if self.plans.has_goal_conditions:
+            self._check_goal_conditions()
+        if self.plans.has_jag and not self.sleeping_evt and not (
+                self.events or self.running or self.mailbox or self.feedback):
+            # nothing left to do: Jason's +jag_sleeping (once, until something wakes the agent)
+            self.sleeping_evt = True
+            self.post_external(Trigger(ADD, BEL, _JAG_SLEEPING))
         return did
+
+    # ------------------------------------------------------------------ deadlines and goal conditions
+    def _check_deadline(self, goal: Literal, intention: Intention) -> None:
+        """``!g[hard_deadline(MS)]``: if g is still pursued MS milliseconds later, it fails with
+        ``error(deadline_reached)`` (Jason's TransitionSystem.checkHardDeadline)."""
+        for a in goal.annots:
+            if type(a) is Literal and a.functor == "hard_deadline" and len(a.args) == 1 \
+                    and type(a.args[0]) in (int, float):
+                size = len(intention.stack)
+                self.add_timer(a.args[0] / 1000.0, lambda: self._deadline(goal, intention, size))
+                return
+
+    def _deadline(self, goal: Literal, intention: Intention, size: int) -> None:
+        if intention.dropped or len(intention.stack) < size:
+            return
+        im = intention.stack[size - 1] if size else None
+        if im is None or im.event_literal is not goal:
+            return
+        del intention.stack[size:]
+        im.frames[:] = [im.frames[0]]
+        intention.waiting = None  # a wait in progress is abandoned
+        self.running_remove(intention)
+        intention.suspended = None
+        self.suspended.pop(intention.id, None)
+        self._fail(intention, "deadline_reached", f"hard deadline of {to_str(goal)} reached")
+        if intention.suspended is None and not intention.dropped:
+            self._requeue(intention)
+
+    def running_remove(self, intention: Intention) -> None:
+        try:
+            self.running.remove(intention)
+        except ValueError:
+            pass
+
+    def _check_goal_conditions(self) -> None:
+        """Jason 3.2's ``+!g <: C``: a goal whose condition holds is achieved at once (applyClrSatInt)."""
+        for intention in self.intentions():
+            stack = intention.stack
+            for idx, im in enumerate(stack):
+                gc = im.plan.goal_condition
+                if gc is None:
+                    continue
+                if solve_first(self, gc, dict(im.b)):
+                    del stack[idx + 1:]
+                    im.frames[:] = [im.frames[0]]
+                    im.frames[0].pc = len(im.frames[0].body)
+                    intention.waiting = None
+                    intention.suspended = None
+                    self.suspended.pop(intention.id, None)
+                    self.event_waiters = [w for w in self.event_waiters if w[1] is not intention]
+                    self.condition_waiters = [w for w in self.condition_waiters if w[0] is not intention]
+                    self.running_remove(intention)
+                    self.clr_int(intention)
+                    if not intention.dropped and intention.stack:
+                        self.running.append(intention)
+                    break
+
+    def _awaking(self) -> None:
+        """Something other than the +jag_sleeping plan woke the agent: +jag_awaking (Jason's rule)."""
+        awake = bool(self.mailbox)
+        if not awake:
+            for ev in self.events:
+                lit = ev.trigger.literal
+                if not (type(lit) is Literal and lit.functor == "jag_sleeping"):
+                    awake = True
+                    break
+        if not awake:
+            for i in self.running:
+                if not any(type(im.event_literal) is Literal and im.event_literal.functor == "jag_sleeping"
+                           for im in i.stack):
+                    awake = True
+                    break
+        if awake:
+            self.sleeping_evt = False
+            self.post_external(Trigger(ADD, BEL, _JAG_AWAKING))
 
     def has_work(self) -> bool:
         return bool(self.events or self.running or self.mailbox or self.feedback)
@@ -291,6 +381,7 @@ class Agent:
         intention = ev.intention
         if intention is not None and intention.dropped:
             return True
+        self.current_intention = intention  # what .intention(..., current) means in a plan context
         lit = trigger.literal
         if type(lit) is Literal:
             # PlanLibrary.relevant, inlined; every plan listed under the key has the event's
@@ -336,7 +427,7 @@ class Agent:
                 try:
                     if not context(self, b, trail, _true_k):
                         continue
-                except (SolveError, ArithmeticError_) as exc:
+                except (SolveError, ArithmeticError_, RecursionError, TypeError, ValueError, AttributeError) as exc:
                     trail = []
                     b = None
                     log.warning("[%s] error in the context of the plan at %s:%s: %s", self.name,
@@ -354,6 +445,11 @@ class Agent:
                 self.running.append(new)
             else:
                 self.push_im(ev, plan, b)
+            if trigger.op == ADD and trigger.kind == ACHIEVE:
+                if self.plans.has_meta:
+                    self.goal_state(trigger, "executing")
+                if type(lit) is Literal and lit.annots is not None and len(lit.annots) > 1:
+                    self._check_deadline(lit, intention if intention is not None else self.running[-1])
             return True
         self._no_plan(ev, "no_applicable", f"found a goal for which there is no applicable plan: {trigger}")
         return True
@@ -370,8 +466,22 @@ class Agent:
                                 self.name, trigger, intention)
                     self.drop_intention(intention)
             return
+        if intention is None and type(trigger.literal) is Literal and trigger.literal.functor == "kqml_received" \
+                and len(trigger.literal.args) == 4:
+            held = getattr(self, "kqml_messages", None)
+            msg = held.pop(trigger.literal.args[3], None) if held else None
+            if msg is not None:  # no user plan applies: the default semantics (Jason's kqmlPlans.asl)
+                from agentspeak.communication import receive_by_default
+                receive_by_default(self, msg)
+                return
         if intention is None:
-            intention = Intention()
+            # an external goal (.at, !!g, a message) without a plan: Jason posts -!g when a plan is
+            # relevant for it (generateGoalDeletionFromEvent), else it warns
+            failed = Trigger(DEL, trigger.kind, trigger.literal)
+            if type(trigger.literal) is Literal and self.plans.relevant(failed):
+                annots = self._failure_annots(error, message)
+                self.events.append(Event(Trigger(DEL, trigger.kind, _add_annots(trigger.literal, annots))))
+                return
             log.warning("[%s] %s", self.name, message)
             self.failures_unhandled += 1
             return
@@ -412,6 +522,8 @@ class Agent:
                 # replaced by the callee, which reports its result directly to the caller's caller,
                 # so the stack stays flat. The caller's intended means object is reused for the
                 # callee (nothing else refers to a finished caller).
+                if self.plans.has_meta:
+                    self._goal_achieved(top)
                 top.result = resolve(top.result, top.b) if len(stack) > 1 else plan.trigger.literal
                 top.plan = plan
                 top.b = b
@@ -452,6 +564,7 @@ class Agent:
         if intention is None or intention.dropped or not intention.stack:
             return
         intention.suspended = None
+        self.current_intention = intention
         # rule ExecInt (this runs once per reasoning cycle)
         im = intention.stack[-1]
         frame = im.frames[-1]
@@ -469,6 +582,11 @@ class Agent:
                 self._fail(intention, exc.error, exc.message, instr)
             except ArithmeticError_ as exc:
                 self._fail(intention, "wrong_arguments", str(exc), instr)
+            except RecursionError:
+                self._fail(intention, "wrong_arguments", "a term too deep or cyclic to work with", instr)
+            except Exception as exc:  # a broken internal action fails its intention, never the agent
+                log.exception("[%s] %s raised", self.name, instr)
+                self._fail(intention, "ia_failed", f"{instr}: {type(exc).__name__}: {exc}", instr)
             else:
                 if intention.suspended is None and not intention.dropped:
                     # clr_int's two usual cases inlined: the top plan still has formulas to run
@@ -486,6 +604,8 @@ class Agent:
                                 stack.pop()
                                 if top.plan.atomic:
                                     intention.atomic -= 1
+                                if self.plans.has_meta:
+                                    self._goal_achieved(top)
                                 self._finished(intention)
                                 return
                     self.clr_int(intention)
@@ -522,6 +642,8 @@ class Agent:
             stack.pop()
             if im.plan.atomic:
                 intention.atomic -= 1
+            if self.plans.has_meta:
+                self._goal_achieved(im)
             if im.handles is not None:
                 # a failure-handling plan finished: drop everything down to the goal that failed
                 if im.handles is not _PENDING_GOAL:
@@ -536,6 +658,9 @@ class Agent:
                 continue
             if not stack:
                 break
+            if im.plan.trigger.kind == BEL:
+                # a plan reacting to the caller's +b/-b: the caller had already moved past that formula
+                continue
             caller = stack[-1]
             instr = caller.current()
             value = resolve(im.result, im.b)
@@ -546,6 +671,28 @@ class Agent:
             self._advance(caller)
         # the intention is finished
         self._finished(intention)
+
+    # ------------------------------------------------------------------ goal states (meta events)
+    def goal_state(self, trigger: Trigger, state: str, reason: Term = "") -> None:
+        """Post ``^!g[state(S)[reason(R)]]`` at the start of the next cycle, when a plan is relevant
+        (Jason's GoalListenerForMetaEvents: pending, executing, suspended, waiting, resumed, achieved,
+        failed, finished, dropped). Only called when the plan library has a ``^`` plan."""
+        lit = trigger.literal
+        if type(lit) is not Literal:
+            return
+        annot = Literal("state", (Literal(state),), (Literal("reason", (reason,)),))
+        meta = Trigger(META, trigger.kind, lit.add_annot(annot))
+        if not self.plans.relevant(meta):
+            return
+        self.feedback.append(lambda: self.events.appendleft(Event(meta)))
+        self.arch.wake(self)
+
+    def _goal_achieved(self, im: IntendedMeans) -> None:
+        trig = im.plan.trigger
+        if trig.kind != BEL and trig.op != META:
+            t = Trigger(trig.op, trig.kind, resolve(im.event_literal, im.b))
+            self.goal_state(t, "achieved")
+            self.goal_state(t, "finished")
 
     def _finished(self, intention: Intention) -> None:
         intention.dropped = True
@@ -584,7 +731,7 @@ class Agent:
         if instr is not None:
             code = instr.term if hasattr(instr, "term") else Literal(str(instr))
             annots.append(Literal("code", (code if isinstance(code, (Literal, Var)) else str(instr),)))
-            annots.append(Literal("code_src", (self.source_file or "",)))
+            annots.append(Literal("code_src", (source_url(self.source_file),)))
             annots.append(Literal("code_line", (getattr(instr, "line", 0),)))
         annots.extend(extra)
         return tuple(annots)
@@ -615,6 +762,9 @@ class Agent:
             trig = im.plan.trigger
             if trig.op == ADD and trig.kind != BEL:
                 lit = resolve(trig.literal, im.b)
+                if self.plans.has_meta:
+                    self.goal_state(Trigger(ADD, trig.kind, resolve(im.event_literal, im.b)), "failed",
+                                    Literal(error))
                 if type(lit) is Literal and self.plans.relevant(Trigger(DEL, trig.kind, lit)):
                     self.events.append(Event(Trigger(DEL, trig.kind, _add_annots(lit, annots)), intention, im))
                     self._notify_waiters(self.events[-1].trigger)
@@ -655,6 +805,16 @@ class Agent:
             if done[0] or intention.dropped:
                 return
             done[0] = True
+            held = intention.waiting
+            if held is not susp:
+                if held is not None and getattr(held, "inner", None) is susp:
+                    # suspended by .suspend while waiting (Jason keeps it pending): .resume completes this
+                    held.complete = lambda: complete(ok, error, message, extra)
+                # else the wait was abandoned (its goal failed or succeeded meanwhile)
+                return
+            complete(ok, error, message, extra)
+
+        def complete(ok: bool, error: str, message: str, extra: tuple) -> None:
             intention.waiting = None
             if ok:
                 self._advance(im)
@@ -668,6 +828,13 @@ class Agent:
                 self._fail(intention, error, message or f"{instr} failed", instr, extra=extra)
 
         susp.finish = finish  # type: ignore[attr-defined]
+        if self.plans.has_meta:
+            for gim in reversed(intention.stack):
+                t = gim.plan.trigger
+                if t.op == ADD and t.kind == ACHIEVE:
+                    self.goal_state(Trigger(ADD, ACHIEVE, resolve(gim.event_literal, gim.b)), "waiting",
+                                    susp.term if susp.term is not None else Literal(susp.reason))
+                    break
         ctx = IAContext(self, intention, im, im.b, [])
         if susp.future is not None:
             self.pending_futures += 1
@@ -818,6 +985,14 @@ class Agent:
         return sorted(seen.values(), key=lambda i: i.id)
 
 
+def source_url(path: str) -> str:
+    """A source file as Jason names it in ``code_src`` (``file:./x.asl``); names such as
+    ``<string>`` stay as they are."""
+    if not path or path.startswith("<") or ":" in path.split("/")[0]:
+        return path or ""
+    return "file:" + path
+
+
 def _simple_args(args: tuple) -> bool:
     """True when every argument is a number, a string or an atom (so the literal is ground)."""
     for a in args:
@@ -854,6 +1029,8 @@ def _exec_achieve(ag: Agent, intention: Intention, im: IntendedMeans, frame: Fra
     trigger = Trigger(ADD, ACHIEVE, ag._fresh_goal(instr.term, im.b))
     if ag.event_waiters:  # post_internal, inlined: this is the step of every subgoal
         ag._notify_waiters(trigger)
+    if ag.plans.has_meta:
+        ag.goal_state(trigger, "pending")
     ag.events.append(Event(trigger, intention))
     intention.suspended = "event"
 
@@ -882,7 +1059,9 @@ def _belief_literal(term: Term, b: dict) -> Literal:
     if type(lit) is not Literal:
         raise IAError("wrong_arguments", f"'{to_str(lit)}' is not a literal")
     if not is_ground(lit):
-        raise IAError("wrong_arguments", f"belief '{to_str(lit)}' is not ground")
+        # Jason stores a belief with free variables as it is (`+test(T,failed)`); here with variables of
+        # its own, so the belief never shares (or binds) the plan's variables
+        lit = rename(lit, {})
     if not has_source(lit):
         lit = lit.add_annot(SOURCE_SELF)
     return lit

@@ -10,11 +10,16 @@ from pathlib import Path
 def add_parser(sub: argparse._SubParsersAction) -> None:
     asl = sub.add_parser("asl", help="check or run AgentSpeak programs")
     asl_sub = asl.add_subparsers(dest="asl_command", metavar="ACTION")
-    check = asl_sub.add_parser("check", help="report every syntax error in the files (exit 2 if any)")
-    check.add_argument("files", nargs="+")
+    check = asl_sub.add_parser("check", help="report every syntax error, unknown internal action and wrong arity "
+                                             "in the files (exit 2 if any)")
+    check.add_argument("files", nargs="+", metavar="FILE", help=".asl (or .mas2j) files to check")
     check.set_defaults(func=cmd_check)
-    run = asl_sub.add_parser("run", help="run one agent until .stopMAS or until it is idle")
-    run.add_argument("file")
+    run = asl_sub.add_parser("run", help="run one agent until .stopMAS or until it is idle",
+                             description="Run one agent until .stopMAS or until it is idle. The exit status is 0 "
+                                         "even when a goal failed without a failure plan: as in Jason, the failure "
+                                         "is reported on stderr and the agent goes on with its other intentions; "
+                                         "2 for a file that cannot be read or parsed.")
+    run.add_argument("file", metavar="FILE.asl", help="the agent's program")
     run.add_argument("--name", help="agent name (default: the file's stem)")
     run.add_argument("--timeout", type=float, default=None, help="stop after S seconds")
     run.set_defaults(func=cmd_run)
@@ -26,14 +31,20 @@ def _setup_logging() -> None:
 
 
 def cmd_check(args) -> int:
+    from agentspeak.errors import SourceError
     from agentspeak.parser import parse_program_all_errors
+    from agentspeak.source_text import read_source
     _setup_logging()
     failed = 0
     for file in args.files:
         try:
-            text = Path(file).read_text()
+            text = read_source(file)
         except OSError as exc:
             print(f"{file}: cannot read: {exc.strerror or exc}", file=sys.stderr)
+            failed += 1
+            continue
+        except SourceError as exc:  # not UTF-8
+            print(exc, file=sys.stderr)
             failed += 1
             continue
         if file.endswith(".mas2j"):
@@ -46,6 +57,9 @@ def cmd_check(args) -> int:
                 failed += 1
             continue
         program, errors = parse_program_all_errors(text, file)
+        if not errors:      # names and arities of internal actions, against the registry an agent runs with
+            from agentspeak.lint import internal_action_problems
+            errors = internal_action_problems(program)
         for err in errors:
             print(err, file=sys.stderr)
         for warning in program.warnings:
@@ -61,11 +75,15 @@ def cmd_check(args) -> int:
 def cmd_run(args) -> int:
     from agentspeak.errors import AslSyntaxError
     from agentspeak.runtime import LocalRuntime
+    from agentspeak.source_text import read_source
     _setup_logging()
     try:
-        text = Path(args.file).read_text()
+        text = read_source(args.file)
     except OSError as exc:
         print(f"{args.file}: cannot read: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except AslSyntaxError.__mro__[1] as exc:  # SourceError: not UTF-8
+        print(exc, file=sys.stderr)
         return 2
     name = args.name or Path(args.file).stem
     runtime = LocalRuntime()

@@ -18,7 +18,7 @@ from agentspeak.beliefs import SELF, SOURCE_SELF, source
 from agentspeak.intentions import Event
 from agentspeak.program import ACHIEVE, ADD, BEL, DEL, Plan, PlanTerm, Trigger
 from agentspeak.solver import SolveError, solve
-from agentspeak.terms import NIL, Cons, Literal, Term, is_ground, list_items, make_list, rename, resolve, to_str
+from agentspeak.terms import NIL, Cons, Literal, Term, Var, is_ground, list_items, make_list, rename, resolve, to_str
 
 log = logging.getLogger("faultmas.agentspeak")
 
@@ -128,8 +128,16 @@ def _annotate(lit: Term, who: Term) -> Term:
             lit = rename(lit, {})
         if lit.annots is None:  # the usual content: no annotations of its own
             return Literal(lit.functor, lit.args, (_source_of(who),), lit.neg)
-        return Literal(lit.functor, lit.args, lit.annots, lit.neg).add_annot(_source_of(who))
+        return nested_source(lit, who)
     return lit
+
+
+def nested_source(lit: Literal, who: Term) -> Literal:
+    """Jason's ``.add_nested_source``: ``p[a,b]`` from ``who`` is ``p[source(who)[a,b]]`` (what a told
+    belief or an answer was annotated with stays visible, inside the source)."""
+    annots = lit.annots
+    src = Literal("source", (who,), annots if annots else None)
+    return Literal(lit.functor, lit.args, (src,), lit.neg)
 
 
 _SOURCE_ANNOTS: dict[str, tuple] = {}
@@ -159,6 +167,12 @@ def receive_message(agent: Any, msg: Message) -> None:
     if plans.kqml_override:
         sender = _atom_of(name) if name != agent.name else SELF
         goal = Literal("kqml_received", (sender, Literal(perf), msg.content, msg.msg_id), (SOURCE_SELF,))
+        # kept until a plan handles it: when none of the user's +!kqml_received plans applies, the
+        # message gets the default semantics (Jason's kqmlPlans.asl comes after the user's plans)
+        held = agent.__dict__.setdefault("kqml_messages", {})
+        if len(held) >= 1000:
+            del held[next(iter(held))]
+        held[msg.msg_id] = msg
         agent.post_external(Trigger(ADD, ACHIEVE, goal), force=True)
         return
     content = msg.content
@@ -195,6 +209,20 @@ def receive_message(agent: Any, msg: Message) -> None:
         handler(agent, msg, sender)
     except (SolveError, TypeError, ValueError) as exc:
         log.warning("[%s] message from %s dropped: %s", agent.name, msg.sender, exc)
+
+
+def receive_by_default(agent: Any, msg: Message) -> None:
+    """The default semantics of a message, also when the agent has ``+!kqml_received`` plans (for a
+    message none of them applies to)."""
+    plans = agent.plans
+    if plans._index is None:
+        plans._build()
+    saved = plans.kqml_override
+    plans.kqml_override = False
+    try:
+        receive_message(agent, msg)
+    finally:
+        plans.kqml_override = saved
 
 
 def _tell(agent, msg: Message, sender: Term) -> None:
@@ -245,11 +273,20 @@ def _answer(agent, msg: Message, performative: str, content: Term) -> None:
     agent.arch.send(agent, reply)
 
 
+def _with_annots_of_answer(query: Term) -> Term:
+    """The query with an open annotation tail: its answer carries the annotations of the belief that
+    answered it (Jason answers ``askOne value(X)`` with ``value(10)[source(bob)]``)."""
+    if isinstance(query, Literal) and query.annot_tail is None:
+        return Literal(query.functor, query.args, query.annots, query.neg, Var("_Annots"))
+    return query
+
+
 def _ask_one(agent, msg: Message, sender: Term) -> None:
     query = msg.content
     b: dict = {}
-    for _ in solve(agent, query, b):
-        _answer(agent, msg, "tell", _strip_self_source(resolve(query, b)) if isinstance(query, Literal) else resolve(query, b))
+    pattern = _with_annots_of_answer(query)
+    for _ in solve(agent, pattern, b):
+        _answer(agent, msg, "tell", _strip_self_source(resolve(pattern, b)) if isinstance(query, Literal) else resolve(query, b))
         return
     # no belief: try a +?q plan, answering when it finishes
     if isinstance(query, Literal) and agent.plans.relevant(Trigger(ADD, "?", query)):
@@ -277,8 +314,9 @@ def _ask_all(agent, msg: Message, sender: Term) -> None:
     query = msg.content
     b: dict = {}
     answers = []
-    for _ in solve(agent, query, b):
-        value = resolve(query, b)
+    pattern = _with_annots_of_answer(query)
+    for _ in solve(agent, pattern, b):
+        value = resolve(pattern, b)
         answers.append(_strip_self_source(value) if isinstance(value, Literal) else value)
     _answer(agent, msg, "tell", make_list(answers))
 

@@ -107,6 +107,15 @@ KQML_RECEIVED_KEY = (ADD, ACHIEVE, False, "kqml_received", 4)
 """The index key of ``+!kqml_received(Sender, Performative, Content, MsgId)`` plans."""
 
 
+def _has_source(label: Literal, source: Term) -> bool:
+    for a in label.annots or ():
+        if type(a) is Literal and a.functor == "source" and len(a.args) == 1 and a.args[0] == source:
+            return True
+    # a plan from the agent's own source has no source annotation: it is the agent's (self)
+    return type(source) is Literal and source.functor == "self" and not any(
+        type(a) is Literal and a.functor == "source" for a in label.annots or ())
+
+
 class PlanLibrary:
     """Plans in source order, indexed by trigger (op, kind, functor/arity); variable triggers last-bound."""
 
@@ -115,17 +124,30 @@ class PlanLibrary:
         self._index: dict[tuple, list[Plan]] | None = None
         self._var_plans: dict[tuple, list[Plan]] = {}
         self.kqml_override = False  # a plan is relevant to +!kqml_received/4 (valid while _index is)
+        self.has_meta = False       # a ^!g plan exists: the agent posts goal-state meta events
+        self.has_goal_conditions = False  # a `+!g <: C` plan exists: C is checked every cycle
+        self.has_jag = False        # a +jag_sleeping/+jag_awaking plan exists: the agent posts them
 
     def add(self, plan: Plan, at_end: bool = True) -> None:
         plan.ensure_label()
+        if plan.trigger.op == "^":
+            self.has_meta = True
+        if plan.goal_condition is not None:
+            self.has_goal_conditions = True
+        lit = plan.trigger.literal
+        if getattr(lit, "functor", None) in ("jag_sleeping", "jag_awaking"):
+            self.has_jag = True
         if at_end:
             self.plans.append(plan)
         else:
             self.plans.insert(0, plan)
         self._index = None
 
-    def remove(self, label: Literal) -> list[Plan]:
-        removed = [p for p in self.plans if p.label is not None and p.label.functor == label.functor]
+    def remove(self, label: Literal, source: Term = None) -> list[Plan]:
+        """Remove the plans of this label (with a source: only those whose label says that source,
+        Jason's ``.remove_plan(L, Source)``)."""
+        removed = [p for p in self.plans if p.label is not None and p.label.functor == label.functor
+                   and (source is None or _has_source(p.label, source))]
         if removed:
             self.plans = [p for p in self.plans if p not in removed]
             self._index = None

@@ -10,10 +10,16 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from agentspeak.lark_loader import lalr_parser  # first: it refuses lark-parser 0.12 with the fix
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedInput
 
 from agentspeak.errors import AslSyntaxError
+from agentspeak.source_text import read_source
+
+#: The most instances one declaration may ask for (``robot #N``): a typo such as ``#99999999999999999999``
+#: must be a located error, not a list of names growing to gigabytes.
+MAX_INSTANCES = 10_000
 
 _GRAMMAR = Path(__file__).with_name("mas2j.lark")
 _PARSER: Lark | None = None
@@ -25,6 +31,7 @@ class AgentDecl:
     source: str                       # path of the .asl file
     options: dict = field(default_factory=dict)
     instances: int = 0                # 0: a single agent named `name`
+    token: object = field(default=None, repr=False, compare=False)  # the name as written (line, column)
 
     def instance_names(self) -> list[str]:
         if self.instances <= 0:
@@ -40,6 +47,9 @@ class MasProject:
     infrastructure: str | None = None
     source_paths: list[str] = field(default_factory=list)
     file: str = ""
+    source_dirs: list[str] = field(default_factory=list)
+    """Where includes and ``.create_agent`` look (absolute): each ``aslSourcePath`` entry against the
+    working directory (as Jason), then against the project file's folder, then that folder."""
 
     def agent_names(self) -> list[str]:
         return [n for a in self.agents for n in a.instance_names()]
@@ -48,7 +58,7 @@ class MasProject:
 def _parser() -> Lark:
     global _PARSER
     if _PARSER is None:
-        _PARSER = Lark(_GRAMMAR.read_text(), parser="lalr", maybe_placeholders=True)
+        _PARSER = lalr_parser(_GRAMMAR, maybe_placeholders=True)
     return _PARSER
 
 
@@ -73,40 +83,98 @@ def parse_mas2j(text: str, file: str = "<mas2j>") -> MasProject:
             continue
         if section.data == "agents":
             for decl in section.children:
-                project.agents.append(_agent(decl))
+                project.agents.append(_agent(decl, file, text))
         elif section.data == "environment":
             project.environment = _class_text(section.children[0])
         elif section.data == "infrastructure":
             project.infrastructure = _class_text(section.children[0])
         elif section.data == "source_path":
             project.source_paths = [str(s)[1:-1] for s in section.children]
-    paths = [os.path.join(base, p) for p in project.source_paths] + [base]
+    _check_unique_names(project, file, text)
+    project.source_dirs = source_dirs(project.source_paths, base)
     for decl in project.agents:
-        decl.source = _find_source(decl.source, paths)
+        decl.source = _find_source(decl.source, project.source_dirs)
     return project
 
 
-def _agent(tree: Tree) -> AgentDecl:
+def _error_at(token: object, message: str, file: str, text: str) -> AslSyntaxError:
+    line = getattr(token, "line", None)
+    lines = text.split("\n")
+    return AslSyntaxError(message, file, line, getattr(token, "column", None),
+                          lines[line - 1] if line and 0 < line <= len(lines) else None)
+
+
+def _check_unique_names(project: MasProject, file: str, text: str) -> None:
+    """Two agents of one name (``a`` twice, or ``a #2`` beside ``a1``) would share an inbox: refused."""
+    seen: set[str] = set()
+    for decl in project.agents:
+        for name in decl.instance_names():
+            if name in seen:
+                raise _error_at(decl.token, f"agent name {name!r} is declared twice (each agent needs its own name)",
+                                file, text)
+            seen.add(name)
+
+
+def source_dirs(entries: list[str], base: str) -> list[str]:
+    """The folders of an ``aslSourcePath``, absolute: Jason reads a relative entry against the working
+    directory; an entry found only beside the project file is taken from there (what users of earlier
+    faultmas versions wrote), and the project's folder comes last."""
+    out: list[str] = []
+    for entry in entries:
+        for candidate in ([entry] if os.path.isabs(entry) else [entry, os.path.join(base, entry)]):
+            if os.path.isdir(candidate):
+                out.append(os.path.abspath(candidate))
+                break
+    out.append(os.path.abspath(base))
+    return list(dict.fromkeys(out))
+
+
+def _agent(tree: Tree, file: str = "<mas2j>", text: str = "") -> AgentDecl:
     name = str(tree.children[0])
     file_part, options_part = tree.children[1], tree.children[2]
     source = f"{name}.asl"
     if file_part is not None:
         tok = file_part.children[0]
-        text = str(tok)
-        source = text[1:-1] if tok.type == "STRING" else text
+        written = str(tok)
+        source = written[1:-1] if tok.type == "STRING" else written
         if not source.endswith(".asl"):
             source += ".asl"
+        if "\0" in source:
+            raise _error_at(tok, "a NUL character in the agent's source file name", file, text)
     options = {}
     if options_part is not None:
         for opt in options_part.children:
             key, value = opt.children
             v = str(value)
-            options[str(key)] = v[1:-1] if isinstance(value, Token) and value.type == "STRING" else v
+            options[str(key)] = _unescape(v[1:-1]) if isinstance(value, Token) and value.type == "STRING" else v
     instances = 0
     for child in tree.children[3:]:
         if isinstance(child, Tree) and child.data == "instances":
-            instances = int(float(str(child.children[0])))
-    return AgentDecl(name, source, options, instances)
+            count = child.children[0]
+            try:
+                instances = int(float(str(count)))
+            except (ValueError, OverflowError):
+                instances = MAX_INSTANCES + 1
+            if not 0 <= instances <= MAX_INSTANCES:
+                raise _error_at(count, f"instance count {str(count)[:30]} is out of range (1 to {MAX_INSTANCES})",
+                                file, text)
+    return AgentDecl(name, source, options, instances, token=tree.children[0])
+
+
+def _unescape(text: str) -> str:
+    """A string option's escapes as Java reads them: ``\\"`` is ``"``, ``\\\\`` is ``\\``."""
+    out = []
+    i = 0
+    while i < len(text):
+        ch = text[i]
+        if ch == "\\" and i + 1 < len(text):
+            nxt = text[i + 1]
+            out.append({"n": "\n", "t": "\t"}.get(nxt, nxt))
+            i += 2
+            continue
+        out.append(ch)
+        i += 1
+    return "".join(out)
 
 
 def _class_text(tree: Tree) -> str:
@@ -124,4 +192,4 @@ def _find_source(source: str, paths: list[str]) -> str:
 
 
 def load_mas2j(path: str) -> MasProject:
-    return parse_mas2j(Path(path).read_text(), path)
+    return parse_mas2j(read_source(path, "project file"), path)

@@ -12,19 +12,24 @@ import re
 import threading
 from pathlib import Path
 
+from agentspeak.lark_loader import lalr_parser  # first: it refuses lark-parser 0.12 with the fix
 from lark import Lark, Token, Transformer
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from agentspeak.errors import AslSyntaxError
 from agentspeak.ground_terms import read_ground_term
+from agentspeak.source_text import read_source
+from agentspeak.nesting import MAX_NESTING, first_too_deep_bracket, nesting_depth, too_deep_message
 from agentspeak.program import (
     ACHIEVE, ADD, BEL, DEL, META, TEST, Achieve, AchieveNew, Action, AddBel, AddBelEnd, AddBelNew,
     AddPlan, Constraint, DelBel, DelBelNew, ExecVar, Fork, If, InternalAction, Plan, PlanTerm,
     Program, RemovePlan, Rule, Test, Trigger, TriggerInstr, UpdBel, While, For,
 )
 from agentspeak.stdlib.functions import FUNCTIONS, check_function_name, rule_function
+from agentspeak.stdlib.registry import set_program_reader
 from agentspeak.terms import (
-    And, Arith, ArithmeticError_, Func, Literal, Not, Or, Rel, Term, Var, is_ground, make_list, resolve,
+    And, AnnotatedVar, Arith, ArithmeticError_, Func, Literal, Not, Or, Rel, Term, Var, is_ground, make_list,
+    resolve,
 )
 
 _GRAMMAR = Path(__file__).with_name("agentspeak.lark")
@@ -131,13 +136,19 @@ class _ToProgram(Transformer):
         return ("end", None, self.line)
 
     def plan(self, c):
-        label, trigger, context, _arrow, body = c
+        label, trigger, context, _gc, goal_condition, _arrow, body = c
+        context = _no_true(context)
         plan = Plan(trigger, context, body or (), label, self.source_file, trigger_line(trigger, self))
+        plan.goal_condition = goal_condition
         self._end_clause()
         return ("plan", plan, plan.line)
 
     def label_named(self, c):
         return _not_function(c[0])
+
+    def label_var(self, c):
+        """``@L`` in a plan term (``{@L +!g <- b}``): unifies with a plan's label."""
+        return self.var_literal(c)
 
     def label_anon(self, c):
         annots = c[0]
@@ -256,11 +267,15 @@ class _ToProgram(Transformer):
 
     # -- plan terms -------------------------------------------------------------------------------
     def plan_term_full(self, c):
-        label, trigger, context, _arrow, body = c
-        return PlanTerm(plan=Plan(trigger, context, body or (), label, self.source_file, self.line))
+        label, trigger, context, _gc, goal_condition, _arrow, body = c
+        context = _no_true(context)
+        plan = Plan(trigger, context, body or (), label, self.source_file, self.line)
+        plan.goal_condition = goal_condition
+        return PlanTerm(plan=plan)
 
     def plan_term_ctx(self, c):
         label, trigger, context = c
+        context = _no_true(context)
         return PlanTerm(plan=Plan(trigger, context, (), label, self.source_file, self.line))
 
     def plan_term_body(self, c):
@@ -323,6 +338,8 @@ class _ToProgram(Transformer):
         if "." in text or "e" in text or "E" in text:
             value = float(text)
             return int(value) if value.is_integer() and abs(value) < 2 ** 53 else value
+        if len(text) > _MAX_INT_DIGITS:  # Python refuses to convert longer ones (a ValueError)
+            raise _BadInput(f"integer literal of {len(text)} digits is too long (at most {_MAX_INT_DIGITS})")
         return int(text)
 
     def string(self, c):
@@ -365,6 +382,14 @@ class _ToProgram(Transformer):
         # a quoted atom keeps its quotes, as in Jason: 'a b' prints quoted and 'abc' is not abc
         return text
 
+    def ns_functor(self, c):
+        """``ns::name`` is the functor ``ns::name`` (name spaces are kept in the name; ``::name`` and
+        ``default::name`` are the default name space, i.e. plain ``name``)."""
+        tok = c[-1]
+        self.line = tok.line
+        ns = c[0].value if len(c) == 3 else "default"
+        return tok.value if ns == "default" else f"{ns}::{tok.value}"
+
     def annotations(self, c):
         items, tail = self._items(c)
         return (tuple(items), tail)
@@ -388,6 +413,14 @@ class _ToProgram(Transformer):
             if x is not None:
                 items.append(x)
         return items, tail
+
+
+def _no_true(context: Term) -> Term:
+    """A context that is just ``true`` is no context (Jason prints ``+!g : true <- b`` as ``+!g <- b``)."""
+    if type(context) is Literal and context.functor == "true" and not context.args and not context.neg \
+            and context.annots is None:
+        return None
+    return context
 
 
 def _not_function(t: Term) -> Term:
@@ -414,24 +447,7 @@ def _binary(op: str, left: Term, right: Term) -> Term:
     return Rel(op, left, right)
 
 
-class AnnotatedVar(Var):
-    """A variable with annotations, ``X[a]``: unifies with a literal whose annotations include ``a``."""
-
-    __slots__ = ("var", "annots", "annot_tail")
-
-    def __init__(self, var: Var, annots: tuple, tail: Var | None) -> None:
-        super().__init__(var.name)
-        self.var, self.annots, self.annot_tail = var, annots, tail
-
-    def resolve(self, b):
-        value = resolve(self.var, b)
-        if isinstance(value, Literal):
-            extra = tuple(resolve(a, b) for a in self.annots)
-            merged = value
-            for a in extra:
-                merged = merged.add_annot(a)
-            return merged
-        return value
+_MAX_INT_DIGITS = 4300  # CPython's limit on int(str) (sys.get_int_max_str_digits)
 
 
 class _BadInput(Exception):
@@ -439,7 +455,7 @@ class _BadInput(Exception):
 
 
 def parse_program(text: str, source_file: str = "<string>", base_dir: str | None = None,
-                  _seen: set | None = None) -> Program:
+                  _seen: set | None = None, source_path: tuple = ()) -> Program:
     """Parse a whole agent program; raise ``AslSyntaxError`` at the first error.
 
     A file without includes is parsed once per process: later calls with the same text get a copy
@@ -448,21 +464,24 @@ def parse_program(text: str, source_file: str = "<string>", base_dir: str | None
     # the functions known decide whether `ns.f(...)` is a call: a function registered later must not
     # meet a parse made before it
     key = (text, source_file, len(FUNCTIONS.functions))
-    cached = _PARSED.get(key)
+    cached = _PARSED.get(key) or _PARSED.get(key + (tuple(source_path),))
     if cached is not None:
         return _copy_program(cached)
     program, errors = _parse(text, source_file, stop_at_first=True)
     if errors:
         raise errors[0]
-    if not program.__dict__.get("includes"):
-        if len(_PARSED) >= _PARSED_MAX:
-            try:
-                del _PARSED[next(iter(_PARSED))]  # the oldest
-            except (KeyError, RuntimeError, StopIteration):  # another thread got there first
-                pass
-        _PARSED[key] = program
-        return _copy_program(program)
-    return _expand_includes(program, source_file, base_dir, _seen)
+    if program.__dict__.get("includes"):
+        # the included files are read now; the expanded program is kept like any other (100 agents that
+        # include the same library parse it once)
+        program = _expand_includes(program, source_file, base_dir, _seen, source_path)
+        key = key + (tuple(source_path),)
+    if len(_PARSED) >= _PARSED_MAX:
+        try:
+            del _PARSED[next(iter(_PARSED))]  # the oldest
+        except (KeyError, RuntimeError, StopIteration):  # another thread got there first
+            pass
+    _PARSED[key] = program
+    return _copy_program(program)
 
 
 _PARSED: dict[tuple, Program] = {}
@@ -476,9 +495,15 @@ def _copy_program(program: Program) -> Program:
         beliefs=list(program.beliefs),
         rules=[dataclasses.replace(r) for r in program.rules],
         goals=list(program.goals),
-        plans=[Plan(p.trigger, p.context, p.body, p.label, p.source_file, p.line) for p in program.plans],
+        plans=[_copy_plan(p) for p in program.plans],
         source_file=program.source_file,
         warnings=list(program.warnings))
+
+
+def _copy_plan(p: Plan) -> Plan:
+    q = Plan(p.trigger, p.context, p.body, p.label, p.source_file, p.line)
+    q.goal_condition = p.goal_condition
+    return q
 
 
 def parse_program_all_errors(text: str, source_file: str = "<string>") -> tuple[Program, list[AslSyntaxError]]:
@@ -498,6 +523,14 @@ _CLAUSE_START = re.compile(r"^(?=[+\-@!^a-z~{])", re.M)
 def _parse(text: str, source_file: str, stop_at_first: bool) -> tuple[Program, list]:
     program = Program(source_file=source_file)
     errors: list[AslSyntaxError] = []
+    too_deep = first_too_deep_bracket(text)
+    if too_deep is not None:  # refused before the parser spends seconds on it (agentspeak/nesting.py)
+        line = text.count("\n", 0, too_deep) + 1
+        column = too_deep - (text.rfind("\n", 0, too_deep) + 1) + 1
+        source_line = text.split("\n")[line - 1]
+        errors.append(AslSyntaxError(too_deep_message(), source_file, line, column,
+                                     source_line[:200] if len(source_line) > 200 else source_line))
+        return program, errors
     offset_line = 0
     remaining = text
     while True:
@@ -555,7 +588,7 @@ def _parse_items(text: str, source_file: str) -> list:
     global _INLINE_PARSER
     with _PARSE_LOCK:
         if _INLINE_PARSER is None:
-            _INLINE_PARSER = Lark(_GRAMMAR.read_text(), parser="lalr", lexer="contextual",
+            _INLINE_PARSER = lalr_parser(_GRAMMAR, lexer="contextual",
                                   maybe_placeholders=True, transformer=_TRANSFORMER, **_speedups())
         t = _TRANSFORMER
         t.source_file, t.vars, t.line, t.trigger_line = source_file, {}, 0, 0
@@ -565,10 +598,15 @@ def _parse_items(text: str, source_file: str) -> list:
             return _INLINE_PARSER.parse(text)
         except _BadInput as exc:
             raise _BadInputAt(str(exc), t.line) from exc
+        except RecursionError:  # an expression nested so deeply that the parser's own recursion gave up
+            raise _BadInputAt(too_deep_message(), t.line) from None
 
 
 def _collect(items, program: Program, offset_line: int) -> None:
     for kind, value, line in items:
+        depth = nesting_depth(value)
+        if depth > MAX_NESTING:  # before anything walks it (agentspeak/nesting.py says why)
+            raise _BadInputAt(too_deep_message(), line)
         if kind == "belief":
             lit = value
             if not isinstance(lit, Literal):
@@ -600,31 +638,44 @@ def _collect(items, program: Program, offset_line: int) -> None:
 
 def program_directive(program: Program, lit: Literal, line: int) -> None:
     if isinstance(lit, Literal) and lit.functor == "include" and lit.args and isinstance(lit.args[0], str):
-        program.__dict__.setdefault("includes", []).append((lit.args[0], line))
+        # where the directive stands: the included clauses go there, in source order (as Jason)
+        at = (len(program.beliefs), len(program.rules), len(program.plans), len(program.goals))
+        program.__dict__.setdefault("includes", []).append((lit.args[0], line, at))
     else:
         program.warnings.append(f"{program.source_file}:{line}: unknown directive '{lit}' ignored")
 
 
-def _expand_includes(program: Program, source_file: str, base_dir: str | None, seen: set | None) -> Program:
+def _expand_includes(program: Program, source_file: str, base_dir: str | None, seen: set | None,
+                     source_path: tuple = ()) -> Program:
+    """Inline ``{ include("f.asl") }``: beside the including file, then along the source path
+    (``agentspeak.sources``); a file already included is not included again."""
+    from agentspeak.sources import find_source
     includes = program.__dict__.pop("includes", [])
     if not includes:
         return program
     seen = set() if seen is None else seen
     seen.add(os.path.abspath(source_file))
     base = base_dir or (os.path.dirname(source_file) if source_file and not source_file.startswith("<") else ".")
-    for rel, line in includes:
-        path = rel if os.path.isabs(rel) else os.path.join(base, rel)
+    inserted = [0, 0, 0, 0]  # clauses inserted so far into each list (the later positions move)
+    for rel, line, at in includes:
+        path = find_source(rel, base, source_path)
+        if path is None:
+            where = ", ".join([base or "."] + list(source_path))
+            raise AslSyntaxError(f"cannot include '{rel}': no such file (looked in {where})", source_file, line)
         if os.path.abspath(path) in seen:
             continue
         try:
-            text = Path(path).read_text()
+            text = read_source(path)
         except OSError as exc:
             raise AslSyntaxError(f"cannot include '{rel}': {exc.strerror or exc}", source_file, line) from exc
-        sub = parse_program(text, path, os.path.dirname(path), seen)
-        program.beliefs.extend(sub.beliefs)
-        program.rules.extend(sub.rules)
-        program.goals.extend(sub.goals)
-        program.plans.extend(sub.plans)
+        except ValueError as exc:  # not UTF-8 (a SourceError), or a NUL byte in the path
+            raise AslSyntaxError(f"cannot include {rel!r}: {exc}", source_file, line) from None
+        sub = parse_program(text, path, os.path.dirname(path), seen, source_path)
+        for k, (target, items) in enumerate(((program.beliefs, sub.beliefs), (program.rules, sub.rules),
+                                             (program.plans, sub.plans), (program.goals, sub.goals))):
+            pos = at[k] + inserted[k]
+            target[pos:pos] = items
+            inserted[k] += len(items)
         program.warnings.extend(sub.warnings)
     return program
 
@@ -729,3 +780,6 @@ def parse_body(text: str) -> tuple:
 
 def parse_plans(text: str, source_file: str = "<string>") -> list[Plan]:
     return parse_program(text, source_file).plans
+
+
+set_program_reader(parse_program)   # for .include (agentspeak/stdlib/system.py), without an import cycle

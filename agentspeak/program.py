@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from agentspeak.terms import (
-    Bindings, Literal, Term, Var, rename, resolve, to_str, variables,
+    NIL, And, Arith, Bindings, Cons, Func, Literal, Not, Or, Rel, Term, Var, rename, resolve, to_str, variables,
 )
 
 # trigger operators and types, as Jason names them
@@ -312,6 +312,8 @@ class Plan:
     line: int = 0
     atomic: bool = field(init=False, default=False)
     all_unifs: bool = field(init=False, default=False)
+    goal_condition: Term | None = field(init=False, default=None)
+    """Jason 3.2's ``+!g <: C <- body``: the goal is achieved as soon as C holds."""
     matcher: tuple | None = field(init=False, default=None, repr=False)
     """(trigger variables, compiled context, tail-call key) for deliberation, made on first use
     (``plan_matcher``); shared by every agent whose plan has the same terms."""
@@ -320,7 +322,7 @@ class Plan:
         self.refresh_label_flags()
 
     def refresh_label_flags(self) -> None:
-        annots = self.label.annots if self.label is not None and self.label.annots else ()
+        annots = self.label.annots if type(self.label) is Literal and self.label.annots else ()
         names = {a.functor for a in annots if isinstance(a, Literal)}
         self.atomic = "atomic" in names
         self.matcher = None  # tail calls depend on atomic
@@ -344,11 +346,15 @@ class Plan:
         return p
 
     def resolved(self, b: Bindings) -> "Plan":
-        return Plan(self.trigger.resolve(b),
-                    resolve(self.context, b) if self.context is not None else None,
-                    map_body(self.body, lambda t: resolve(t, b)),
-                    resolve(self.label, b) if self.label is not None else None,
-                    self.source_file, self.line)
+        """The plan with the bindings applied; nothing in it is evaluated (a plan is code: its
+        ``math.random`` runs when the formula runs, not when the plan is handed around as a term)."""
+        p = Plan(Trigger(self.trigger.op, self.trigger.kind, substitute(self.trigger.literal, b)),
+                 substitute(self.context, b) if self.context is not None else None,
+                 map_body(self.body, lambda t: substitute(t, b)),
+                 substitute(self.label, b) if self.label is not None else None,
+                 self.source_file, self.line)
+        p.goal_condition = substitute(self.goal_condition, b) if self.goal_condition is not None else None
+        return p
 
     def __str__(self) -> str:
         text = ""
@@ -435,17 +441,19 @@ class PlanTerm:
         if self.plan is not None:
             return PlanTerm(plan=self.plan.resolved(b))
         if self.body is not None:
-            return PlanTerm(body=map_body(self.body, lambda t: resolve(t, b)))
+            return PlanTerm(body=map_body(self.body, lambda t: substitute(t, b)))
         r = self.rule
-        return PlanTerm(rule=Rule(resolve(r.head, b), resolve(r.body, b), r.source_file, r.line))
+        return PlanTerm(rule=Rule(substitute(r.head, b), substitute(r.body, b), r.source_file, r.line))
 
     def rename(self, mapping: dict) -> "PlanTerm":
         if self.plan is not None:
             p = self.plan
-            return PlanTerm(plan=Plan(p.trigger.rename(mapping),
-                                      rename(p.context, mapping) if p.context is not None else None,
-                                      map_body(p.body, lambda t: rename(t, mapping)), p.label,
-                                      p.source_file, p.line))
+            q = Plan(p.trigger.rename(mapping), rename(p.context, mapping) if p.context is not None else None,
+                     map_body(p.body, lambda t: rename(t, mapping)),
+                     rename(p.label, mapping) if p.label is not None else None, p.source_file, p.line)
+            if p.goal_condition is not None:
+                q.goal_condition = rename(p.goal_condition, mapping)
+            return PlanTerm(plan=q)
         if self.body is not None:
             return PlanTerm(body=map_body(self.body, lambda t: rename(t, mapping)))
         r = self.rule
@@ -465,13 +473,40 @@ class PlanTerm:
         return out + body_variables(body)
 
     def unify_with(self, other: object, b: Bindings, trail: list) -> bool:
+        """Structural, as Jason's plan terms: label, trigger, context (none is ``true``) and body, where
+        a variable formula unifies with the other's formula and a variable last formula with the
+        rest of the other body (``{ T; _ }``; ``{@L +!g : C <- B}``)."""
         if not isinstance(other, PlanTerm):
             return False
         from agentspeak.unify import unify
-        if self.plan is not None and other.plan is not None:
-            return str(self.plan.resolved(b).body) == str(other.plan.resolved(b).body) and \
-                unify(self.plan.trigger.literal, other.plan.trigger.literal, b, trail)
-        return str(self.resolve(b)) == str(other.resolve(b))
+        x, y = self.as_plan_parts(), other.as_plan_parts()
+        if x is None or y is None:
+            if self.rule is not None and other.rule is not None:
+                return (unify(self.rule.head, other.rule.head, b, trail)
+                        and unify(self.rule.body, other.rule.body, b, trail))
+            return False
+        (xl, xt, xc, xb), (yl, yt, yc, yb) = x, y
+        if xt is not None or yt is not None:
+            if xt is None or yt is None or xt.op != yt.op or xt.kind != yt.kind:
+                return False
+            if not unify(xt.literal, yt.literal, b, trail):
+                return False
+        if xl is not None and yl is not None and not unify(xl, yl, b, trail):
+            return False
+        if (xc is not None or yc is not None) and not unify(_TRUE if xc is None else xc,
+                                                              _TRUE if yc is None else yc, b, trail):
+            return False
+        return unify_bodies(xb, yb, b, trail)
+
+    def as_plan_parts(self) -> tuple | None:
+        """(label, trigger, context, body) of a plan or body term; None for a rule term."""
+        if self.plan is not None:
+            p = self.plan
+            return (p.label, p.trigger, p.context, p.body)
+        if self.body is not None:
+            trig = self.as_trigger() if len(self.body) == 1 and isinstance(self.body[0], TriggerInstr) else None
+            return (None, trig, None, () if trig is not None else self.body)
+        return None
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, PlanTerm) and str(self) == str(other)
@@ -487,6 +522,90 @@ class PlanTerm:
         return "{ " + str(self.rule) + " }"
 
     __repr__ = __str__
+
+
+_TRUE = Literal("true")
+
+
+def substitute(t: Term, b: Bindings) -> Term:
+    """``t`` with the bindings applied, evaluating nothing (``resolve`` computes arithmetic and calls
+    functions; inside a plan term those are code that runs later)."""
+    tt = type(t)
+    if tt is Var:
+        v = b.get(t)
+        while type(v) is Var:
+            t, v = v, b.get(v)
+        return t if v is None else substitute(v, b)
+    if tt is Literal:
+        if not t.args and t.annots is None and t.annot_tail is None:
+            return t
+        if t.annot_tail is not None and b.get(t.annot_tail) is not None:
+            return resolve(t, b)
+        return Literal(t.functor, tuple(substitute(a, b) for a in t.args),
+                       tuple(substitute(a, b) for a in t.annots) if t.annots else None, t.neg, t.annot_tail)
+    if tt is Func:
+        return Func(t.name, tuple(substitute(a, b) for a in t.args), t.spec)
+    if tt is Arith:
+        return Arith(t.op, substitute(t.left, b), substitute(t.right, b) if t.right is not None else None)
+    if tt is Rel:
+        return Rel(t.op, substitute(t.left, b), substitute(t.right, b))
+    if tt is And:
+        return And(substitute(t.left, b), substitute(t.right, b))
+    if tt is Or:
+        return Or(substitute(t.left, b), substitute(t.right, b))
+    if tt is Not:
+        return Not(substitute(t.arg, b))
+    if tt is Cons:
+        heads = []
+        while type(t) is Cons:
+            heads.append(substitute(t.head, b))
+            t = t.tail
+            while type(t) is Var and b.get(t) is not None:
+                t = b[t]
+        tail = substitute(t, b) if t is not NIL else NIL
+        for h in reversed(heads):
+            tail = Cons(h, tail)
+        return tail
+    return resolve(t, b)
+
+
+def _formula_term(instr) -> Term:
+    """What a variable unifies with when it stands for one formula of a body term: the formula's term
+    (``!g(1)`` gives ``g(1)``, as Jason's body terms do)."""
+    if isinstance(instr, _OneTerm):
+        return instr.term
+    return PlanTerm(body=(instr,))
+
+
+def unify_bodies(xs: tuple, ys: tuple, b: Bindings, trail: list) -> bool:
+    from agentspeak.unify import unify
+    if ys and isinstance(ys[-1], ExecVar) and not (xs and isinstance(xs[-1], ExecVar)):
+        xs, ys = ys, xs  # the side with a variable tail leads
+    n = len(xs)
+    for i, x in enumerate(xs):
+        if i == n - 1 and type(x) is ExecVar and type(x.term) is Var and (len(ys) != n or type(ys[i]) is not ExecVar):
+            value = resolve(x.term, b)
+            if type(value) is Var:
+                return unify(value, PlanTerm(body=ys[i:]), b, trail)  # the rest of the body
+        if i >= len(ys):
+            return False
+        y = ys[i]
+        if type(x) is ExecVar:
+            if not unify(x.term, _formula_term(y) if type(y) is not ExecVar else y.term, b, trail):
+                return False
+            continue
+        if type(y) is ExecVar:
+            if not unify(_formula_term(x), y.term, b, trail):
+                return False
+            continue
+        if type(x) is not type(y):
+            return False
+        if isinstance(x, _OneTerm):
+            if not unify(x.term, y.term, b, trail):
+                return False
+        elif str(x.map_terms(lambda t: resolve(t, b))) != str(y.map_terms(lambda t: resolve(t, b))):
+            return False
+    return len(xs) == len(ys)
 
 
 class TriggerInstr(Instr):

@@ -55,6 +55,12 @@ class LocalArch(AgentArch):
     def accepts_plans_from(self, agent: Agent, sender: str) -> bool:
         return self.runtime.accepts_plans_from(sender)
 
+    def create_agent(self, agent: Agent, name: str, source: str) -> str:
+        return self.runtime.create_agent(name, source)
+
+    def kill_agent(self, agent: Agent, name: str) -> bool:
+        return self.runtime.kill_agent(name)
+
     def act(self, agent: Agent, action: Literal):
         env = self.runtime.environment
         return env(agent, action) if env is not None else None
@@ -79,6 +85,9 @@ class LocalRuntime:
         self.trusted_senders: set[str] | None = None
         self.remote: Callable[[Message], bool] | None = None   # a transport for agents elsewhere
         self.undeliverable = 0
+        self.source_dirs: list[str] = []     # where .create_agent and includes look (a project's aslSourcePath)
+        self._yield_turn = False             # end the running agent's turn now (it created an agent)
+        self._yield_to: Agent | None = None  # ... and run this one next, then the creator again
 
     # -- set-up
     def add_agent(self, name: str, source: str | None = None, source_file: str = "<string>",
@@ -100,6 +109,65 @@ class LocalRuntime:
 
     def names(self) -> list[str]:
         return list(self.agents)
+
+    def create_agent(self, name: str, source: str) -> str:
+        """A new agent from an ``.asl`` file, at run time (Jason's ``.create_agent``): the file is looked
+        up as given, then along ``source_dirs``; a name in use gets a number appended, as in Jason.
+        Raises ``IAError`` (the calling formula fails) for a missing file or a syntax error."""
+        from agentspeak.errors import AslSyntaxError
+        from agentspeak.sources import find_source
+        from agentspeak.stdlib.registry import IAError
+        path = find_source(source, None, self.source_dirs)
+        if path is None:
+            raise IAError("ia_failed", f".create_agent: cannot find {source!r} (looked in ., "
+                                       f"{', '.join(self.source_dirs)})")
+        unique, n = name, 1
+        while unique in self.agents:
+            n += 1
+            unique = f"{name}_{n}"
+        try:
+            with open(path, encoding="utf-8") as f:
+                text = f.read()
+            program = parse_program(text, path, source_path=tuple(self.source_dirs))
+        except OSError as exc:
+            raise IAError("ia_failed", f".create_agent: cannot read {path}: {exc.strerror or exc}") from None
+        except AslSyntaxError as exc:
+            log.warning("%s", exc)
+            raise IAError("ia_failed", f".create_agent({unique}): {exc}") from None
+        if self.trusted_senders is not None:
+            self.trusted_senders.add(unique)
+        self.add_agent(unique, source_file=path, program=program)
+        # the creator's turn ends after this cycle, so the new agent starts before the creator goes on
+        # (Jason starts it on a thread of its own at once; a creator that loops must not starve it)
+        self._yield_turn = True
+        self._yield_to = self.agents[unique]
+        return unique
+
+    def _run_next(self, first: Agent, then: Agent) -> None:
+        """Put ``first`` then ``then`` at the head of the ready queue (a new agent starts at once, and
+        its creator goes on right after it, as if each had a thread of its own)."""
+        for agent in (then, first):
+            if agent.name in self._ready_set:
+                try:
+                    self.ready.remove(agent)
+                except ValueError:
+                    pass
+            self._ready_set.add(agent.name)
+            self.ready.appendleft(agent)
+
+    def kill_agent(self, name: str) -> bool:
+        """Remove an agent (Jason's ``.kill_agent``): its intentions stop, later messages to it are
+        undeliverable."""
+        agent = self.agents.pop(name, None)
+        if agent is None:
+            return False
+        agent.stopped = True
+        agent.events.clear()
+        agent.running.clear()
+        agent.timers.clear()
+        agent.mailbox.clear()
+        self._timed.discard(agent)
+        return True
 
     def accepts_plans_from(self, sender: str) -> bool:
         return self.trusted_senders is None or sender in self.trusted_senders or sender in self.agents
@@ -210,8 +278,12 @@ class LocalRuntime:
                     agent.cycle()  # called on the agent (not a bound method kept aside): compiled, a C call
                     # that still honours a cycle() overridden in a Python subclass
                     if not (agent.events or agent.running or agent.mailbox or agent.feedback) \
-                            or self._stop_at is not None:
+                            or self._stop_at is not None or self._yield_turn:
+                        self._yield_turn = False
                         break
+                if self._yield_to is not None:
+                    self._run_next(self._yield_to, agent)
+                    self._yield_to = None
                 if agent.timers:
                     timed.add(agent)  # timers are only set by the agent itself, during its turn
                     if agent.timers[0][0] <= monotonic():

@@ -15,7 +15,7 @@ import operator
 from typing import TYPE_CHECKING, Iterator, Protocol
 
 from agentspeak.terms import (
-    _EXACT, INT_OPS, And, Arith, ArithmeticError_, Cons, Func, Literal, Not, Or, Rel, Term, Var, compare, deref,
+    _EXACT, INT_OPS, And, AnnotatedVar, Arith, ArithmeticError_, Cons, Func, Literal, Not, Or, Rel, Term, Var, compare, deref,
     is_list, list_items, make_list, resolve, to_str,
 )
 from agentspeak.copier import rule_copier
@@ -125,6 +125,17 @@ def solve(kb: KnowledgeBase, formula: Term, b: dict, trail: list | None = None) 
                 ok = goal
                 if ok:
                     continue
+            elif tg is AnnotatedVar:
+                # `X[a]` as a query: X's value with those annotations, or, X free, any belief with them
+                value = resolve(goal, b)
+                if type(value) is Literal:
+                    cont = _Cont(value, cont)
+                    continue
+                bb = getattr(kb, "bb", None)
+                facts = list(bb.literals()) if bb is not None else []
+                if facts:
+                    choices.append((1, goal, facts, 0, [], 0, cont, len(trail), None))
+                ok = False
             elif tg is str or tg is int or tg is float or tg is Cons:
                 raise SolveError("wrong_arguments", f"'{to_str(goal)}' is not a formula")
             else:

@@ -46,6 +46,61 @@ class Var:
         return Var(f"_{next(_fresh_ids)}{hint if hint != '_' else ''}")
 
 
+class AnnotatedVar(Var):
+    """A variable with annotations, ``X[a]`` or ``F[error(E)|T]``. As in Jason, it unifies with a literal
+    whose annotations include its own (binding the tail to the rest), and the variable is bound to that
+    literal without annotations (``agentspeak.unify``)."""
+
+    __slots__ = ("var", "annots", "annot_tail")
+
+    def __init__(self, var: Var, annots: tuple, tail: Var | None) -> None:
+        super().__init__(var.name)
+        self.var, self.annots, self.annot_tail = var, tuple(annots or ()), tail
+
+    def as_pattern(self, functor: str, args: tuple, neg: bool) -> "Literal":
+        """The literal ``functor(args)[annots|tail]`` (to match annotations with ``unify_annots``)."""
+        return Literal(functor, args, self.annots or None, neg, self.annot_tail)
+
+    def resolve(self, b):
+        value = resolve(self.var, b)
+        if type(value) is Literal:
+            annots = tuple(resolve(a, b) for a in self.annots)
+            tail = resolve(self.annot_tail, b) if self.annot_tail is not None else None
+            if type(tail) is Var:
+                return Literal(value.functor, value.args, (value.annots or ()) + annots, value.neg, tail)
+            if tail is not None:
+                annots += tuple(list_items_or_empty(tail))
+            return Literal(value.functor, value.args, (value.annots or ()) + annots or None, value.neg,
+                           value.annot_tail)
+        if type(value) is Var:
+            return AnnotatedVar(value, tuple(resolve(a, b) for a in self.annots),
+                                resolve(self.annot_tail, b) if self.annot_tail is not None else None)
+        return value
+
+    def without_annots(self) -> Var:
+        return self.var
+
+    def rename(self, mapping: dict) -> "AnnotatedVar":
+        return AnnotatedVar(rename(self.var, mapping), tuple(rename(a, mapping) for a in self.annots),
+                            rename(self.annot_tail, mapping) if self.annot_tail is not None else None)
+
+    def subterms(self) -> list:
+        return [self.var, *self.annots] + ([self.annot_tail] if self.annot_tail is not None else [])
+
+    def __eq__(self, other: object) -> bool:
+        return (type(other) is AnnotatedVar and other.var is self.var and other.annots == self.annots
+                and other.annot_tail is self.annot_tail)
+
+    def __hash__(self) -> int:
+        return hash((id(self.var), self.annots))
+
+    def __repr__(self) -> str:
+        inner = ",".join(to_str(a) for a in self.annots)
+        if self.annot_tail is not None:
+            inner += "|" + to_str(self.annot_tail)
+        return f"{self.var.name}[{inner}]"
+
+
 class Literal:
     """An atom, a structure or a predicate: ``~functor(args)[annots]``.
 
@@ -856,6 +911,9 @@ def _plain_atom(name: str) -> bool:
     c = name[0]
     if not (c.islower() or c == "."):
         return False
+    if "::" in name:  # a name space: `family::brother`
+        ns, _, rest = name.partition("::")
+        return _plain_atom(ns) and _plain_atom(rest)
     return all(ch.isalnum() or ch in "_." for ch in name)
 
 

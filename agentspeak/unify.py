@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import Iterator
 
 from agentspeak.terms import (
-    NIL, And, Arith, Bindings, Cons, Func, Literal, Not, Or, Rel, Term, Var, list_items, make_list,
+    NIL, And, AnnotatedVar, Arith, Bindings, Cons, Func, Literal, Not, Or, Rel, Term, Var, list_items, make_list,
 )
 
 
@@ -89,6 +89,10 @@ def _unify_general(a: Term, c: Term, b: Bindings, trail: list) -> bool:
             b[y] = x
             trail.append(y)
             continue
+        if tx is AnnotatedVar or ty is AnnotatedVar:
+            if not _unify_annotated_var(x, y, b, trail):
+                return False
+            continue
         if tx is Literal:
             if ty is not Literal:
                 return False
@@ -159,6 +163,34 @@ def _unify_general(a: Term, c: Term, b: Bindings, trail: list) -> bool:
     return True
 
 
+def _unify_annotated_var(x: Term, y: Term, b: Bindings, trail: list) -> bool:
+    """``X[a|T] = p(1)[a,b]`` as Jason: the left side's annotations are a subset of the right side's;
+    the variable is bound to the literal without annotations (``X = p(1)``, ``T = [b]``)."""
+    av = x if type(x) is AnnotatedVar else y
+    other = y if av is x else x
+    if type(other) is AnnotatedVar:  # two annotated variables: unify the variables and the annotations
+        return (unify(av.var, other.var, b, trail)
+                and unify(make_list(list(x.annots), x.annot_tail), make_list(list(y.annots), y.annot_tail), b, trail))
+    if type(other) is not Literal:
+        return False
+    pattern = av.as_pattern(other.functor, other.args, other.neg)
+    if av is x:
+        if not unify_annots(pattern, other, b, trail):
+            return False
+    elif not unify_annots(other, pattern, b, trail):
+        return False
+    value = av.var
+    while type(value) is Var:
+        bound = b.get(value)
+        if bound is None:
+            break
+        value = bound
+    if type(value) is Var:
+        bind(value, other.without_annots(), b, trail)
+        return True
+    return unify(value, other, b, trail) if av is x else unify(other, value, b, trail)
+
+
 def unify_annots(x: Literal, y: Literal, b: Bindings, trail: list) -> bool:
     """Every annotation of ``x`` must unify with some annotation of ``y`` (first match wins).
 
@@ -171,6 +203,9 @@ def unify_annots(x: Literal, y: Literal, b: Bindings, trail: list) -> bool:
         if tail_value is not None:
             yann.extend(_safe_items(tail_value, b))
     used = [False] * len(yann)
+    # an unbound tail on the right takes the left annotations it lacks (Jason: p[a,b] = X[H|T], T = [b])
+    open_tail = y.annot_tail if y.annot_tail is not None and b.get(y.annot_tail) is None else None
+    extra: list = []
     for ax in x.annots or ():
         for i, ay in enumerate(yann):
             if used[i]:
@@ -181,7 +216,14 @@ def unify_annots(x: Literal, y: Literal, b: Bindings, trail: list) -> bool:
                 break
             undo(b, trail, mark)
         else:
+            if open_tail is None:
+                return False
+            extra.append(ax)
+    if open_tail is not None and x.annot_tail is None:
+        if not unify(open_tail, make_list(extra), b, trail):
             return False
+    elif extra:
+        return False
     if x.annot_tail is not None:
         rest = make_list([a for a, u in zip(yann, used) if not u])
         return unify(x.annot_tail, rest, b, trail)

@@ -11,6 +11,7 @@ import sys
 import time
 
 BENCHMARKS: dict[str, str] = {
+    "startup": "benchmarks.bench_startup",     # whole process: --help, hello world, vs baselines (issue 23)
     "asl": "benchmarks.bench_asl",
     "zenoh": "benchmarks.bench_zenoh",
     "agents": "benchmarks.bench_agents_zenoh",
@@ -18,6 +19,8 @@ BENCHMARKS: dict[str, str] = {
     "sim": "benchmarks.bench_sim",
     "perception": "benchmarks.bench_perception",
     "observers": "benchmarks.bench_observers",
+    "perfbugs": "benchmarks.bench_perfbugs",
+    "inspect": "benchmarks.bench_inspect",
 }
 
 

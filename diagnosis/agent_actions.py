@@ -10,12 +10,16 @@
   minimum-cardinality diagnosis (PosAb), without enumerating every diagnosis.
 
 Both solve on a worker thread: only the calling intention waits; the agent's other intentions go on.
+The last calls of an agent, with their inputs and results, are kept on it as ``diagnosis_calls`` (the
+inspector's page shows them).
 """
 from __future__ import annotations
 
 import atexit
 import os
 import threading
+import time
+from collections import deque
 from importlib import resources
 
 from agentspeak.stdlib.registry import IAError, Suspend, internal_action, wrong_arguments
@@ -23,6 +27,7 @@ from agentspeak.terms import Literal, is_ground, list_items, make_list, to_str
 
 _lock = threading.Lock()
 _service = None
+KEPT_CALLS = 20
 
 
 def service():
@@ -89,7 +94,9 @@ def _options(term) -> dict:
 def diagnose(ctx, model, obs, result, options=None):
     """All minimal diagnoses of ``model`` given ``obs``, as a list of lists of component atoms."""
     path = model_path(ctx.agent, model)
-    future = service().submit(path, observations(obs), **_options(options))
+    seen = observations(obs)
+    future = service().submit(path, seen, **_options(options))
+    _record(ctx.agent, ".diagnose", path, seen, future, lambda res: [sorted(d) for d in res.diagnoses])
 
     def on_result(c, res) -> bool:
         return c.unify(result, make_list([make_list([Literal(x) for x in d]) for d in res.diagnoses]))
@@ -100,8 +107,30 @@ def diagnose(ctx, model, obs, result, options=None):
 def possibly_faulty(ctx, model, obs, result):
     """PosAb: the components faulty in some minimum-cardinality diagnosis."""
     path = model_path(ctx.agent, model)
-    future = service().submit_possibly_faulty(path, observations(obs))
+    seen = observations(obs)
+    future = service().submit_possibly_faulty(path, seen)
+    _record(ctx.agent, ".possibly_faulty", path, seen, future, list)
 
     def on_result(c, comps) -> bool:
         return c.unify(result, make_list([Literal(x) for x in comps]))
     return Suspend(future=future, on_result=on_result, reason="diagnosing")
+
+
+def _record(agent, action: str, path: str, seen: dict[str, bool], future, result_of) -> None:
+    """Keep this call on the agent (``agent.diagnosis_calls``, the last ``KEPT_CALLS``), its result
+    filled in when the solver answers."""
+    calls = getattr(agent, "diagnosis_calls", None)
+    if calls is None:
+        calls = agent.diagnosis_calls = deque(maxlen=KEPT_CALLS)
+    entry = {"t": time.time(), "action": action, "model": os.path.basename(path), "observations": dict(seen),
+             "state": "running", "result": None}
+    calls.append(entry)
+
+    def done(f) -> None:
+        try:
+            entry["result"] = result_of(f.result())
+            entry["state"] = "done"
+        except BaseException as exc:  # a failed or cancelled solve is shown with its reason
+            entry["result"] = str(exc) or type(exc).__name__
+            entry["state"] = "failed"
+    future.add_done_callback(done)

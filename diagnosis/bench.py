@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Mapping
 
 from agentspeak.errors import SourceError
+from agentspeak.source_text import read_source
 from diagnosis.builder import ModelBuilder
 from diagnosis.model import SystemModel
 
@@ -40,7 +41,7 @@ class Netlist:
 def parse_bench(path: str | Path, text: str | None = None) -> Netlist:
     """Read a .bench file; errors name file:line and what was expected."""
     path = str(path)
-    text = Path(path).read_text(encoding="utf-8") if text is None else text
+    text = read_source(path, "netlist") if text is None else text
     lines = text.splitlines()
     inputs: list[str] = []
     outputs: list[tuple[str, int]] = []

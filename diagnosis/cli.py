@@ -2,7 +2,8 @@
 
 MODEL is a ``.yaml`` system description (or architecture model) or a ``.bench`` netlist. OBS.json maps
 observation names to 0/1 (or false/true); for a netlist, signal names (primary inputs and outputs, or any
-other signal that was probed). Exit status: 0 answered, 2 bad model or observations.
+other signal that was probed). Exit status: 0 answered, 2 bad model or observations, 3 stopped by --timeout (before the search) or
+--max-memory.
 """
 from __future__ import annotations
 
@@ -10,6 +11,8 @@ import argparse
 import json
 import sys
 from pathlib import Path
+
+from diagnosis.limits import DEFAULT_MAX_MEMORY_MB, RunLimits
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -21,7 +24,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="largest diagnosis size to enumerate (default: no bound)")
     p.add_argument("--min-card-only", action="store_true", help="only the minimum-cardinality diagnoses")
     p.add_argument("--max-count", type=int, default=None, metavar="N", help="stop after N diagnoses")
-    p.add_argument("--timeout", type=float, default=None, metavar="S", help="wall-clock limit in seconds")
+    p.add_argument("--timeout", type=float, default=None, metavar="S",
+                   help="wall-clock limit in seconds for the whole run (reading, building, search); a search "
+                        "cut short reports what it found as INCOMPLETE, an earlier phase is an error (exit 3)")
+    p.add_argument("--max-memory", type=float, default=DEFAULT_MAX_MEMORY_MB, metavar="MIB",
+                   help=f"resident memory limit in MiB; beyond it the run stops with an error (exit 3) "
+                        f"(default {DEFAULT_MAX_MEMORY_MB})")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)
 
@@ -29,9 +37,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 def read_observations(path: str) -> dict[str, bool]:
     """OBS.json as name -> bool; a bad file raises SourceError naming it."""
     from agentspeak.errors import SourceError
+    from agentspeak.source_text import read_source
 
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        data = json.loads(read_source(path, "observations file"))
+    except RecursionError:  # json's C decoder guards its recursion: a file nested 100,000 deep
+        raise SourceError(f"nested too deeply (JSON arrays or objects inside each other beyond "
+                          f"{sys.getrecursionlimit()} levels)", file=path) from None
     except OSError as exc:
         raise SourceError(f"cannot read observations: {exc.strerror}", file=path) from None
     except json.JSONDecodeError as exc:
@@ -52,12 +64,21 @@ def run(args: argparse.Namespace) -> int:
     from diagnosis.engine import Diagnoser
     from diagnosis.loader import load_model
 
+    if args.timeout is not None and not args.timeout > 0 or not args.max_memory > 0:
+        print("faultmas diagnose: --timeout and --max-memory must be positive", file=sys.stderr)
+        return 2
     try:
-        model = load_model(args.model)
-        observations = read_observations(args.obs)
-        diagnoser = Diagnoser(model)
-        result = diagnoser.diagnose(observations, max_card=args.max_card, max_count=args.max_count,
-                                    timeout=args.timeout, min_card_only=args.min_card_only)
+        with RunLimits(args.timeout, args.max_memory) as limits:
+            limits.phase("reading the model")
+            model = load_model(args.model)
+            limits.phase("reading the observations")
+            observations = read_observations(args.obs)
+            limits.phase("building the solver")
+            diagnoser = Diagnoser(model)
+            limits.phase("searching for diagnoses")
+            result = diagnoser.diagnose(observations, max_card=args.max_card, max_count=args.max_count,
+                                        timeout=limits.left(), min_card_only=args.min_card_only)
+            limits.phase("printing the diagnoses")
     except SourceError as exc:
         print(f"faultmas diagnose: {exc}", file=sys.stderr)
         return 2

@@ -351,6 +351,13 @@ class Diagnoser:
             known = KnownDiagnoses()
             covered: set[frozenset[int]] = set()  # diagnoses spread along their chains
             for k in range(limit + 1):
+                if deadline.expired():  # each level grows the bound's encoding: check before it
+                    raise TimedOut
+                if k > 0 and hs.candidate(len(hs.members)) is None:
+                    # no set of any size hits every conflict without containing a diagnosis found:
+                    # no level above has anything (a 6,000-gate chain went on raising the bound to
+                    # thousands, 49 s and 3.3 GB, to find nothing)
+                    return
                 found: list[list[str]] = []
 
                 def record(diagnosis: list[int]) -> None:

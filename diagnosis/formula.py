@@ -10,10 +10,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 from typing import Callable, Union
 
+from agentspeak.lark_loader import lalr_parser  # first: it refuses lark-parser 0.12 with the fix
 from lark import Lark, Transformer, v_args
 from lark.exceptions import UnexpectedEOF, UnexpectedInput
+
+from agentspeak.nesting import MAX_NESTING, first_too_deep_bracket, nesting_depth, too_deep_message
 
 
 @dataclass(frozen=True)
@@ -105,11 +109,17 @@ _TOKEN_NAMES = {"LPAR": "'('", "RPAR": "')'", "NAME": "a name", "NOT": "'!'", "C
 
 @lru_cache(maxsize=1)
 def _parser() -> Lark:
-    return Lark.open_from_package("diagnosis", "formula.lark", parser="lalr", maybe_placeholders=False)
+    return lalr_parser(Path(__file__).with_name("formula.lark"), maybe_placeholders=False)
 
 
 def parse_formula(text: str) -> Formula:
-    """Parse one formula; raises FormulaSyntaxError with the column and what was expected."""
+    """Parse one formula; raises FormulaSyntaxError with the column and what was expected.
+
+    A formula nested deeper than ``MAX_NESTING`` (``!!!...a`` 20,000 times, say) is refused here: the
+    transformation, ``literals``, ``_nnf`` and ``to_cnf`` recurse once per level."""
+    too_deep = first_too_deep_bracket(text)
+    if too_deep is not None:
+        raise FormulaSyntaxError(too_deep_message(), too_deep + 1)
     try:
         tree = _parser().parse(text)
     except UnexpectedInput as exc:
@@ -121,12 +131,19 @@ def parse_formula(text: str) -> Formula:
         found = text[exc.pos_in_stream:exc.pos_in_stream + 2].strip() or text[exc.pos_in_stream:][:1]
         raise FormulaSyntaxError(f"unexpected {found!r}{what}", exc.column) from None
     try:
-        return _ToAst().transform(tree)
+        formula = _ToAst().transform(tree)
+    except RecursionError:  # a long chain of binary operators
+        raise FormulaSyntaxError(too_deep_message(), None) from None
     except Exception as exc:  # lark wraps transformer errors in VisitError
         inner = getattr(exc, "orig_exc", exc)
         if isinstance(inner, FormulaSyntaxError):
             raise inner from None
+        if isinstance(inner, RecursionError):
+            raise FormulaSyntaxError(too_deep_message(), None) from None
         raise
+    if nesting_depth(formula) > MAX_NESTING:
+        raise FormulaSyntaxError(too_deep_message(), None)
+    return formula
 
 
 def literals(formula: Formula) -> list[Literal]:

@@ -5,6 +5,7 @@ dicts so that the place of each scalar stays at hand.
 """
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import NoReturn
 
@@ -12,6 +13,7 @@ import yaml
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
 from agentspeak.errors import SourceError
+from agentspeak.source_text import read_source
 
 
 class YamlSource:
@@ -19,10 +21,13 @@ class YamlSource:
 
     def __init__(self, path: str | Path, text: str | None = None) -> None:
         self.path = str(path)
-        self.text = Path(path).read_text(encoding="utf-8") if text is None else text
+        self.text = read_source(path, "YAML file") if text is None else text
         self.lines = self.text.splitlines()
         try:
             self.root = yaml.compose(self.text, Loader=yaml.SafeLoader)
+        except RecursionError:  # PyYAML's composer recurses once per level: a list nested 20,000 deep
+            raise SourceError(f"nested too deeply (YAML lists or mappings inside each other beyond "
+                              f"{sys.getrecursionlimit() // 2} levels)", file=self.path) from None
         except yaml.MarkedYAMLError as exc:
             mark = exc.problem_mark
             line = mark.line + 1 if mark else None

@@ -27,7 +27,7 @@ settle_wait(600).           // ms after a turn before the helper looks (the base
 outcome([], none).
 outcome([left_encoder, right_encoder], encoders).
 outcome([left_motor, right_motor], both_actuators).
-outcome([left_wheel, right_wheel], both_actuators).    // stuck wheels: the motors push, nothing turns
+outcome([left_wheel, right_wheel], stuck_wheels).      // the motors push (over-current), nothing turns
 outcome([left_motor], left_actuator).
 outcome([right_motor], right_actuator).
 
@@ -125,12 +125,17 @@ aspect_turn(A, AA, T) :- (AA < 65 | AA > 115) & A < 0 & T = -90 - A.
 // ---- asking for help: the first helper that accepts (the others are released) --------------------
 +!broadcastHelp(Ds) <- !askForHelp(Ds, 1).
 
+// the help request says where I am (the team's shared frame), so that a helper far away comes near
+where_i_am(at(X, Y)) :- team_pose(X, Y, _).
+where_i_am(unknown) :- not team_pose(_, _, _).    // no start_pose: the helper looks from where it is
+
 +!askForHelp(Ds, Round)
    <- .my_name(Me);
+      ?where_i_am(At);
       .print("I cannot tell alone: asking for help");
       .progress(help_requested);
       .abolish(canHelp);
-      .broadcast(achieve, helpMe(Me));
+      .broadcast(achieve, helpMe(Me, At));
       !awaitHelper(Ds, Round).
 
 +!awaitHelper(Ds, _) : canHelp[source(H)] & not tried(H) <- !withHelper(H, Ds).

@@ -1,6 +1,7 @@
 // Cooperative fault diagnosis: the side of a robot that helps another one find out what is wrong.
 //
-// helpMe -> canHelp (the first to answer is chosen; see faulty.asl) -> findRobot: turn in steps until
+// helpMe(F, at(X, Y)) -> canHelp (the first to answer is chosen; see faulty.asl) -> findRobot: go near
+// where F said it is (the team's shared frame, see team_pose), then turn in steps until
 // the robot's two cylinders are seen, then centre them; after a full turn without them, step back and
 // look again from there (it may be too close for the depth camera); once found, keep a distance the
 // camera measures well -> trackMe: where it is now -> giveMeFeedback: where it is after its test
@@ -16,6 +17,7 @@ search_step(40).         // degrees per look: the camera sees 57 degrees, so vie
 look_wait(300).          // ms for fresh camera frames after a turn
 centre_tolerance(4).     // degrees off the image centre that count as centred
 centre_tries(4).
+approach_stop(1.6).      // metres short of where the robot asking for help says it is
 step_away(0.7).          // metres to step aside before a second search (see lookFromElsewhere)
 near_limit(1.0, 1.4).    // metres: a robot found closer than the first may drive out of the depth
                          // range during its test motion: I back off to the second
@@ -24,11 +26,11 @@ far_limit(3.2, 2.6).     // metres: farther than the first, its cylinders are sm
 available :- not helping(_) & not on_mission & not diagnosing & not self_suspect.
 
 // ---- being asked ------------------------------------------------------------------------------
-+!helpMe(F)[source(F)] : available & odom(_, _, Yaw)
-   <- +helping(F); -+home_yaw(Yaw);
++!helpMe(F, At)[source(F)] : available & odom(_, _, Yaw)
+   <- +helping(F); -+home_yaw(Yaw); -+help_at(F, At);
       .print(F, " needs help: I offer mine");
       .send(F, tell, canHelp).
-+!helpMe(F)[source(F)] <- .print(F, " needs help, but I am busy").
++!helpMe(F, _)[source(F)] <- .print(F, " needs help, but I am busy").
 
 +noThanks[source(F)] : helping(F) <- .print(F, " found another helper"); !release(F).
 +thanks[source(F)] : helping(F) <- .print("glad I could help ", F); !release(F).
@@ -45,6 +47,7 @@ available :- not helping(_) & not on_mission & not diagnosing & not self_suspect
       .abolish(noThanks[source(F)]);
       .abolish(thanks[source(F)]);
       .abolish(stepped(F));
+      .abolish(help_at(F, _));
       !returnToTask.
 
 +!returnToTask : home_yaw(H) & odom(_, _, Y) & norm(H - Y, T)
@@ -58,6 +61,7 @@ available :- not helping(_) & not on_mission & not diagnosing & not self_suspect
 +?findRobot(F, Result) : helping(F)
    <- .print("looking for ", F);
       .progress(searching, F);
+      !goNear(F, 2);
       !search(F, 0);
       !lookFromElsewhere(F);
       !keepDistance(F);
@@ -78,6 +82,27 @@ available :- not helping(_) & not on_mission & not diagnosing & not self_suspect
       .wait(W);
       !centre(F, N + 1).
 +!centre(F, _).          // lost it again, or close enough after the tries
+
+// Go to where F said it is, stopping approach_stop metres short and facing it, so that its cylinders are
+// in view at a depth the camera measures well. Someone in the way (the move fails): step aside and try
+// again, at most Tries times; then the search starts from wherever I am.
++!goNear(F, _) : help_at(F, at(X, Y)) & team_pose(MX, MY, _) & approach_stop(S) &
+                 (X - MX) * (X - MX) + (Y - MY) * (Y - MY) <= (S + 0.5) * (S + 0.5).    // near enough
++!goNear(F, Tries) : help_at(F, at(X, Y)) & team_pose(MX, MY, MYaw) & approach_stop(S) & look_wait(W) &
+                     direction(X - MX, Y - MY, A) & norm(A - MYaw, T)
+   <- .print(F, " says it is at (", X, ", ", Y, "): I go near it");
+      turn(T);
+      !approachTo(F, S, Tries);
+      .wait(W).
++!goNear(F, _).          // it did not say where it is (or I do not know where I am): look from here
+
++!approachTo(F, S, _) : help_at(F, at(X, Y)) & team_pose(MX, MY, MYaw) & direction(X - MX, Y - MY, A) &
+                        norm(A - MYaw, T)
+   <- turn(T);           // my first turn may have drifted
+      move(math.sqrt((X - MX) * (X - MX) + (Y - MY) * (Y - MY)) - S).
+-!approachTo(F, S, Tries) : Tries > 0 <- !sidestep(90, 0.6); !goNear(F, Tries - 1).
+-!approachTo(F, S, _).
+-!goNear(F, _).          // a side step failed too: look from here
 
 // Where to step when a full turn showed nothing: sideways, across my line of sight. The usual reason
 // for a blind turn is a robot seen end-on (its two cylinders hide each other), often after a glimpse

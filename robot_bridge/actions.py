@@ -18,7 +18,8 @@ action                      meaning and completion
 ``stop``                    decelerate to a standstill; succeeds when odometry shows the robot still
 ``reset_odometry``          set the believed pose back to (0, 0, 0); succeeds at once
 ``set_fault(K)``            inject fault ``K`` (``none``, ``encoders``, ``both_actuators``, ``left_actuator``,
-``set_fault(K, Fraction)``  ``right_actuator``, ``stuck_wheels``; see ``robot_bridge.sim.faults``) for tests
+``set_fault(K, Fraction)``  ``right_actuator``, ``stuck_wheels``, ``imu_stuck``, ``imu_over``,
+                            ``imu_zero_after_rotating``; see ``robot_bridge.sim.faults``) for tests
                             and experiments; succeeds at once; real robots answer ``unsupported``
 =========================== ============================================================================
 
@@ -45,7 +46,8 @@ REASONS: dict[str, str] = {
 """Every failure reason a bridge may give, with its meaning."""
 
 FAULT_KINDS: tuple[str, ...] = (  # what each does: robot_bridge.sim.faults
-    "none", "encoders", "both_actuators", "left_actuator", "right_actuator", "stuck_wheels")
+    "none", "encoders", "both_actuators", "left_actuator", "right_actuator", "stuck_wheels",
+    "imu_stuck", "imu_over", "imu_zero_after_rotating")
 
 
 @dataclass(frozen=True)

@@ -63,7 +63,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     sim.set_defaults(func=lambda args: (sim.print_help(), 2)[1])
 
     run = sim_sub.add_parser("run", help="drive a robot through a script of actions, with a fault",
-                             description=__doc__.splitlines()[0])
+                             description="Drive the first robot through a script of actions on the embedded "
+                                         "simulator, with a fault injected, and show what its sensors reported.")
     run.add_argument("--script", default="move(1.0); turn(90); move(0.5)",
                      help="actions for the first robot, separated by ';' (default: %(default)s)")
     run.add_argument("--robots", default="faulty,helper",
@@ -71,7 +72,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--fault", default="none",
                      help="fault of the first robot: none, encoders, both_actuators, left_actuator[:FRACTION], "
                           "right_actuator[:FRACTION], stuck_wheels (default: %(default)s)")
-    run.add_argument("--seed", type=int, default=0)
+    run.add_argument("--seed", type=int, default=0, help="seed of the simulator's noise (default %(default)s)")
     run.add_argument("--csv", metavar="PATH", help="write every robot's trajectory (truth and odometry) as CSV")
     run.add_argument("--plot", metavar="PATH", help="plot the trajectories to an image (e.g. run.png)")
     run.set_defaults(func=run_script)

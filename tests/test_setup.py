@@ -25,7 +25,7 @@ BUILT = (REPO / "agentspeak" / _speedups.MANIFEST).exists() and (BUILD / "cython
 def _copy_of_the_tree(tmp_path: Path) -> Path:
     copy = tmp_path / "tree"
     skip = shutil.ignore_patterns("__pycache__")
-    for name in ("setup.py", "pyproject.toml", "README.md", "robot_bridge/__init__.py"):
+    for name in ("setup.py", "pyproject.toml", "README.md", "LICENSE", "robot_bridge/__init__.py"):
         (copy / name).parent.mkdir(parents=True, exist_ok=True)
         shutil.copy2(REPO / name, copy / name)
     for name in ("agentspeak", "robot_bridge/sim", "build/cython", *(str(p.relative_to(REPO)) for p in BUILD.glob("lib.*"))):

@@ -18,6 +18,7 @@ from typing import Any, Callable, Iterable, Iterator
 
 from agents.transport.envelope import (BATCH_BYTES, BATCH_SEPARATOR, DEFAULT_MAX_SIZE, QUESTIONS, BadMessage,
                                        Envelope, decode, split_batch)
+from agents.transport.drop_log import DropLog
 from agents.transport.keys import check_name
 from agents.transport.outbox import Outbox
 from agents.transport.status import AgentStatus
@@ -154,6 +155,7 @@ class Transport(ABC):
         self.mas = check_name(mas, "MAS name")
         self.max_message_size = max_message_size
         self.dropped: Counter[str] = Counter()
+        self._drop_log = DropLog(log)
         self.sent: Counter[str] = Counter()       # by sender
         self.received: Counter[str] = Counter()   # by receiver
         self._counters = threading.Lock()
@@ -180,6 +182,7 @@ class Transport(ABC):
                 self.unregister(agent)
             self._close()
             self._opened = False
+            self._drop_log.flush()
 
     def __enter__(self) -> "Transport":
         return self.open()
@@ -335,8 +338,7 @@ class Transport(ABC):
     def _drop(self, reason: str, where: str, sender: str | None, detail: str = "") -> None:
         with self._counters:
             self.dropped[reason] += 1
-        log.warning("dropped message on %s from %s: %s%s", where, sender or "unknown sender", reason,
-                    f" ({detail})" if detail else "")
+        self._drop_log.drop(reason, where, sender, detail)  # rate-limited per reason, summed up, never silent
 
     # -- presence --------------------------------------------------------------------------------
     def on_presence(self, callback: OnPresence) -> None:

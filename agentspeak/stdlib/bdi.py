@@ -44,9 +44,10 @@ def _matching(agent, goal: Literal):
 def succeed_goal(ctx, goal):
     """Finish goal ``goal`` as if its plan had succeeded (the caller goes on after its ``!goal``)."""
     agent = ctx.agent
-    _drop_events(agent, goal)
+    _drop_events(agent, goal, "achieved")
     for intention, idx in list(_matching(agent, goal)):
         del intention.stack[idx + 1:]
+        intention.waiting = None  # a wait in progress is abandoned
         im = intention.stack[idx]
         im.frames[:] = [im.frames[0]]
         im.frames[0].pc = len(im.frames[0].body)
@@ -64,6 +65,7 @@ def fail_goal(ctx, goal):
     agent = ctx.agent
     current = ctx.intention
     affected_current = False
+    _fail_pending_events(agent, goal)
     for intention, idx in list(_matching(agent, goal)):
         del intention.stack[idx + 1:]
         if intention is current:
@@ -74,6 +76,26 @@ def fail_goal(ctx, goal):
     if affected_current:
         raise IAError("ia_failed", f".fail_goal({goal})")
     return True
+
+
+def _fail_pending_events(agent, goal: Literal) -> None:
+    """A goal still waiting as an event fails there: its -!g (when a plan is relevant) becomes the
+    event instead (Jason's generateGoalDeletionFromEvent)."""
+    from agentspeak.intentions import Event
+    from agentspeak.program import DEL, Trigger
+    for ev in list(agent.events):
+        t = ev.trigger
+        if ev.intention is None and t.op == ADD and t.kind == ACHIEVE and unifies(goal, t.literal, {}):
+            agent.events.remove(ev)
+            if agent.plans.has_meta:
+                agent.goal_state(t, "failed", Literal("ia_failed"))
+            failed = Trigger(DEL, ACHIEVE, t.literal)
+            if agent.plans.relevant(failed):
+                annots = agent._failure_annots("ia_failed", f".fail_goal({goal})")
+                lit = t.literal
+                for a in annots:
+                    lit = lit.add_annot(a)
+                agent.events.append(Event(Trigger(DEL, ACHIEVE, lit)))
 
 
 @internal_action(".drop_intention", args=(0, 1))
@@ -91,17 +113,31 @@ def drop_intention(ctx, goal=None):
     return Suspend(reason="dropped") if current_dropped else True
 
 
-def _drop_events(agent, goal: Literal) -> None:
+def _drop_events(agent, goal: Literal, state: str = "dropped") -> None:
+    """Remove the pending +!goal events (also those .suspend set aside); with meta-event plans, each
+    dropped goal reports ``state`` then ``finished`` (Jason's goalFinished)."""
     keep = []
+    gone = []
     for ev in agent.events:
         t = ev.trigger
         if t.op == ADD and t.kind == ACHIEVE and unifies(goal, t.literal, {}):
+            gone.append(t)
             if ev.intention is not None:
                 agent.drop_intention(ev.intention)
             continue
         keep.append(ev)
     agent.events.clear()
     agent.events.extend(keep)
+    held = agent.__dict__.get("suspended_events")
+    if held:
+        for ev in list(held):
+            if unifies(goal, ev.trigger.literal, {}):
+                held.remove(ev)
+                gone.append(ev.trigger)
+    if agent.plans.has_meta:
+        for t in gone:
+            agent.goal_state(t, state)
+            agent.goal_state(t, "finished")
 
 
 def drop_desire(agent, goal: Literal, current=None) -> bool:
@@ -127,13 +163,21 @@ def drop_all_desires(ctx):
     for i in agent.intentions():
         if i is not ctx.intention:
             agent.drop_intention(i)
-    agent.drop_intention(ctx.intention)
-    return Suspend(reason="dropped")
+    # the calling intention goes on (Jason: drop_all_desires removes the other desires)
+    return True
 
 
 @internal_action(".drop_all_intentions", args=0)
 def drop_all_intentions(ctx):
-    return drop_all_desires(ctx)
+    """Drop every intention (the calling one too) but keep the pending events (Jason 3)."""
+    agent = ctx.agent
+    for i in agent.intentions():
+        if i is not ctx.intention:
+            agent.drop_intention(i)
+    if ctx.intention is not None:
+        agent.drop_intention(ctx.intention)
+        return Suspend(reason="dropped")
+    return True
 
 
 @internal_action(".drop_all_events", args=0)
@@ -141,12 +185,25 @@ def drop_all_events(ctx):
     ctx.agent.events.clear()
 
 
+def _failing(agent, intention: Intention) -> set:
+    """The intended means whose goal is being failed (a -!g event or plan handles it): no longer a
+    desire (Jason pops them with the failure)."""
+    out = {id(im.handles) for im in intention.stack if im.handles is not None}
+    for ev in agent.events:
+        if ev.intention is intention and ev.handles is not None:
+            out.add(id(ev.handles))
+    return out
+
+
 @internal_action(".intend", args=(1, 2))
 def intend(ctx, goal, ident=None):
     """Is ``goal`` currently intended? Backtracks over intentions."""
     for intention in ctx.agent.intentions() + ([ctx.intention] if ctx.intention and ctx.intention.dropped is False and ctx.intention not in ctx.agent.intentions() else []):
+        failing = _failing(ctx.agent, intention)
         for i in _goal_ims(intention, goal):
             im = intention.stack[i]
+            if id(im) in failing:
+                continue
             mark = len(ctx.trail)
             if ctx.unify(goal, resolve(im.plan.trigger.literal, im.b)) and (ident is None or ctx.unify(ident, intention.id)):
                 yield
@@ -155,8 +212,8 @@ def intend(ctx, goal, ident=None):
 
 @internal_action(".desire", args=(1, 2))
 def desire(ctx, goal, ident=None):
-    """Is ``goal`` a desire (a pending goal event or an intention)?"""
-    for ev in list(ctx.agent.events):
+    """Is ``goal`` a desire (a pending goal event, one set aside by .suspend, or an intention)?"""
+    for ev in list(ctx.agent.events) + list(ctx.agent.__dict__.get("suspended_events", ())):
         t = ev.trigger
         if t.op == ADD and t.kind == ACHIEVE:
             mark = len(ctx.trail)
@@ -173,6 +230,13 @@ def suspend(ctx, goal=None):
     if goal is None:
         return Suspend(reason="suspended")
     current = False
+    # a goal not yet intended (its event is pending) is set aside until .resume (Jason's PE)
+    held = agent.__dict__.setdefault("suspended_events", [])
+    for ev in list(agent.events):
+        t = ev.trigger
+        if ev.intention is None and t.op == ADD and t.kind == ACHIEVE and unifies(goal, t.literal, {}):
+            agent.events.remove(ev)
+            held.append(ev)
     for intention, _ in list(_matching(agent, goal)):
         if intention is ctx.intention:
             current = True
@@ -182,33 +246,69 @@ def suspend(ctx, goal=None):
         except ValueError:
             pass
         agent._suspend(intention, "suspended")
-        intention.waiting = Suspend(reason="suspended")
+        before = intention.waiting
+        held = Suspend(reason="suspended", term=getattr(before, "term", None))
+        held.inner = before  # a wait in progress: it completes only once resumed
+        intention.waiting = held
+    if agent.plans.has_meta:
+        from agentspeak.program import Trigger
+        agent.goal_state(Trigger(ADD, ACHIEVE, goal), "suspended")
     return Suspend(reason="suspended") if current else True
 
 
 @internal_action(".resume", args=1)
 def resume(ctx, goal):
-    """Resume intentions suspended by ``.suspend`` that pursue ``goal``."""
+    """Resume intentions suspended by ``.suspend`` that pursue ``goal``. One that was waiting (``.wait``,
+    an action) goes on waiting; the resumed intention runs after the resuming one's next step (it is
+    queued at the next cycle, as Jason puts it back at the end of the intentions)."""
     agent = ctx.agent
+    resumed = False
+    pending = agent.__dict__.get("suspended_events")
+    for ev in list(pending or ()):
+        if unifies(goal, ev.trigger.literal, {}):
+            pending.remove(ev)
+            agent.post_feedback(lambda e=ev: agent.events.append(e))
+            resumed = True
     for intention, _ in list(_matching(agent, goal)):
         if intention.suspended == "suspended":
-            susp = intention.waiting
-            finish = getattr(susp, "finish", None)
-            if finish is not None:
-                finish(True)
-            else:
-                intention.waiting = None
-                agent._requeue(intention)
+            held = intention.waiting
+            agent.post_feedback(lambda i=intention, h=held: _resume(agent, i, h))
+            resumed = True
+    if resumed and agent.plans.has_meta:
+        from agentspeak.program import Trigger
+        agent.goal_state(Trigger(ADD, ACHIEVE, goal), "resumed")
+
+
+def _resume(agent, intention, held) -> None:
+    if intention.dropped or intention.waiting is not held:
+        return
+    complete = getattr(held, "complete", None)
+    inner = getattr(held, "inner", None)
+    if complete is not None:       # the wait ended meanwhile: go on after it
+        complete()
+    elif inner is not None:        # still waiting: the wait goes on
+        intention.waiting = inner
+        intention.suspended = inner.reason
+    else:
+        finish = getattr(held, "finish", None)
+        if finish is not None:
+            finish(True)
+        else:
+            intention.waiting = None
+            agent._requeue(intention)
 
 
 @internal_action(".suspended", args=2)
 def suspended(ctx, goal, reason):
+    """``.suspended(G, R)``: G is the goal of a suspended intention and R why (``wait(W)[time(T)]`` for a
+    ``.wait``, ``suspended`` for ``.suspend``, else the kind of wait)."""
     for intention in ctx.agent.intentions():
         if intention.suspended:
             for i in _goal_ims(intention, goal):
+                term = getattr(intention.waiting, "term", None)
                 mark = len(ctx.trail)
-                if ctx.unify(reason, Literal(intention.suspended)):
+                if ctx.unify(goal, resolve(intention.stack[i].plan.trigger.literal, intention.stack[i].b)) and \
+                        ctx.unify(reason, term if term is not None else Literal(intention.suspended)):
                     yield
+                    return
                 undo(ctx.b, ctx.trail, mark)
-
-

@@ -41,10 +41,15 @@ def count(ctx, query, result):
 def abolish(ctx, pattern):
     """Remove every belief that unifies with ``pattern`` (posting -b events)."""
     agent = ctx.agent
-    if not isinstance(pattern, Literal):
-        raise wrong_arguments(".abolish needs a literal")
+    from agentspeak.terms import AnnotatedVar
     from agentspeak.unify import unifies
-    for fact in list(agent.bb.candidates(pattern, {})):
+    if isinstance(pattern, AnnotatedVar):  # `_[source(a)]`: any belief with these annotations
+        facts = list(agent.bb.literals())
+    elif isinstance(pattern, Literal):
+        facts = list(agent.bb.candidates(pattern, {}))
+    else:
+        raise wrong_arguments(".abolish needs a literal")
+    for fact in facts:
         if unifies(pattern, fact, {}):
             removed = agent.bb.remove(fact)
             if removed is not None:

@@ -74,7 +74,8 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
     def on_timeout(c) -> bool:
         for fut in futures:
             fut.cancel()
-        return c.unify(answer, Literal("timeout"))
+        c.unify(answer, Literal("timeout"))  # Jason goes on even when the answer pattern does not match
+        return True
 
     seconds = None
     if timeout is not None:
@@ -128,7 +129,8 @@ def _answer_value(perf: str, reply: Message, question):
 
 def _with_source(t, sender):
     if isinstance(t, Literal):
-        return t.add_annot(Literal("source", (sender,)))
+        from agentspeak.communication import nested_source
+        return nested_source(t, sender)
     return t
 
 

@@ -36,7 +36,13 @@ def printf(ctx, fmt, *args) -> None:
 
 @internal_action(".log", args=(1, None))
 def log_(ctx, level, *args) -> None:
-    """``.log(severe|warning|info|fine, args...)`` to the agent's logger (stderr)."""
-    levels = {"severe": logging.ERROR, "warning": logging.WARNING, "info": logging.INFO, "fine": logging.DEBUG}
+    """``.log(severe|warning|info|fine|..., args...)``: as Jason's console shows it by default, ``info``
+    and above are printed as a line of the agent (like ``.print``); finer levels go to the logger."""
+    levels = {"severe": logging.ERROR, "warning": logging.WARNING, "info": logging.INFO, "config": logging.INFO,
+              "fine": logging.DEBUG, "finer": logging.DEBUG, "finest": logging.DEBUG}
     name = getattr(level, "functor", str(level))
-    log.log(levels.get(name, logging.INFO), "[%s] %s", ctx.agent.name, "".join(to_print_str(a) for a in args))
+    text = "".join(to_print_str(a) for a in args)
+    if levels.get(name, logging.INFO) >= logging.INFO and name != "config":
+        ctx.agent.arch.print_line(ctx.agent, text)
+    else:
+        log.log(levels.get(name, logging.INFO), "[%s] %s", ctx.agent.name, text)

@@ -58,28 +58,47 @@ def remove_plan(ctx, labels, source=None):
         if isinstance(label, str):
             label = Literal(label[1:] if label.startswith("@") else label)
         if isinstance(label, Literal):
-            ctx.agent.plans.remove(label)
+            ctx.agent.plans.remove(label, source)
 
 
 @internal_action(".relevant_plans", args=(2, 3))
 def relevant_plans(ctx, trigger_term, result, labels=None):
-    """The plans relevant for a trigger ``{+!g}``, as plan terms (and their labels)."""
+    """The plans relevant for a trigger ``{+!g}``, as plan terms with fresh variables (Jason returns
+    copies: a copy bound into the running plan must not share its variables), and their labels."""
     trigger = trigger_term.as_trigger() if isinstance(trigger_term, PlanTerm) else None
     if trigger is None:
         raise wrong_arguments(".relevant_plans needs a trigger term such as {+!g}")
     from agentspeak.unify import unifies
-    found = [p for p in ctx.agent.plans.relevant(trigger) if unifies(p.trigger.literal, trigger.literal, {})]
-    ok = ctx.unify(result, make_list([PlanTerm(plan=p) for p in found]))
+    found = [p for p in ctx.agent.plans.relevant(trigger)
+             if p.trigger.op == trigger.op and p.trigger.kind == trigger.kind
+             and unifies(p.trigger.literal, trigger.literal, {})]
+    ok = ctx.unify(result, make_list([PlanTerm(plan=p).rename({}) for p in found]))
     if ok and labels is not None:
-        ok = ctx.unify(labels, make_list([p.label for p in found]))
+        ok = ctx.unify(labels, make_list([p.ensure_label() for p in found]))
     return ok
 
 
 @internal_action(".plan_label", args=2)
 def plan_label(ctx, plan, label):
-    name = label.functor if isinstance(label, Literal) else None
-    p = ctx.agent.plans.by_label(name) if name else None
-    return p is not None and ctx.unify(plan, PlanTerm(plan=p))
+    """``.plan_label(P, L)``: the plan (as a term) of label L, or the label of plan term P, or, both
+    free, backtracks over every plan (Jason's three modes)."""
+    from agentspeak.terms import Var
+    from agentspeak.unify import undo
+    if isinstance(plan, Var) and not isinstance(label, Var):
+        name = label.functor if isinstance(label, Literal) else to_str(label)
+        p = ctx.agent.plans.by_label(name)
+        return p is not None and ctx.unify(plan, PlanTerm(plan=p).rename({}))
+    if isinstance(label, Var) and isinstance(plan, PlanTerm) and plan.plan is not None:
+        return plan.plan.label is not None and ctx.unify(label, plan.plan.label)
+    return _all_plan_labels(ctx, plan, label, undo)
+
+
+def _all_plan_labels(ctx, plan, label, undo):
+    for p in list(ctx.agent.plans):
+        mark = len(ctx.trail)
+        if ctx.unify(label, p.ensure_label()) and ctx.unify(plan, PlanTerm(plan=p).rename({})):
+            yield
+        undo(ctx.b, ctx.trail, mark)
 
 
 @internal_action(".list_plans", args=(0, 1))

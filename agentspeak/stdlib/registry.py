@@ -66,6 +66,8 @@ class Suspend:
     event: Any = None
     reason: str = "suspended"
     on_event: Callable[[Any, Any], bool] | None = None
+    term: Any = None
+    """Why, as a term (``.suspended(G, R)`` gives it; Jason's ``wait(W)[time(T)]`` for ``.wait``)."""
 
 
 @dataclass(frozen=True)
@@ -127,6 +129,22 @@ class Registry:
 
 
 STDLIB = Registry()
+
+_program_reader: Callable[[str, str], Any] | None = None
+
+
+def set_program_reader(reader: Callable[[str, str], Any]) -> None:
+    """``agentspeak.parser`` gives ``parse_program`` here when imported, so that ``.include`` can read a file
+    without the standard library importing the parser (which imports the standard library: a cycle)."""
+    global _program_reader
+    _program_reader = reader
+
+
+def read_program(text: str, file: str) -> Any:
+    """Parse AgentSpeak text with the parser registered by ``agentspeak.parser``."""
+    if _program_reader is None:
+        raise IAError("no AgentSpeak parser loaded (import agentspeak.parser)")
+    return _program_reader(text, file)
 internal_action = STDLIB.internal_action
 
 

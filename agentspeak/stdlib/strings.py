@@ -1,7 +1,7 @@
 """String and term actions: term2string, string, substring, lower/upper case, replace, type tests."""
 from __future__ import annotations
 
-from agentspeak.stdlib.registry import internal_action, wrong_arguments
+from agentspeak.stdlib.registry import IAError, internal_action, wrong_arguments
 from agentspeak.terms import Literal, Var, is_ground, is_list, to_print_str, to_str
 from agentspeak.unify import undo
 
@@ -47,21 +47,35 @@ def ground(ctx, x):
     return is_ground(x)
 
 
-@internal_action(".substring", args=(2, 3))
-def substring(ctx, sub, text, pos=None):
-    """Is ``sub`` in ``text``? With a third argument, backtracks over the positions."""
+@internal_action(".substring", args=(2, 4))
+def substring(ctx, sub, text, pos=None, end=None):
+    """Is ``sub`` in ``text``? With a third argument, backtracks over the positions (and a fourth, the
+    position of the last character). ``.substring(R, Text, Start[, End])`` with R unbound gives the
+    substring from Start (Jason 3's forms, including its reversed-argument compatibility form)."""
     s = sub if isinstance(sub, str) else to_str(sub)
     t = text if isinstance(text, str) else to_str(text)
     if pos is None:  # not a generator here: a function with ``yield`` would always fail
         return s in t
-    return _positions(ctx, s, t, pos)
+    if isinstance(pos, int) and isinstance(sub, Var):
+        stop = end if isinstance(end, int) else len(t)
+        return _slice(ctx, sub, t, pos, stop)
+    if isinstance(pos, int) and isinstance(text, Var):
+        stop = end if isinstance(end, int) else len(s)
+        return _slice(ctx, text, s, pos, stop)
+    return _positions(ctx, s, t, pos, end)
 
 
-def _positions(ctx, s: str, t: str, pos):
+def _slice(ctx, var, t: str, start: int, stop: int) -> bool:
+    if not (0 <= start <= stop <= len(t)):
+        raise IAError("wrong_arguments", f".substring: positions {start}..{stop} outside \"{t}\"")
+    return ctx.unify(var, t[start:stop])
+
+
+def _positions(ctx, s: str, t: str, pos, end=None):
     start = t.find(s)
     while start >= 0:
         mark = len(ctx.trail)
-        if ctx.unify(pos, start):
+        if ctx.unify(pos, start) and (end is None or ctx.unify(end, start - 1 + len(s))):
             yield
         undo(ctx.b, ctx.trail, mark)
         start = t.find(s, start + 1)

@@ -28,27 +28,87 @@ def nano_time(ctx, t):
     return ctx.unify(t, time.perf_counter_ns())
 
 
+class JavaRandom(_random.Random):
+    """``java.util.Random``'s generator (a 48-bit linear congruential one), so that a seeded program
+    (``.set_random_seed(20)``) draws the numbers it draws under Jason."""
+
+    _MULT, _MASK = 0x5DEECE66D, (1 << 48) - 1
+
+    def seed(self, a=None, version=2) -> None:  # noqa: D102 - random.Random's signature
+        if a is None:
+            a = time.time_ns()
+        self._seed = (int(a) ^ self._MULT) & self._MASK
+
+    def _next(self, bits: int) -> int:
+        self._seed = (self._seed * self._MULT + 0xB) & self._MASK
+        r = self._seed >> (48 - bits)
+        return r - (1 << 32) if r >= 1 << 31 else r  # Java's (int) cast
+
+    def random(self) -> float:
+        return ((self._next(26) << 27) + self._next(27)) * (1.0 / (1 << 53))
+
+    def getrandbits(self, k: int) -> int:
+        out, got = 0, 0
+        while got < k:
+            out |= (self._next(32) & 0xFFFFFFFF) << got
+            got += 32
+        return out & ((1 << k) - 1)
+
+    def next_int(self, bound: int) -> int:
+        """Java's ``nextInt(bound)``."""
+        if bound & -bound == bound:
+            return (bound * self._next(31)) >> 31
+        while True:
+            bits = self._next(31)
+            val = bits % bound
+            if bits - val + (bound - 1) < (1 << 31):
+                return val
+
+    def choice(self, seq):
+        return seq[self.next_int(len(seq))]
+
+    def getstate(self):
+        return self._seed
+
+    def setstate(self, state) -> None:
+        self._seed = state
+
+
 def _rng(agent) -> _random.Random:
     rng = getattr(agent, "_rng", None)
     if rng is None:
-        rng = agent._rng = _random.Random()
+        rng = agent._rng = JavaRandom()
     return rng
 
 
-@internal_action(".random", args=(1, 2))
-def random(ctx, x, n=None):
-    """A random number in [0, 1); with a count N, backtracks over N values."""
+@internal_action(".random", args=(1, 3))
+def random(ctx, x, n=None, m=None):
+    """``.random(X)``: a number in [0, 1); ``.random(X, N)``: backtracks over N such numbers (0: no end);
+    ``.random(List, X[, N])``: a random element of List (N of them; 0: no end). As Jason 3."""
+    from agentspeak.terms import Cons, NIL, list_items
     rng = _rng(ctx.agent)
     if n is None:  # not a generator here: a function with ``yield`` would never bind X
         return ctx.unify(x, rng.random())
-    return _random_values(ctx, rng, x, n)
+    if isinstance(x, Cons) or x is NIL:
+        items = list_items(x)
+        if not items:
+            return False
+        count = 1 if m is None else m
+        if not isinstance(count, (int, float)):
+            raise wrong_arguments(".random(List, X, N): N is a number")
+        return _random_values(ctx, lambda: rng.choice(items), n, int(count))
+    if not isinstance(n, (int, float)):
+        raise wrong_arguments(".random(X, N): N is a number (or write .random(List, X))")
+    return _random_values(ctx, rng.random, x, int(n))
 
 
-def _random_values(ctx, rng, x, n):
+def _random_values(ctx, draw, x, n: int):
     from agentspeak.unify import undo
-    for _ in range(int(n)):
+    i = 0
+    while n == 0 or i < n:
+        i += 1
         mark = len(ctx.trail)
-        if ctx.unify(x, rng.random()):
+        if ctx.unify(x, draw()):
             yield
         undo(ctx.b, ctx.trail, mark)
 
@@ -63,8 +123,10 @@ def wait(ctx, what, timeout=None, elapsed=None):
     """``.wait(Ms)``, ``.wait({Event}[, Ms[, Elapsed]])`` or ``.wait(Condition[, Ms[, Elapsed]])``.
     With two arguments a timeout fails the goal; with three it does not (Elapsed says how long)."""
     started = time.monotonic()
+    from agentspeak.terms import Literal
     if isinstance(what, (int, float)):
-        return Suspend(timeout=max(0.0, what / 1000.0), on_timeout=lambda c: True, reason="wait")
+        return Suspend(timeout=max(0.0, what / 1000.0), on_timeout=lambda c: True, reason="wait",
+                       term=Literal("wait", (what,), (Literal("time", (what,)),)))
     seconds = None
     if timeout is not None:
         if not isinstance(timeout, (int, float)):
@@ -101,12 +163,12 @@ def stop_mas(ctx, delay=0, code=0):
 def include(ctx, path, namespace=None):
     """Load an .asl file now (beliefs, rules, plans, goals)."""
     import os
-    from agentspeak.parser import parse_program
+    from agentspeak.stdlib.registry import read_program
     if not isinstance(path, str):
         raise wrong_arguments(".include needs a file name")
     base = os.path.dirname(ctx.agent.source_file) if ctx.agent.source_file else "."
     full = path if os.path.isabs(path) else os.path.join(base, path)
     with open(full) as f:
-        ctx.agent.load(parse_program(f.read(), full))
+        ctx.agent.load(read_program(f.read(), full))
 
 

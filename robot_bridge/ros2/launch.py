@@ -70,9 +70,12 @@ class Supervisor:
     specs: list[NodeSpec]
     domain_id: int | None = None
     processes: list[subprocess.Popen] = field(default_factory=list)
+    extra_env: dict[str, str] = field(default_factory=dict)
+    """Added to the nodes' environment (e.g. ``FAULTMAS_PERFBUGS``, see ``robot_bridge.ros2.perfbugs``)."""
 
     def start(self) -> None:
         env = loopback_env()
+        env.update(self.extra_env)
         if self.domain_id is not None:
             env["ROS_DOMAIN_ID"] = str(self.domain_id)
         for spec in self.specs:

@@ -124,6 +124,8 @@ def run_node(node_factory: Callable[..., object], description: str, argv: Sequen
 
     ``--robot R`` puts the node in namespace ``/R``; ``--ros-args`` (remaps, ``-p`` parameters) are
     handed to rclpy unchanged. SIGINT and SIGTERM stop the node cleanly with exit code 0.
+    With ``FAULTMAS_PERFBUGS`` set, the scheduled performance bugs are installed in the node
+    (:mod:`robot_bridge.ros2.perfbugs`; the learned detector's experiments).
     """
     require_ros("__main__")
     import rclpy
@@ -139,9 +141,11 @@ def run_node(node_factory: Callable[..., object], description: str, argv: Sequen
     options = parser.parse_args(remove_ros_args(args=["prog", *argv])[1:])
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     rclpy.init(args=["prog", *argv], domain_id=options.domain_id)
-    node = None
+    node = bugs = None
     try:
         node = node_factory(namespace=f"/{options.robot}" if options.robot else "", options=options)
+        from robot_bridge.ros2.perfbugs import install_from_env
+        bugs = install_from_env(node, options.robot)
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         executor.spin()
@@ -151,6 +155,8 @@ def run_node(node_factory: Callable[..., object], description: str, argv: Sequen
         if rclpy.ok():
             raise                 # a real error, not a message taken while SIGINT shut us down
     finally:
+        if bugs is not None:
+            bugs.stop()
         if node is not None:
             stop = getattr(node, "stop", None)
             if stop:

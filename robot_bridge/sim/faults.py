@@ -13,16 +13,29 @@ left_actuator  the left wheel runs at ``fraction`` (default 0.3) of its command,
 right_actuator the right wheel runs at ``fraction`` of its command, so the robot curves right
 stuck_wheels   both wheels are mechanically blocked: the motors push (Kobuki's over-current flags rise),
                nothing turns
+imu_stuck      the gyro reports zero yaw rate from the moment of injection (stuck at zero)
+imu_over       the gyro reports 20 % more rotation than it measures (``IMU_OVER_GAIN``)
+imu_zero_after the gyro reports zero once the robot has turned without pause for ``ROTATING_FOR_S``
+_rotating      (1 s), until the turn ends; short turns still read right (an intermittent fault)
 ============== ==========================================================================================
+
+The three IMU faults are the seed paper's (Zaman et al., ICRA 2013, section VI).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 from robot_bridge.actions import FAULT_KINDS
 from robot_bridge.sim.kobuki import BaseState, WheelSpeeds
 
 DEFAULT_FRACTION = 0.3
+IMU_OVER_GAIN = 0.2
+"""``imu_over``: rotation overestimated by 20 %, as in the paper."""
+ROTATING_FOR_S = 1.0
+"""``imu_zero_after_rotating``: seconds of uninterrupted turning after which the gyro reports zero."""
+TURNING_RATE = math.radians(5.0)
+"""A true yaw rate above this (rad/s) counts as turning for ``imu_zero_after_rotating``."""
 
 
 @dataclass(frozen=True)
@@ -81,3 +94,25 @@ def apply_to_base(fault: Fault, state: BaseState) -> BaseState:
     if state.blocked == blocked:
         return state
     return replace(state, blocked=blocked)
+
+
+@dataclass(frozen=True)
+class GyroFaultState:
+    """What an IMU fault remembers between samples: how long the robot has been turning (s)."""
+
+    turning_for: float = 0.0
+
+
+def inject_gyro(fault: Fault, reported: float, true_rate: float, dt: float,
+                state: GyroFaultState = GyroFaultState()) -> tuple[float, GyroFaultState]:
+    """The yaw rate the odometry gets when the gyro measured ``reported`` while the base truly turned
+    at ``true_rate`` for ``dt`` s, and the fault's next state."""
+    turning_for = state.turning_for + dt if abs(true_rate) > TURNING_RATE else 0.0
+    next_state = state if turning_for == state.turning_for else GyroFaultState(turning_for)
+    if fault.kind == "imu_stuck":
+        return 0.0, next_state
+    if fault.kind == "imu_over":
+        return reported * (1.0 + IMU_OVER_GAIN), next_state
+    if fault.kind == "imu_zero_after_rotating" and turning_for > ROTATING_FOR_S:
+        return 0.0, next_state
+    return reported, next_state

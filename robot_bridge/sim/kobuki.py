@@ -50,9 +50,38 @@ class BaseParams:
     """kobuki_ros ``cmd_vel_timeout_sec``: without a command for this long the base stops."""
     speed_noise: float = 0.02
     """Relative standard deviation of wheel-speed noise (slip, uneven floor)."""
+    left_radius_scale: float = 1.0
+    right_radius_scale: float = 1.0
+    """True radius of each wheel over ``wheel_radius`` (tyre wear, load, manufacturing): the physics
+    drives with the true radii while odometry, like the Kobuki driver, assumes the nominal one."""
+    wheelbase_scale: float = 1.0
+    """Effective wheelbase in turns over ``wheelbase``: above 1 the tyres scrub (slip) in turns, so
+    the robot turns less than its encoders say. 1.0 everywhere: a perfectly calibrated base."""
 
 
 KOBUKI = BaseParams()
+
+MISCALIBRATION_SIGMA = {"radius": 0.005, "radius_ratio": 0.002, "wheelbase": 0.01}
+"""Spread of the systematic wheel-odometry errors drawn by :func:`miscalibrated` (relative)."""
+WHEELBASE_SCRUB = 0.03
+"""Mean excess of the effective wheelbase in turns (3 %). Sources: UMBmark (Borenstein & Feng 1996)
+finds the wheelbase uncertainty the dominant systematic error of differential drives, a few percent,
+and the diameter ratio a few tenths of a percent; the Kobuki's tyres are ~2 cm wide on a 23 cm base."""
+
+
+def miscalibrated(rng: np.random.Generator, params: BaseParams = KOBUKI) -> BaseParams:
+    """``params`` with one draw of realistic systematic wheel-odometry error (one robot, one run).
+
+    Mean radius off by N(0, 0.5 %), left/right ratio off by N(0, 0.2 %), effective wheelbase in
+    turns N(+3 %, 1 %) larger than nominal (slip in turns). See ``docs/experiments.md``.
+    """
+    sigma = MISCALIBRATION_SIGMA
+    mean = 1.0 + sigma["radius"] * float(rng.standard_normal())
+    half_ratio = sigma["radius_ratio"] * float(rng.standard_normal()) / 2.0
+    wheelbase = 1.0 + WHEELBASE_SCRUB + sigma["wheelbase"] * float(rng.standard_normal())
+    return BaseParams(params.wheelbase, params.wheel_radius, params.max_wheel_speed, params.max_wheel_accel,
+                      params.cmd_timeout, params.speed_noise, mean * (1.0 - half_ratio),
+                      mean * (1.0 + half_ratio), wheelbase)
 
 
 @dataclass(frozen=True)
@@ -131,7 +160,7 @@ def step(state: BaseState, command: WheelSpeeds | None, dt: float,
         scale = 1.0 + params.speed_noise * rng.standard_normal(2)
         noisy_left, noisy_right = left * float(scale[0]), right * float(scale[1])
     # Exact arc integration over the step (no drift for pure rotation or straight lines).
-    linear, angular = wheels_to_twist(WheelSpeeds(noisy_left, noisy_right), params)
+    linear, angular = _true_twist(noisy_left, noisy_right, params)
     dyaw = angular * dt
     if abs(dyaw) < 1e-9:
         dx, dy = linear * dt * math.cos(state.yaw), linear * dt * math.sin(state.yaw)
@@ -143,6 +172,13 @@ def step(state: BaseState, command: WheelSpeeds | None, dt: float,
         state.x + dx, state.y + dy, _wrap(state.yaw + dyaw),
         state.left_angle + noisy_left * dt, state.right_angle + noisy_right * dt,
         left, right, target, age, state.blocked, state.time + dt)
+
+
+def _true_twist(left: float, right: float, params: BaseParams) -> tuple[float, float]:
+    """Body velocity the wheels really produce: true radii and effective wheelbase, not the nominal ones."""
+    left_v = left * params.wheel_radius * params.left_radius_scale
+    right_v = right * params.wheel_radius * params.right_radius_scale
+    return (left_v + right_v) / 2.0, (right_v - left_v) / (params.wheelbase * params.wheelbase_scale)
 
 
 def is_moving(state: BaseState) -> bool:

@@ -22,8 +22,9 @@ import numpy as np
 
 from robot_bridge import percepts as vocabulary
 from robot_bridge.protocol import Completion, Percept
-from robot_bridge.sim import faults, kobuki, motion, odometry
+from robot_bridge.sim import faults, imu, kobuki, motion, odometry
 from robot_bridge.sim.faults import NO_FAULT, Fault
+from robot_bridge.sim.odometry_fusion import OdometryFusion, Pose2D
 
 DEFAULT_DT = 0.02
 """Simulated seconds per step: the Kobuki reports its sensors at 50 Hz."""
@@ -102,6 +103,18 @@ class _Robot:
     over_current_at: list[float] = field(default_factory=lambda: [-math.inf, -math.inf])
     """When each motor last drew over-current (simulated seconds)."""
     trajectory: list[TrajectoryPoint] = field(default_factory=list)
+    gyro: imu.Gyro = imu.Gyro()
+    gyro_rng: np.random.Generator | None = None
+    """Separate from ``rng`` so adding the gyro did not change the physics' noise draws."""
+    gyro_fault: faults.GyroFaultState = faults.GyroFaultState()
+    yaw_rate: float = 0.0
+    """Last yaw rate the gyro reported to the robot's software (rad/s), faults included."""
+    fusion: OdometryFusion = field(default_factory=OdometryFusion)
+    """The odometry component fusing encoders and gyro; its ``use_imu`` is a settable parameter."""
+
+
+NODE_PARAMETERS = {"odometry": ("use_imu",)}
+"""The parameters of a simulated robot's software nodes that ``World.set_parameter`` can set."""
 
 
 class World:
@@ -139,8 +152,11 @@ class World:
             base = kobuki.BaseState(x=x, y=y, yaw=math.radians(yaw_deg), time=self.time)
             ticks = kobuki.encoder_ticks(base)
             mount = CameraMount() if camera is True else (camera or None)
+            gyro_rng = np.random.default_rng([self.seed, key, 2]) if self.noise else None
             robot = _Robot(name, base, rng, np.random.default_rng([self.seed, key, 1]), fault,
-                           odometry.Odometry(ticks=ticks), ticks, camera=mount)
+                           odometry.Odometry(ticks=ticks), ticks, camera=mount,
+                           gyro=imu.Gyro.draw(gyro_rng) if gyro_rng is not None else imu.Gyro(),
+                           gyro_rng=gyro_rng)   # odometry frames start at the origin
             self._robots[name] = robot
             self._log(robot)
 
@@ -176,6 +192,32 @@ class World:
         with self._lock:
             robot = self._robot(name)
             robot.odom = odometry.reset(robot.odom)
+            robot.fusion.pose = Pose2D()
+
+    def set_parameter(self, name: str, node: str, parameter: str, value: object) -> None:
+        """Set ``parameter`` of software node ``node`` on robot ``name`` (as ``ros2 param set`` would).
+
+        Nodes and their parameters: ``NODE_PARAMETERS``; anything else is a ``KeyError`` naming them.
+        """
+        with self._lock:
+            robot = self._robot(name)
+            if node not in NODE_PARAMETERS:
+                raise KeyError(f"robot {name!r} has no node {node!r} (nodes: {', '.join(NODE_PARAMETERS)})")
+            robot.fusion.set_parameter(parameter, value)
+
+    def drive(self, name: str, linear: float, angular: float) -> None:
+        """Send a velocity command (m/s, rad/s) straight to the base, like ``commands/velocity``.
+
+        A running motion is preempted; the base keeps the command for ``cmd_timeout`` (0.6 s), so a
+        controller sends one at least that often.
+        """
+        with self._lock:
+            robot = self._robot(name)
+            previous, robot.motion, robot.pending = robot.pending, None, None
+            robot.command = kobuki.twist_to_wheels(linear, angular, self.params)
+            self.changed.notify_all()
+        if previous is not None and not previous.done():
+            previous.set_result(Completion.failure("preempted", "replaced by a velocity command"))
 
     def command(self, name: str, kind: str, args: tuple = ()) -> "Future[Completion]":
         """Start motion ``kind`` (move, turn, rotate, stop) with normalized args; preempts the running one."""
@@ -259,7 +301,9 @@ class World:
             moved = kobuki.step(base, faults.inject_command(robot.fault, sent), dt, robot.rng, self.params)
             robot.base = self._collide(robot, base, moved)
             robot.ticks = faults.inject_encoders(robot.fault, kobuki.encoder_ticks(robot.base), robot.ticks)
+            before = robot.odom
             robot.odom = odometry.update(robot.odom, robot.ticks, dt, self.params)
+            self._sense_rotation(robot, base.yaw, before)
             for side, flag in enumerate(kobuki.over_current(robot.base, self.params)):
                 if flag:
                     robot.over_current_at[side] = now
@@ -270,6 +314,17 @@ class World:
                 for robot in self._robots.values():
                     self._log(robot)
         return done
+
+    def _sense_rotation(self, robot: _Robot, yaw_before: float, odom_before: odometry.Odometry) -> None:
+        """The gyro samples the step's true rotation; the fusion integrates it with the encoders'."""
+        dt = self.dt
+        turned = robot.base.yaw - yaw_before
+        true_rate = math.atan2(math.sin(turned), math.cos(turned)) / dt
+        measured = imu.measure(robot.gyro, true_rate, dt, robot.gyro_rng)
+        robot.yaw_rate, robot.gyro_fault = faults.inject_gyro(robot.fault, measured, true_rate, dt,
+                                                              robot.gyro_fault)
+        robot.fusion.step(robot.odom.distance - odom_before.distance,
+                          robot.odom.rotation - odom_before.rotation, robot.yaw_rate * dt)
 
     def _collide(self, robot: _Robot, before: kobuki.BaseState, after: kobuki.BaseState) -> kobuki.BaseState:
         """Keep the robot out of walls, obstacles and other robots; wheels slip, the bumper reports."""
@@ -327,6 +382,24 @@ class World:
     def odometry(self, name: str) -> odometry.Odometry:
         with self._lock:
             return self._robot(name).odom
+
+    def yaw_rate(self, name: str) -> float:
+        """The gyro's last reading (rad/s) as the robot's software gets it (IMU faults included)."""
+        with self._lock:
+            return self._robot(name).yaw_rate
+
+    def fused_odometry(self, name: str) -> Pose2D:
+        """The pose of robot ``name``'s odometry component (encoders fused with the gyro, see ``use_imu``)."""
+        with self._lock:
+            return self._robot(name).fusion.pose
+
+    def parameter(self, name: str, node: str, parameter: str) -> object:
+        """The current value of a node parameter (see ``set_parameter``)."""
+        with self._lock:
+            robot = self._robot(name)
+            if node not in NODE_PARAMETERS or parameter not in NODE_PARAMETERS[node]:
+                raise KeyError(f"robot {name!r} has no parameter {node}.{parameter}")
+            return robot.fusion.use_imu
 
     def base_state(self, name: str) -> kobuki.BaseState:
         with self._lock:

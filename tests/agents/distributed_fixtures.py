@@ -95,7 +95,8 @@ TEAM_MAS2J = "MAS team {\n    agents:\n        watcher;\n        friend;\n      
 
 
 def write_files(folder: Path, files: dict[str, str]) -> Path:
-    """Write ``name -> text`` into ``folder``; return the folder."""
+    """Write ``name -> text`` into ``folder`` (made if missing); return the folder."""
+    folder.mkdir(parents=True, exist_ok=True)
     for name, text in files.items():
         (folder / name).write_text(text)
     return folder
@@ -104,9 +105,9 @@ def write_files(folder: Path, files: dict[str, str]) -> Path:
 class Proc:
     """A ``python -m agents ...`` child; stdout and stderr lines collected by reader threads."""
 
-    def __init__(self, args: Sequence[str]) -> None:
+    def __init__(self, args: Sequence[str], cwd: Path | None = None) -> None:
         env = dict(os.environ, PYTHONUNBUFFERED="1")
-        self.process = subprocess.Popen([sys.executable, "-m", "agents", *args], cwd=REPO, env=env, text=True,
+        self.process = subprocess.Popen([sys.executable, "-m", "agents", *args], cwd=cwd or REPO, env=env, text=True,
                                         stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         self.out: list[str] = []
         self.err: list[str] = []
@@ -153,5 +154,6 @@ def agent_run(folder: Path, name: str, mas: str, connect: str, *extra: str) -> P
                  "--connect", connect, *extra])
 
 
-def mas_run(project: Path, *extra: str) -> Proc:
-    return Proc(["mas", "run", str(project), *extra])
+def mas_run(project: Path, *extra: str, cwd: Path | None = None) -> Proc:
+    """``faultmas mas run PROJECT ...`` (from ``cwd``: the repository by default)."""
+    return Proc(["mas", "run", str(project), *extra], cwd=cwd)

@@ -7,6 +7,7 @@ plans and the diagnoser: a wrong model, plan or perception makes these tests fai
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -45,9 +46,11 @@ def test_faultmas_run_json_contract_with_the_default_encoder_fault(tmp_path):
     picture = cv2.imread(str(image))
     assert picture is not None and picture.shape[0] > 200 and picture.std() > 0    # a real drawing
     report = json.loads(done.stdout)
-    assert report["fault"] == "encoders" and report["diagnosis"] == "encoders" and report["correct"] is True
-    assert set(report["steps"]) == {"fault_detection", "robot_detection", "diagnosis", "total"}
-    assert report["steps"]["total"] >= report["steps"]["fault_detection"] + report["steps"]["robot_detection"]
+    faulty = report["robots"][0]        # the schema of the team's report too (one entry per robot)
+    assert faulty["fault"] == "encoders" and faulty["diagnosis"] == "encoders" and report["correct"] is True
+    assert set(faulty["steps"]) == {"fault_detection", "robot_detection", "diagnosis", "total"}
+    assert faulty["steps"]["total"] >= faulty["steps"]["fault_detection"] + faulty["steps"]["robot_detection"] - 0.02
+    assert all(round(v, 2) == v for v in faulty["steps"].values())
     assert "robot detected" in done.stderr       # progress is shown as the steps happen
 
 
@@ -158,7 +161,7 @@ def test_the_same_plans_diagnose_through_the_ros2_bridge_with_real_rclpy_nodes()
 
 def test_faultmas_eval_prints_a_table_and_json_of_every_run():
     command = [sys.executable, "-m", "agents", "eval", "--runs", "1", "--faults", "both_actuators,none",
-               "--jobs", "2", "--seed", "3"]
+               "--teams", "none", "--jobs", "2", "--seed", "3"]
     done = subprocess.run(command + ["--json"], cwd=REPO, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     report = json.loads(done.stdout)
@@ -186,3 +189,55 @@ def test_the_eval_draws_any_bearing_and_any_heading_including_end_on_views():
         views.append(abs((faulty.yaw_deg - line_of_sight + 180.0) % 360.0 - 180.0))
     assert min(views) < 10.0 and max(views) > 170.0          # end-on from the front and from behind
     assert any(80.0 < v < 100.0 for v in views)               # and side views
+
+
+# ---- teams: robots anywhere in the arena, a helper goes to where the robot asking for help says it is ----
+def test_a_team_of_two_at_the_default_seed_diagnoses_correctly_though_out_of_camera_range():
+    scenario = team_scenario(2, 1, seed=1)
+    a, b = scenario.robots
+    assert math.hypot(a.x - b.x, a.y - b.y) > 4.0          # beyond the camera's range: a search alone fails
+    done = subprocess.run([sys.executable, "-m", "agents", "run", "--robots", "2", "--faulty", "1", "--json"],
+                          cwd=REPO, capture_output=True, text=True, timeout=200)
+    assert done.returncode == 0, done.stderr[-3000:]
+    report = json.loads(done.stdout)
+    assert report["correct"] is True and report["finished"] is True
+    assert sorted(r["fault"] != "none" for r in report["robots"]) == [False, True]   # same schema as the pair
+    assert "I go near it" in done.stderr and "robot detected" in done.stderr
+
+
+def test_team_placements_cover_the_whole_arena_and_keep_robots_apart():
+    xs, ys = [], []
+    for seed in range(40):
+        robots = team_scenario(12, 3, seed).robots
+        xs += [r.x for r in robots]
+        ys += [r.y for r in robots]
+        assert all(math.hypot(p.x - q.x, p.y - q.y) >= 1.6 for p in robots for q in robots if p is not q)
+    assert min(xs) < -4.0 and max(xs) > 4.0 and min(ys) < -4.0 and max(ys) > 4.0
+    assert max(map(abs, xs + ys)) <= 5.0 - 0.8
+
+
+def test_the_fault_option_is_injected_into_every_faulty_robot_of_a_team():
+    robots = team_scenario(5, 3, seed=4, fault="left_actuator").robots
+    assert sorted(r.fault for r in robots) == ["left_actuator"] * 3 + ["none"] * 2
+    false_alarms = team_scenario(3, 1, seed=4, fault="none").robots
+    assert [r.false_alarm for r in false_alarms].count(True) == 1
+    with pytest.raises(ValueError):
+        team_scenario(3, 1, seed=4, fault="gremlins")
+
+
+def test_faulty_without_robots_is_an_error(capsys):
+    from agents.cli import main
+    assert main(["run", "--faulty", "2"]) == 2
+    assert "--faulty K needs --robots N" in capsys.readouterr().err
+
+
+def test_faultmas_eval_runs_team_placements():
+    done = subprocess.run([sys.executable, "-m", "agents", "eval", "--runs", "1", "--faults", "", "--teams", "2",
+                           "--seed", "2", "--jobs", "1", "--json"], cwd=REPO, capture_output=True, text=True,
+                          timeout=230)
+    assert done.returncode == 0, done.stderr[-2000:]
+    report = json.loads(done.stdout)
+    [row] = report["table"]
+    assert row["scenario"] == "team of 2" and row["success_rate"] == 1.0
+    [run] = report["runs"]
+    assert run["correct"] is True and run["steps"]["robot_detection"] > 0

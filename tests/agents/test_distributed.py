@@ -48,6 +48,23 @@ def test_every_performative_across_processes_as_in_one_process(tmp_path):
     assert "[bob] work finished" not in run.out  # unachieve dropped it in the other process
 
 
+@pytest.mark.parametrize("where", ["project folder", "parent folder"])
+def test_processes_resolve_sources_as_in_one_process(tmp_path, where):
+    """Relative sources, aslSourcePath (against the working directory, as Jason) and includes: the
+    agent processes start where the user is, so they find what the in-process run finds."""
+    proj = write_files(tmp_path / "proj", {
+        "a.asl": '{ include("greet.asl") }\n!start.\n+!start <- !greet(a); .send(b, achieve, greet(b)).\n',
+        "b.asl": '{ include("greet.asl") }\n',
+        "m.mas2j": 'MAS m { agents: a; b; aslSourcePath: "lib"; }'})
+    write_files(proj / "lib", {"greet.asl": "+!greet(X) <- .print(hello(X)).\n"})
+    cwd, project = (proj, Path("m.mas2j")) if where == "project folder" else (tmp_path, Path("proj/m.mas2j"))
+    here = mas_run(project, "--timeout", "30", cwd=cwd)
+    assert here.finish() == 0, here.err[-20:]
+    run = mas_run(project, "--processes", "--timeout", "60", cwd=cwd)
+    assert run.finish() == 0, run.err[-20:]
+    assert sorted(run.out) == sorted(here.out) == ["[a] hello(a)", "[b] hello(b)"]
+
+
 def test_ring_runs_unchanged_with_processes(tmp_path):
     """ring10.mas2j as shipped; the hop count is scaled down in a copy of ring.asl to keep the test short."""
     (tmp_path / "ring10.mas2j").write_text((RING / "ring10.mas2j").read_text())
@@ -152,3 +169,29 @@ def test_agent_joins_a_mas_running_in_one_process(tmp_path):
     joined = agent_run(tmp_path, "b", "rr", endpoint, "--timeout", "60")
     assert joined.finish() == 0 and joined.out == ["[b] got x(1)[source(a)]"]
     assert host.finish() == 0
+
+
+def test_processes_from_a_non_editable_install(tmp_path):
+    """``pip install .`` (not editable) of this repository: the agent processes find the installed package
+    and the user's sources, from the user's folder."""
+    import os
+    import subprocess
+    import sys
+    repo = Path(__file__).resolve().parents[2]
+    target = tmp_path / "site"
+    env = dict(os.environ, FAULTMAS_PURE_PYTHON="1", PIP_NO_INDEX="1")
+    build = subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--no-build-isolation",
+                            "--target", str(target), str(repo)], env=env, capture_output=True, text=True,
+                           timeout=600)
+    assert build.returncode == 0, build.stderr[-2000:]
+    assert not (target / "agents" / "__init__.py").resolve().is_relative_to(repo)
+    proj = write_files(tmp_path / "proj", {
+        "a.asl": '!start.\n+!start <- .send(b, achieve, hi).\n',
+        "b.asl": '+!hi[source(S)] <- .print(hi_from(S)).\n',
+        "m.mas2j": 'MAS m { agents: a; b; }'})
+    run_env = dict(env, PYTHONPATH=str(target), PYTHONUNBUFFERED="1")
+    # -I would drop PYTHONPATH; -P keeps the working directory off sys.path, so only the installed copy counts
+    run = subprocess.run([sys.executable, "-P", "-m", "agents", "mas", "run", "m.mas2j", "--processes",
+                          "--timeout", "60"], cwd=proj, env=run_env, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout.splitlines() == ["[b] hi_from(a)"]

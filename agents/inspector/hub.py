@@ -1,0 +1,333 @@
+"""The viewer side: one Zenoh session gathers what the page shows of a MAS, from any of its hosts.
+
+* the team: liveliness tokens (``faultmas/<mas>/alive/*``: an agent that dies is gone in milliseconds,
+  a frozen host within the link lease) and, twice a second, every agent's summary (one query);
+* the mind of each agent someone looks at: one full query, then its change stream while looked at
+  (the agent publishes it only while this subscriber exists);
+* the robots: their percept snapshots (odometry pose, camera detections) and, when the simulator runs
+  in this process, its ground truth (``truth``);
+* the timeline: the agents' ``.progress`` steps on the MAS's control key (what ``faultmas run`` prints).
+
+A message that does not decode is dropped with one warning line naming its key; the hub goes on.
+Readers (the web app) wait on ``changed`` and read ``view()``; everything else happens on Zenoh's
+threads and the hub's poller.
+"""
+from __future__ import annotations
+
+import json
+import logging
+import math
+import threading
+import time
+from typing import Any, Callable
+
+from agents.inspector import keys
+from agents.transport import keys as mas_keys
+
+log = logging.getLogger("faultmas.inspector")
+
+POLL = 0.2            # seconds between ground-truth samples
+SUMMARY_EVERY = 0.5   # seconds between two summary queries of the team
+QUERY_TIMEOUT = 2.0
+TRAIL_POINTS = 600    # points kept per trail (older ones thinned)
+TRAIL_STEP = 0.01     # metres a robot moves before its trail gets a point
+
+
+class _Trail:
+    """A robot's path, thinned to ``TRAIL_POINTS`` by dropping every other old point."""
+
+    def __init__(self) -> None:
+        self.points: list[tuple[float, float]] = []
+
+    def add(self, x: float, y: float) -> None:
+        if self.points and math.hypot(x - self.points[-1][0], y - self.points[-1][1]) < TRAIL_STEP:
+            return
+        self.points.append((round(x, 3), round(y, 3)))
+        if len(self.points) > TRAIL_POINTS:
+            self.points = self.points[: TRAIL_POINTS // 2: 2] + self.points[TRAIL_POINTS // 2:]
+
+
+class TeamHub:
+    """What the page shows of MAS ``mas``, kept up to date from ``session`` (an open Zenoh session).
+
+    ``clock()``: the time the timeline is stamped with (the simulator's; default: wall seconds since
+    the hub started); ``truth()``: robot name -> (x m, y m, yaw degrees) ground truth, if known."""
+
+    def __init__(self, session: Any, mas: str, *, clock: Callable[[], float] | None = None,
+                 truth: Callable[[], dict[str, tuple[float, float, float]]] | None = None) -> None:
+        self.session = session
+        self.mas = mas_keys.check_name(mas, "MAS name")
+        self.started = time.monotonic()
+        self.clock = clock or (lambda: time.monotonic() - self.started)
+        self.clock_name = "simulated" if clock is not None else "wall"
+        self.truth = truth
+        self.changed = threading.Condition()
+        self.version = 0
+        self.agents: dict[str, dict] = {}        # name -> {"alive", "changed_at", "summary"}
+        self.minds: dict[str, dict] = {}         # name -> latest full state (with "plans" once)
+        self.robots: dict[str, dict] = {}        # name -> {"odom", "trail", "seen", "truth", "truth_trail"}
+        self.timeline: list[dict] = []
+        self.dropped = 0
+        self._trails: dict[tuple[str, str], _Trail] = {}
+        self._watch: dict[str, tuple[int, Any]] = {}   # agent -> (viewers, subscriber)
+        self._fetching: set[str] = set()                # agents whose plan library is being asked for
+        self._lock = threading.RLock()
+        self._declared: list[Any] = []
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    # -- life cycle ------------------------------------------------------------------------------
+    def start(self) -> "TeamHub":
+        s = self.session
+        self._declared = [
+            s.liveliness().declare_subscriber(mas_keys.alive_pattern(self.mas), self._on_alive, history=True),
+            s.declare_subscriber(mas_keys.control_key(self.mas), self._on_control),
+            s.declare_subscriber(keys.robot_percepts_pattern(self.mas), self._on_percepts),
+        ]
+        self._thread = threading.Thread(target=self._poll, name="faultmas-inspect-hub", daemon=True)
+        self._thread.start()
+        return self
+
+    def close(self) -> None:
+        self._stop.set()
+        with self._lock:
+            subscribers = [sub for _, sub in self._watch.values()]
+            self._watch.clear()
+        for entity in [*subscribers, *self._declared]:
+            try:
+                entity.undeclare()
+            except Exception:  # the session may be closed already
+                pass
+        if self._thread is not None:
+            self._thread.join(2.0)
+        self._bump()
+
+    def _bump(self) -> None:
+        with self.changed:
+            self.version += 1
+            self.changed.notify_all()
+
+    def _drop(self, key: str, reason: str) -> None:
+        log.warning("inspector: dropped a malformed message on %s: %s", key, reason[:120])
+        self.dropped += 1
+
+    # -- the team --------------------------------------------------------------------------------
+    def _on_alive(self, sample: Any) -> None:
+        import zenoh
+
+        name = mas_keys.last_chunk(str(sample.key_expr))
+        alive = sample.kind == zenoh.SampleKind.PUT
+        with self._lock:
+            entry = self.agents.setdefault(name, {"alive": alive, "summary": None})
+            entry["alive"], entry["changed_at"] = alive, time.time()
+        self._bump()
+
+    def _poll(self) -> None:
+        next_summary = 0.0
+        while not self._stop.wait(POLL):
+            if self.truth is not None:
+                try:
+                    self._sample_truth()
+                except Exception:  # a world being torn down: next time
+                    log.debug("ground truth not available", exc_info=True)
+            if time.monotonic() >= next_summary:
+                next_summary = time.monotonic() + SUMMARY_EVERY
+                self._query_summaries()
+
+    def _query_summaries(self) -> None:
+        try:
+            replies = list(self.session.get(keys.state_pattern(self.mas) + "?summary", timeout=QUERY_TIMEOUT))
+        except Exception as exc:  # session closing
+            log.debug("summary query failed: %s", exc)
+            return
+        changed = False
+        for reply in replies:
+            if reply.ok is None:
+                continue
+            key = str(reply.ok.key_expr)
+            state = self._decode(key, reply.ok.payload.to_bytes())
+            if state is None:
+                continue
+            with self._lock:
+                entry = self.agents.setdefault(keys.agent_of(key), {"alive": True, "summary": None})
+                if entry["summary"] != state:
+                    entry["summary"], changed = state, True
+        if changed:
+            self._bump()
+
+    def _decode(self, key: str, payload: bytes) -> dict | None:
+        """A state message, or None (dropped with a log line) when it is not one."""
+        try:
+            state = json.loads(payload)
+            if not isinstance(state, dict) or not isinstance(state.get("agent"), str) \
+                    or not isinstance(state.get("cycles"), int):
+                raise ValueError("expected an object with 'agent' and 'cycles'")
+            if state["agent"] != keys.agent_of(key):
+                raise ValueError(f"state of {state['agent']!r} on the key of another agent")
+        except ValueError as exc:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
+            self._drop(key, str(exc))
+            return None
+        return state
+
+    # -- minds -----------------------------------------------------------------------------------
+    def watch(self, agent: str) -> None:
+        """Someone looks at ``agent``: fetch its whole mind, then follow its change stream."""
+        mas_keys.check_name(agent)
+        with self._lock:
+            viewers, subscriber = self._watch.get(agent, (0, None))
+            if subscriber is None:
+                subscriber = self.session.declare_subscriber(keys.stream_key(self.mas, agent), self._on_stream)
+            self._watch[agent] = (viewers + 1, subscriber)
+        if viewers == 0:
+            threading.Thread(target=self.refresh, args=(agent,), daemon=True).start()
+
+    def unwatch(self, agent: str) -> None:
+        with self._lock:
+            viewers, subscriber = self._watch.get(agent, (0, None))
+            if viewers > 1:
+                self._watch[agent] = (viewers - 1, subscriber)
+                return
+            self._watch.pop(agent, None)
+        if subscriber is not None:
+            subscriber.undeclare()
+
+    def refresh(self, agent: str) -> dict | None:
+        """Query ``agent``'s whole mind (with its plan library) now."""
+        key = keys.state_key(self.mas, agent)
+        for reply in self.session.get(key + "?plans", timeout=QUERY_TIMEOUT):
+            if reply.ok is not None:
+                state = self._decode(key, reply.ok.payload.to_bytes())
+                if state is not None:
+                    self._store_mind(state)
+                    return state
+        return None
+
+    def _on_stream(self, sample: Any) -> None:
+        key = str(sample.key_expr)
+        state = self._decode(key, sample.payload.to_bytes())
+        if state is not None:
+            self._store_mind(state)
+
+    def _store_mind(self, state: dict) -> None:
+        name = state["agent"]
+        fetch_plans = False
+        with self._lock:
+            old = self.minds.get(name)
+            if "plans" not in state:          # the stream leaves the plan library out
+                if old is not None and "plans" in old:
+                    state["plans"] = old["plans"]
+                elif name not in self._fetching:   # watched before it was up: ask for it once
+                    self._fetching.add(name)
+                    fetch_plans = True
+            self.minds[name] = state
+            entry = self.agents.setdefault(name, {"alive": True, "summary": None})
+            entry["summary"] = {k: state.get(k) for k in
+                                ("agent", "cycles", "paused", "robot", "top", "intentions", "beliefs",
+                                 "events", "source")}
+        self._bump()
+        if fetch_plans:
+            threading.Thread(target=self._fetch_plans, args=(name,), daemon=True).start()
+
+    def _fetch_plans(self, name: str) -> None:
+        try:
+            self.refresh(name)
+        finally:
+            with self._lock:
+                self._fetching.discard(name)
+
+    def control(self, agent: str, command: str) -> dict:
+        """Ask ``agent`` to pause, step or resume; its answer (it refuses unless the MAS allows it)."""
+        key = keys.control_key(self.mas, agent)
+        payload = json.dumps({"command": command})
+        for reply in self.session.get(key, payload=payload, timeout=QUERY_TIMEOUT + 6.0):
+            if reply.ok is not None:
+                try:
+                    answer = json.loads(reply.ok.payload.to_bytes())
+                except ValueError as exc:
+                    self._drop(key, str(exc))
+                    continue
+                threading.Thread(target=self.refresh, args=(agent,), daemon=True).start()
+                return answer
+        return {"ok": False, "error": f"agent {agent} did not answer (gone, or not inspectable)"}
+
+    # -- the timeline ----------------------------------------------------------------------------
+    def _on_control(self, sample: Any) -> None:
+        from agents.progress import ProgressReport
+
+        try:
+            message = json.loads(sample.payload.to_bytes())
+        except ValueError:
+            return   # the transport itself logs bad control messages
+        report = ProgressReport.from_message(message) if isinstance(message, dict) else None
+        if report is None:
+            return
+        mark = {"agent": report.agent, "step": report.step, "detail": report.detail,
+                "t": round(self.clock(), 3), "wall": round(time.monotonic() - self.started, 3)}
+        with self._lock:
+            self.timeline.append(mark)
+        self._bump()
+
+    # -- the world -------------------------------------------------------------------------------
+    def _robot(self, name: str) -> dict:
+        return self.robots.setdefault(name, {"odom": None, "seen": [], "truth": None, "origin": None})
+
+    def _trail(self, name: str, kind: str) -> _Trail:
+        return self._trails.setdefault((name, kind), _Trail())
+
+    def _on_percepts(self, sample: Any) -> None:
+        from robot_bridge.ros2.wire import PerceptSnapshot, WireError
+
+        key = str(sample.key_expr)
+        try:
+            snap = PerceptSnapshot.from_json(sample.payload.to_bytes().decode())
+        except (WireError, ValueError) as exc:
+            self._drop(key, str(exc))
+            return
+        name = keys.agent_of(key)
+        odom, seen = None, []
+        for p in snap.percepts:
+            if p.name == "odom" and len(p.args) == 3:
+                odom = tuple(float(a) for a in p.args)
+            elif p.name == "robot_seen" and len(p.args) == 4:
+                seen.append({"robot": str(p.args[0]), "angle_deg": float(p.args[1]),
+                             "depth_m": float(p.args[2]), "yaw_deg": float(p.args[3])})
+        with self._lock:
+            robot = self._robot(name)
+            moved = odom is not None and odom != robot["odom"]
+            if moved:
+                robot["odom"] = odom
+                self._trail(name, "odom").add(odom[0], odom[1])
+            if seen != robot["seen"]:
+                robot["seen"], moved = seen, True
+        if moved:
+            self._bump()
+
+    def _sample_truth(self) -> None:
+        poses = self.truth() if self.truth is not None else {}
+        changed = False
+        with self._lock:
+            for name, (x, y, yaw) in poses.items():
+                robot = self._robot(name)
+                pose = (round(x, 3), round(y, 3), round(yaw, 1))
+                if robot["origin"] is None:   # odometry starts at zero where the robot stood: the map
+                    robot["origin"] = pose    # draws it from there, in the world's frame
+                if pose != robot["truth"]:
+                    robot["truth"], changed = pose, True
+                    self._trail(name, "truth").add(x, y)
+        if changed:
+            self._bump()
+
+    # -- what readers get ------------------------------------------------------------------------
+    def view(self, agent: str | None = None, timeline_from: int = 0) -> dict:
+        """A JSON-ready picture: the team, the robots, timeline marks from ``timeline_from`` on, and
+        the mind of ``agent`` if one is watched."""
+        with self._lock:
+            team = [{**(e.get("summary") or {}), "agent": name, "alive": e["alive"]}
+                    for name, e in sorted(self.agents.items())]
+            robots = {name: {**r, "trail": list(self._trail(name, "odom").points),
+                             "truth_trail": list(self._trail(name, "truth").points)}
+                      for name, r in sorted(self.robots.items())}
+            return {"mas": self.mas, "clock": self.clock_name, "version": self.version, "team": team,
+                    "robots": robots, "timeline": self.timeline[timeline_from:],
+                    "timeline_length": len(self.timeline),
+                    "mind": self.minds.get(agent) if agent else None}

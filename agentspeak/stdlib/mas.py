@@ -1,0 +1,311 @@
+"""The MAS and the agent's own state seen from a program: create_agent, kill_agent, list_files, at, type,
+intention. Each follows Jason 3.3's class of the same name in ``jason/stdlib``."""
+from __future__ import annotations
+
+import os
+import re
+
+from agentspeak.program import ACHIEVE, ADD, PlanTerm, Plan, Trigger, body_variables, substitute
+from agentspeak.stdlib.registry import IAError, internal_action, wrong_arguments
+from agentspeak.terms import Literal, Var, make_list, resolve, to_print_str
+from agentspeak.unify import undo
+
+
+def _text(t) -> str:
+    return t if isinstance(t, str) else to_print_str(t)
+
+
+@internal_action(".create_agent", args=(2, 3))
+def create_agent(ctx, name, source, options=None):
+    """``.create_agent(Name, "file.asl"[, Options])``: start a new agent of this MAS with that source (found
+    beside the working directory or along the project's source path). A variable Name gets the name."""
+    agent = ctx.agent
+    create = getattr(agent.arch, "create_agent", None)
+    if create is None:
+        raise IAError("ia_failed", f"the architecture of {agent.name} cannot create agents")
+    if isinstance(name, Var):
+        wanted = name.name[:1].lower() + name.name[1:]
+    else:
+        wanted = _text(name)
+    if not isinstance(source, str):
+        raise wrong_arguments(".create_agent: the source is a string (a file name)")
+    created = create(agent, wanted, source)
+    return ctx.unify(name, created) if isinstance(name, Var) else True
+
+
+@internal_action(".kill_agent", args=1)
+def kill_agent(ctx, name):
+    """``.kill_agent(Name)``: stop and remove an agent of this MAS (fails if there is none of that name)."""
+    kill = getattr(ctx.agent.arch, "kill_agent", None)
+    if kill is None:
+        raise IAError("ia_failed", f"the architecture of {ctx.agent.name} cannot kill agents")
+    return bool(kill(ctx.agent, _text(name)))
+
+
+@internal_action(".list_files", args=(2, 3))
+def list_files(ctx, folder, pattern_or_result, result=None):
+    """``.list_files(Folder[, Regex], Files)``: the files under Folder (recursively) whose name matches
+    Regex (the whole name, as Java's ``String.matches``), as paths that start with Folder."""
+    if result is None:
+        pattern, result = ".*", pattern_or_result
+    else:
+        pattern = pattern_or_result
+    if not isinstance(folder, str) or not isinstance(pattern, str):
+        raise wrong_arguments(".list_files: the folder and the pattern are strings")
+    try:
+        regex = re.compile(pattern)
+    except re.error as exc:
+        raise wrong_arguments(f".list_files: bad pattern {pattern!r}: {exc}") from None
+    found: list[str] = []
+
+    def walk(d: str) -> None:
+        try:
+            entries = sorted(os.listdir(d))
+        except OSError:
+            return
+        for e in entries:
+            path = os.path.join(d, e)
+            if os.path.isfile(path) and regex.fullmatch(e):
+                found.append(path)
+            if os.path.isdir(path):
+                walk(path)
+
+    walk(folder)
+    return ctx.unify(result, make_list(found))
+
+
+_UNITS = {"ms": 0.001, "s": 1, "second": 1, "m": 60, "minute": 60, "h": 3600, "hour": 3600, "d": 86400, "day": 86400}
+
+
+def _at_seconds(when: str) -> float:
+    m = re.fullmatch(r"\s*now\s*\+\s*(\d+)\s*([a-z]*)\s*", when)
+    if m is None:
+        raise wrong_arguments(f".at: cannot read the time {when!r} (write \"now +3 s\")")
+    unit = m.group(2)
+    if not unit:
+        return int(m.group(1)) / 1000.0
+    for name, factor in _UNITS.items():
+        if unit == name or (len(name) > 2 and unit.startswith(name)):
+            return int(m.group(1)) * factor
+    raise wrong_arguments(f".at: unknown time unit {unit!r} (ms, s, m, h or d)")
+
+
+@internal_action(".at", args=2)
+def at(ctx, when, event):
+    """``.at("now +2 s", {+!g})``: post the event (a new intention) at that time."""
+    if not isinstance(when, str):
+        raise wrong_arguments(".at: the time is a string such as \"now +2 s\"")
+    trigger = event.as_trigger() if isinstance(event, PlanTerm) else None
+    if trigger is None:
+        raise wrong_arguments(".at: the event is a trigger term such as {+!g}")
+    agent = ctx.agent
+    literal = resolve(trigger.literal, ctx.b)
+    if trigger.kind == ACHIEVE and trigger.op == ADD and isinstance(literal, Literal):
+        literal = agent._fresh_goal(literal, {})
+    agent.add_timer(_at_seconds(when), lambda: agent.post_external(Trigger(trigger.op, trigger.kind, literal), force=True))
+
+
+def _types(x) -> list[str]:
+    from agentspeak.terms import Cons, NIL, is_ground
+    out = []
+    tx = type(x)
+    if (tx is int or tx is float) and tx is not bool:
+        out.append("number")
+    if tx is Literal and not x.args and not x.neg and x.annots is None and x.annot_tail is None:
+        out.append("atom")
+    if tx is Literal:
+        out.append("literal")
+    if tx is str:
+        out.append("string")
+    if tx is Cons or x is NIL:
+        out.append("list")
+    if tx is Literal and x.args or tx is Cons:
+        out.append("structure")
+    if tx is PlanTerm:
+        out.append("plan")
+    if not isinstance(x, Var) and is_ground(x):
+        out.append("ground")
+    if isinstance(x, Var):
+        out.append("free")
+    return out
+
+
+@internal_action(".type", args=2)
+def type_(ctx, x, kind):
+    """``.type(X, T)``: T is each of number, atom, literal, string, list, structure, plan, ground, free
+    that X is (Jason's order, from the most primitive); with T given, whether X is of that type."""
+    for name in _types(x):
+        mark = len(ctx.trail)
+        if ctx.unify(kind, Literal(name)):
+            yield
+        undo(ctx.b, ctx.trail, mark)
+
+
+# ---------------------------------------------------------------------- intentions as terms
+def _label_term(plan: Plan) -> Literal:
+    label = plan.ensure_label()
+    lit = label if isinstance(label, Literal) else Literal("l")
+    from agentspeak.agent import source_url
+    for annot in (Literal("code_line", (plan.line,)), Literal("code_src", (source_url(plan.source_file),))):
+        if not lit.annots or not any(isinstance(a, Literal) and a.functor == annot.functor for a in lit.annots):
+            lit = lit.add_annot(annot)
+    return lit
+
+
+def _remaining_body(im) -> tuple:
+    out: list = []
+    for frame in reversed(im.frames):
+        out.extend(frame.body[frame.pc:])
+    return tuple(out)
+
+
+def im_term(im) -> Literal:
+    """``im(Label, {Trigger}, {Body still to run}, [map(Var, Value), ...])`` (Jason's IntendedMeans
+    as a term); the body and trigger with the intended means' bindings applied."""
+    from agentspeak.terms import rename
+    b = im.b
+    fresh: dict = {}  # the term shares no variable with the running plan (Jason makes them anonymous)
+
+    def copy(t):
+        return rename(substitute(t, b), fresh)
+    trig = im.plan.trigger
+    literal = im.event_literal if im.event_literal is not None else trig.literal
+    trigger = PlanTerm(plan=Plan(Trigger(trig.op, trig.kind, copy(literal))))
+    body = PlanTerm(body=tuple(instr.map_terms(copy) if hasattr(instr, "term") else instr
+                               for instr in _remaining_body(im)))
+    unifier = make_list([Literal("map", (Var(v.name), copy(v))) for v in body_variables(im.plan.body)
+                         if v in b and not v.name.startswith("_")])
+    return Literal("im", (_label_term(im.plan), trigger, body, unifier))
+
+
+def intention_state(agent, intention) -> Literal:
+    if intention is getattr(agent, "current_intention", None) or not intention.suspended:
+        return Literal("running")
+    return Literal("waiting", (), (Literal("reason", (Literal(str(intention.suspended)),)),))
+
+
+@internal_action(".intention", args=(2, 4))
+def intention(ctx, ident, state, stack=None, which=None):
+    """``.intention(Id, State[, Stack[, current]])``: the agent's intentions (each intended means as
+    ``im(Label, {Trigger}, {Body}, Unifier)``, the top first); ``current`` selects the intention running
+    this formula (in a plan context: the intention whose event is being handled)."""
+    agent = ctx.agent
+    current = ctx.intention if ctx.intention is not None else getattr(agent, "current_intention", None)
+    if isinstance(which, Literal) and which.functor == "current":
+        candidates = [current] if current is not None else []
+    else:
+        candidates = list(agent.intentions())
+        if current is not None and current not in candidates:
+            candidates.append(current)
+    for i in candidates:
+        mark = len(ctx.trail)
+        st = Literal("running") if i is current else intention_state(agent, i)
+        if ctx.unify(ident, i.id) and ctx.unify(state, st) and (
+                stack is None or ctx.unify(stack, make_list([im_term(im) for im in reversed(i.stack)]))):
+            yield
+        undo(ctx.b, ctx.trail, mark)
+
+
+@internal_action(".current_intention", args=1)
+def current_intention(ctx, result):
+    """``.current_intention(intention(Id, Stack))`` (Jason keeps it beside ``.intention``)."""
+    i = ctx.intention if ctx.intention is not None else getattr(ctx.agent, "current_intention", None)
+    if i is None:
+        return False
+    return ctx.unify(result, Literal("intention", (i.id, make_list([im_term(im) for im in reversed(i.stack)]))))
+
+
+@internal_action(".eval", args=2)
+def eval_(ctx, result, formula):
+    """``.eval(X, Formula)``: X is ``true`` if the logical formula holds, else ``false``."""
+    from agentspeak.solver import solve_first
+    b = dict(ctx.b)
+    return ctx.unify(result, Literal("true" if solve_first(ctx.agent, formula, b) else "false"))
+
+
+@internal_action(".relevant_rules", args=2)
+def relevant_rules(ctx, pattern, result):
+    """``.relevant_rules(p(_,_), L)``: the rules whose head unifies with the pattern, as rule terms."""
+    from agentspeak.unify import unifies
+    if not isinstance(pattern, Literal):
+        raise wrong_arguments(".relevant_rules needs a literal")
+    rules = [r for r in ctx.agent.bb.rules_for(pattern) if unifies(pattern, r.head, {})]
+    return ctx.unify(result, make_list([PlanTerm(rule=r).rename({}) for r in rules]))
+
+
+@internal_action(".list_rules", args=(0, 1))
+def list_rules(ctx, pattern=None):
+    """Print the rules (those whose head unifies with the pattern)."""
+    from agentspeak.unify import unifies
+    for r in ctx.agent.bb.rules():
+        if pattern is None or (isinstance(pattern, Literal) and unifies(pattern, r.head, {})):
+            ctx.agent.arch.print_line(ctx.agent, str(r) + ".")
+
+
+@internal_action(".drop_event", args=1)
+def drop_event(ctx, goal):
+    """``.drop_event(G)``: remove the pending ``+!G`` events (the goals not yet intended)."""
+    from agentspeak.unify import unifies
+    agent = ctx.agent
+    keep = [ev for ev in agent.events
+            if not (ev.trigger.op == ADD and ev.trigger.kind == ACHIEVE and ev.intention is None
+                    and unifies(goal, ev.trigger.literal, {}))]
+    agent.events.clear()
+    agent.events.extend(keep)
+
+
+# ---------------------------------------------------------------------- name spaces
+def _namespaces(agent) -> list[str]:
+    seen = {"default": None}
+    for lit in agent.bb.literals():
+        if "::" in lit.functor:
+            seen.setdefault(lit.functor.split("::", 1)[0], None)
+    for ns in getattr(agent, "namespace_props", {}):
+        seen.setdefault(ns, None)
+    return list(seen)
+
+
+@internal_action(".namespace", args=1)
+def namespace(ctx, ns):
+    """``.namespace(NS)``: NS is a name space of the agent's beliefs (backtracks when NS is free)."""
+    for name in _namespaces(ctx.agent):
+        mark = len(ctx.trail)
+        if ctx.unify(ns, Literal(name)):
+            yield
+        undo(ctx.b, ctx.trail, mark)
+
+
+@internal_action(".namespace_set_prop", args=3)
+def namespace_set_prop(ctx, ns, key, value):
+    """``.namespace_set_prop(NS, Key, Value)``: a property of a name space."""
+    props = ctx.agent.__dict__.setdefault("namespace_props", {})
+    props.setdefault(_text(ns), {})[key] = value
+
+
+@internal_action(".namespace_get_prop", args=(2, 4))
+def namespace_get_prop(ctx, ns, key, value=None, default=None):
+    """``.namespace_get_prop(NS, Key[, Value[, Default]])``: backtracks over the keys when Key is free."""
+    props = getattr(ctx.agent, "namespace_props", {}).get(_text(ns), {})
+    if not isinstance(key, Var) and key not in props:
+        if default is not None and value is not None:
+            if ctx.unify(value, default):
+                yield
+        return
+    for k, v in list(props.items()):
+        mark = len(ctx.trail)
+        if ctx.unify(key, k) and (value is None or ctx.unify(value, v)):
+            yield
+        undo(ctx.b, ctx.trail, mark)
+
+
+@internal_action(".add_nested_source", args=3)
+def add_nested_source(ctx, lit, source, result):
+    """``.add_nested_source(p[a], bob, R)``: R is ``p[source(bob)[a]]`` (a list: each of its literals)."""
+    from agentspeak.communication import nested_source
+    from agentspeak.terms import Cons, NIL, list_items
+    if isinstance(lit, Cons) or lit is NIL:
+        return ctx.unify(result, make_list([nested_source(x, source) if isinstance(x, Literal) else x
+                                            for x in list_items(lit)]))
+    if not isinstance(lit, Literal):
+        raise wrong_arguments(".add_nested_source needs a literal")
+    return ctx.unify(result, nested_source(lit, source))

@@ -1,0 +1,122 @@
+"""The learned detector of performance bugs: training time, scoring cost per component per tick, and
+the CPU share of the online observer watching the live team.
+
+Training: ``detection.learned.evaluate.train_models`` on the paper data set when it is there, else on
+the smoke data set (CPU seconds). Scoring: a recorded run replayed through the online observer
+(``LearnedResourceObserver``, features + model, counters given) per component per tick, target
+≤ 1 ms; reading one process's counters with psutil is listed apart. Live: the team's ROS 2 nodes (no
+camera) with the usual workload, the observer in a child process of its own; its CPU time over the
+window divided by the wall time, target ≤ 2 % of one core (skipped with --quick).
+"""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+TARGET_TICK_MS = 1.0
+TARGET_CPU_SHARE = 0.02
+
+
+def _dataset():
+    from detection.learned.dataset import load
+    from experiments.perfbugs import data_dir
+    for profile in ("paper", "smoke"):
+        if (data_dir(profile) / "manifest.json").exists():
+            return profile, load(data_dir(profile))
+    raise RuntimeError("no perfbugs data set: faultmas experiment perfbugs --generate")
+
+
+def _watch_child(domain: int, models_dir: str, seconds: float) -> None:
+    """In the child: watch the team for ``seconds`` after a warm-up; print CPU seconds and ticks."""
+    import psutil
+
+    from detection.learned.observer import load_models
+    from detection.learned.scenario import ROBOTS
+    from detection.learned.watch import LiveLearnedObserver
+
+    live = LiveLearnedObserver(load_models(models_dir), [f"/{r}" for r in ROBOTS], lambda obs: None, domain)
+    try:
+        time.sleep(3.0)
+        me = psutil.Process()
+        before, ticks, received = me.cpu_times(), len(live.observer.tick_seconds), live.tap.received
+        time.sleep(seconds)
+        after = me.cpu_times()
+        cpu = (after.user + after.system) - (before.user + before.system)
+        print(f"{cpu} {len(live.observer.tick_seconds) - ticks} {live.tap.received - received}", flush=True)
+    finally:
+        live.close()
+
+
+def _live_share(models, seconds: float) -> tuple[float, int, int]:
+    import rclpy
+
+    from detection.learned.scenario import ROBOTS, Workload
+    from robot_bridge.ros2.launch import Supervisor, plan
+    from robot_bridge.ros2.runtime import RosContext, loopback_env
+
+    domain = 201 + os.getpid() % 30
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, model in models.items():
+            model.save(Path(tmp) / f"{name}.npz")
+        supervisor = Supervisor(plan(list(ROBOTS), camera=False), domain)
+        supervisor.start()
+        try:
+            if supervisor.wait_ready(90):
+                raise RuntimeError("the team did not come up")
+            with RosContext(domain_id=domain) as work:
+                Workload(work.add(rclpy.create_node("bench_workload", context=work.context)), ROBOTS, seed=3)
+                child = subprocess.run([sys.executable, "-c", "import sys; from benchmarks.bench_perfbugs import "
+                                        f"_watch_child; _watch_child({domain}, {tmp!r}, {seconds})"],
+                                       capture_output=True, text=True, env=loopback_env(), timeout=seconds + 120,
+                                       cwd=Path(__file__).resolve().parents[1])
+        finally:
+            supervisor.stop()
+    if child.returncode != 0:
+        raise RuntimeError(child.stderr[-2000:])
+    cpu, ticks, messages = child.stdout.split()
+    return float(cpu) / seconds, int(ticks), int(messages)
+
+
+def run(quick: bool = False) -> str:
+    import psutil
+
+    from detection.learned.counters import read_counters
+    from detection.learned.evaluate import partitions, train_models
+    from detection.learned.observer import LearnedResourceObserver, replay
+
+    profile, dataset = _dataset()
+    parts = partitions(dataset.fault_free_runs(), 1 if len(dataset.fault_free_runs()) < 10 else 2)
+    started = time.process_time()
+    models = train_models(dataset, parts, 0.005)
+    training = time.process_time() - started
+    samples = sum(len(s.select(parts[0]).run) for s in dataset.components.values())
+
+    observer = LearnedResourceObserver(models, {c: None for c in models}, lambda obs: None)
+    replay(observer, dataset.path / f"run-{parts[3][0]:03d}.npz")
+    per_tick = np.array(observer.tick_seconds[1:]) / len(models) * 1000.0
+    me = psutil.Process()
+    started = time.perf_counter()
+    for _ in range(200):
+        read_counters(me)
+    psutil_ms = (time.perf_counter() - started) / 200 * 1000.0
+
+    lines = [f"{'what':<58} {'measured':>14} {'target':>10}",
+             f"{f'training, {profile} data ({len(models)} components, {samples} ticks in partition 1)':<58} "
+             f"{training:>12.1f} s {'-':>10}",
+             f"{'scoring per component per tick, median (features+model)':<58} {np.median(per_tick):>11.3f} ms "
+             f"{'<= 1 ms':>10}",
+             f"{'scoring per component per tick, worst':<58} {per_tick.max():>11.3f} ms {'':>10}",
+             f"{'reading one process counters (psutil)':<58} {psutil_ms:>11.3f} ms {'':>10}"]
+    if quick:
+        lines.append(f"{'online observer CPU share, live team':<58} {'(skipped: --quick)':>14}")
+    else:
+        share, ticks, messages = _live_share(models, 30.0)
+        lines.append(f"{f'online observer CPU share, live team ({messages / 30:.0f} msg/s, {ticks} ticks)':<58} "
+                     f"{share * 100:>12.2f} % {'<= 2 %':>10}")
+    return "\n".join(lines)

@@ -1,0 +1,93 @@
+"""The live ROS 2 side of the learned detector: which component uses which topic, and every message
+on those topics as (time, channel, encoded vector), read through raw subscriptions.
+
+The components and their channels come from the ROS graph itself (publishers and subscriptions per
+topic), so no per-system table is written by hand. Only topics inside the watched namespaces are
+taken (``/rosout`` and ``/parameter_events`` are every node's housekeeping, not its work).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Iterable
+
+import numpy as np
+
+from detection.learned.encoding import EncodingError, RosEncoder
+from robot_bridge.ros2.perfbugs import component_name
+
+
+@dataclass
+class Component:
+    """One node of the watched system: its name (``robot_node``) and the topics it reads and writes."""
+
+    name: str
+    namespace: str
+    node: str
+    inputs: list[str] = field(default_factory=list)
+    outputs: list[str] = field(default_factory=list)
+
+    @property
+    def channels(self) -> list[str]:
+        return sorted(set(self.inputs) | set(self.outputs))
+
+    def to_dict(self) -> dict:
+        return {"namespace": self.namespace, "node": self.node, "inputs": self.inputs, "outputs": self.outputs}
+
+
+def discover(node, namespaces: Iterable[str], ignore_nodes: Iterable[str] = ()) -> tuple[dict[str, Component], dict[str, str]]:
+    """Components in ``namespaces`` (e.g. ``['/faulty', '/helper']``) and the types of their topics."""
+    prefixes = tuple(ns.rstrip("/") + "/" for ns in namespaces)
+    ignored = set(ignore_nodes)
+    components: dict[str, Component] = {}
+    types: dict[str, str] = {}
+
+    def component(info) -> Component | None:
+        ns = info.node_namespace
+        if info.node_name in ignored or not (ns + "/").startswith(prefixes):
+            return None
+        name = component_name(ns.strip("/").replace("/", "_"), info.node_name)
+        return components.setdefault(name, Component(name, ns, info.node_name))
+
+    for topic, topic_types in node.get_topic_names_and_types():
+        if not topic.startswith(prefixes):
+            continue
+        types[topic] = topic_types[0]
+        for info in node.get_publishers_info_by_topic(topic):
+            if (c := component(info)) is not None and topic not in c.outputs:
+                c.outputs.append(topic)
+        for info in node.get_subscriptions_info_by_topic(topic):
+            if (c := component(info)) is not None and topic not in c.inputs:
+                c.inputs.append(topic)
+    used = {t for c in components.values() for t in c.channels}
+    return components, {t: ty for t, ty in types.items() if t in used}
+
+
+class RawTap:
+    """Raw subscriptions on ``topics``; each message is encoded and handed to ``on_event(t, topic, vector)``.
+
+    A message that cannot be decoded is counted in ``dropped`` (per topic), never raised in the executor.
+    """
+
+    def __init__(self, node, topic_types: dict[str, str], on_event: Callable[[float, str, np.ndarray], None],
+                 clock: Callable[[], float] = time.time) -> None:
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+        self.encoders = {topic: RosEncoder.for_type(type_name) for topic, type_name in topic_types.items()}
+        self.dropped: dict[str, int] = {}
+        self.received = 0
+        self._on_event, self._clock = on_event, clock           # before the first message can arrive
+        qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)   # matches every publisher
+        for topic, encoder in self.encoders.items():
+            node.create_subscription(encoder.msg_class, topic,
+                                     lambda data, t=topic, e=encoder: self._on_raw(t, e, data), qos, raw=True)
+
+    def _on_raw(self, topic: str, encoder: RosEncoder, data: bytes) -> None:
+        now = self._clock()
+        try:
+            vector = encoder.encode_raw(data)
+        except (EncodingError, Exception):      # a bad message is counted, never kills the tap
+            self.dropped[topic] = self.dropped.get(topic, 0) + 1
+            return
+        self.received += 1
+        self._on_event(now, topic, vector)

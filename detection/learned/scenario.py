@@ -1,0 +1,197 @@
+"""Data for the learned detector from faultmas' own running team: runs of the real ROS 2 nodes with a
+varying workload, some with a performance bug injected in one component, each recorded with its truth.
+
+One run: ``robot_bridge.ros2.launch`` starts every node of the robots as its own process (with
+``FAULTMAS_PERFBUGS`` pointing at the run's schedule, see :mod:`robot_bridge.ros2.perfbugs`); a
+workload node sends patrols of ``move``/``turn``/``rotate``/``stop`` actions on ``jason/actions``
+in phases of changing intensity; the recorder taps every topic of the team and samples every node's
+process. Profiles (``PROFILES``) say how many runs of which length; ``generate`` writes a data set
+directory: ``manifest.json`` (runs, faults, components, channels and their columns) and ``run-NNN.npz``.
+"""
+from __future__ import annotations
+
+import json
+import random
+import sys
+import tempfile
+import threading
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Callable, TextIO
+
+from robot_bridge.ros2.perfbugs import ENV_VAR, KINDS, PerfBug, component_name, write_schedule
+
+ROBOTS = ("faulty", "helper")
+WARMUP_S = 8.0
+"""Seconds after all nodes are up before ticks count (imports, discovery, first messages)."""
+
+
+@dataclass(frozen=True)
+class Profile:
+    name: str
+    fault_free_runs: int
+    faulty_runs: int
+    duration_s: float
+    camera: bool
+    fault_length_s: tuple[float, float]
+    kinds: tuple[str, ...] = KINDS
+
+    @property
+    def runs(self) -> int:
+        return self.fault_free_runs + self.faulty_runs
+
+
+PROFILES: dict[str, Profile] = {
+    # a few minutes in all; the tests read it. The camera (rendering 640x480 at 10 Hz per robot) is off
+    # so that a run fits a shared 2-core machine; the leak goes to the motion decomposer (its inputs
+    # and outputs change with the workload, so the model has something to learn).
+    "smoke": Profile("smoke", fault_free_runs=8, faulty_runs=3, duration_s=60.0, camera=False,
+                     fault_length_s=(30.0, 40.0), kinds=("memory_leak", "wasted_cpu", "thread_leak")),
+    # the issue's data set: >= 10 fault-free and >= 20 faulty runs of >= 4 min, every kind 3 times
+    "paper": Profile("paper", fault_free_runs=12, faulty_runs=21, duration_s=240.0, camera=True,
+                     fault_length_s=(40.0, 90.0)),
+}
+
+
+FAULTY_IDS = 100
+"""Faulty runs are numbered from here, fault-free ones from 0: a profile can grow either kind of run
+and the runs already recorded keep their ids."""
+
+
+def run_plan(profile: Profile, seed: int = 0) -> list[dict]:
+    """Which runs to make: id, seed, and for a faulty run its (component node, kind); reproducible."""
+    rng = random.Random(seed)
+    runs = [{"id": i, "seed": seed * 1000 + i, "kind": None} for i in range(profile.fault_free_runs)]
+    nodes = ["kobuki_sim", "fault_injector", "motion_decomposer"] + (
+        ["camera_sim", "visual_synthesizer"] if profile.camera else [])
+    for j in range(profile.faulty_runs):
+        kind = profile.kinds[j % len(profile.kinds)]
+        node = "motion_decomposer" if profile.name == "smoke" else rng.choice(nodes)
+        runs.append({"id": FAULTY_IDS + j, "seed": seed * 1000 + FAULTY_IDS + j,
+                     "kind": kind, "component": component_name(rng.choice(ROBOTS), node)})
+    return runs
+
+
+class Workload:
+    """Patrols on every robot's ``jason/actions``: random motions in phases (busy, calm, idle)."""
+
+    PHASES = (("busy", 0.8), ("calm", 3.0), ("idle", 8.0))          # mean gap between actions, s
+
+    def __init__(self, node, robots: tuple[str, ...], seed: int) -> None:
+        from std_msgs.msg import String
+
+        self.rng = random.Random(seed)
+        self.node = node
+        self.publishers = {r: node.create_publisher(String, f"/{r}/jason/actions", 10) for r in robots}
+        self.next_at = {r: 0.0 for r in robots}
+        self.sign = {r: 1.0 for r in robots}
+        self.phase, self.phase_end, self.id = self.PHASES[0], 0.0, 0
+        self._string = String
+        self.timer = node.create_timer(0.1, self._tick)
+
+    def _tick(self) -> None:
+        from robot_bridge.ros2.wire import ActionRequest
+
+        now = time.monotonic()
+        if now >= self.phase_end:
+            self.phase = self.rng.choice(self.PHASES)
+            self.phase_end = now + self.rng.uniform(8.0, 20.0)
+        for robot, publisher in self.publishers.items():
+            if now < self.next_at[robot]:
+                continue
+            self.next_at[robot] = now + self.rng.expovariate(1.0 / self.phase[1])
+            choice = self.rng.random()
+            if choice < 0.4:
+                self.sign[robot] *= -1.0             # back and forth: the robots stay where they are
+                name, params = "move", [f"{self.sign[robot] * self.rng.uniform(0.1, 0.6):.2f}"]
+            elif choice < 0.75:
+                name, params = "turn", [f"{self.rng.uniform(-180, 180):.0f}"]
+            elif choice < 0.9:
+                name, params = "rotate", [f"{self.rng.uniform(20, 60):.0f}"]
+            else:
+                name, params = "stop", []
+            self.id += 1
+            publisher.publish(self._string(data=ActionRequest(robot, name, tuple(params), self.id).to_json()))
+
+
+def _domain_id(seed: int) -> int:
+    return 101 + (seed + int(time.time())) % 100        # 101..200: clear of the tests' and run's ids
+
+
+def record_run(run: dict, profile: Profile, out_dir: Path, progress: Callable[[str], None]) -> dict:
+    """Launch the team, run the workload for ``profile.duration_s`` and record; returns the run's manifest entry."""
+    from detection.learned.record import RunRecorder
+    from detection.learned.ros_tap import RawTap, discover
+    from robot_bridge.ros2.launch import Supervisor, plan
+    from robot_bridge.ros2.runtime import RosContext
+
+    rng = random.Random(run["seed"])
+    domain = _domain_id(run["seed"])
+    with tempfile.TemporaryDirectory(prefix="faultmas-perfbugs-") as tmp:
+        schedule = Path(tmp) / "schedule.json"
+        write_schedule(schedule, [])               # filled once the start time is known (nodes read it at start)
+        supervisor = Supervisor(plan(list(ROBOTS), camera=profile.camera, seed=run["seed"]), domain,
+                                extra_env={ENV_VAR: str(schedule)})
+        bugs: list[PerfBug] = []
+        supervisor.start()
+        try:
+            missing = supervisor.wait_ready(90.0)
+            if missing or supervisor.dead():
+                raise RuntimeError(f"run {run['id']}: nodes did not come up (missing {sorted(missing)})")
+            pids = {component_name(s.robot, s.node): p.pid for s, p in zip(supervisor.specs, supervisor.processes)}
+            with RosContext(domain_id=domain) as ros:
+                import rclpy
+                probe = ros.add(rclpy.create_node("faultmas_perfbugs_recorder", context=ros.context))
+                time.sleep(2.0)                                     # the graph settles
+                components, topic_types = discover(probe, [f"/{r}" for r in ROBOTS])
+                recorder = RunRecorder({name: pids[name] for name in components})
+                tap = RawTap(probe, topic_types, recorder.on_event)
+                Workload(probe, ROBOTS, run["seed"])
+                time.sleep(WARMUP_S)
+                recorder.start()
+                began = time.time()
+                if run["kind"]:          # the nodes' hooks re-read the schedule: the times count from now
+                    start = began + rng.uniform(8.0, max(9.0, profile.duration_s - profile.fault_length_s[1] - 5.0))
+                    length = rng.uniform(*profile.fault_length_s)
+                    bugs = [PerfBug(run["component"], run["kind"], start, min(start + length, began + profile.duration_s))]
+                    write_schedule(schedule, bugs)
+                end = began + profile.duration_s
+                while time.time() < end:
+                    if supervisor.dead():
+                        raise RuntimeError(f"run {run['id']}: a node died: {supervisor.dead()}")
+                    time.sleep(min(5.0, max(0.0, end - time.time())))
+                    progress(f"run {run['id']}: {time.time() - began:4.0f}/{profile.duration_s:.0f} s, "
+                             f"{tap.received} messages")
+                recorder.stop()
+        finally:
+            supervisor.stop()
+    counts = recorder.save(out_dir / f"run-{run['id']:03d}.npz")
+    return {"id": run["id"], "seed": run["seed"], "file": f"run-{run['id']:03d}.npz", "start": began,
+            "duration_s": profile.duration_s, "faults": [b.to_dict() for b in bugs],
+            "components": {n: c.to_dict() for n, c in components.items()},
+            "channels": {t: {"type": topic_types[t], "columns": tap.encoders[t].columns, "events": counts.get(t, 0)}
+                         for t in topic_types}, "dropped": tap.dropped, "lost_processes": recorder.lost}
+
+
+def generate(out_dir: str | Path, profile_name: str, seed: int = 0, out: TextIO = sys.stderr,
+             only: list[int] | None = None) -> Path:
+    """Make (or complete) the data set of ``profile_name`` in ``out_dir``; runs already there are kept."""
+    profile = PROFILES[profile_name]
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    manifest_path = out_dir / "manifest.json"
+    manifest = json.loads(manifest_path.read_text()) if manifest_path.exists() else \
+        {"format": 1, "profile": asdict(profile), "seed": seed, "runs": []}
+    import signal
+    if threading.current_thread() is threading.main_thread():      # SIGTERM stops the nodes too
+        signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
+    done = {r["id"] for r in manifest["runs"]}
+    todo = [r for r in run_plan(profile, seed) if r["id"] not in done and (only is None or r["id"] in only)]
+    for n, run in enumerate(todo, 1):
+        what = f"{run['kind']} in {run['component']}" if run["kind"] else "fault-free"
+        print(f"[{n}/{len(todo)}] run {run['id']} ({what})", file=out, flush=True)
+        entry = record_run(run, profile, out_dir, lambda text: print(f"  {text}", file=out, flush=True))
+        manifest["runs"] = sorted([*manifest["runs"], entry], key=lambda r: r["id"])
+        manifest_path.write_text(json.dumps(manifest, indent=1))     # after every run: an interrupted
+    return out_dir                                                     # generation resumes where it was

@@ -1,0 +1,80 @@
+"""Wall-clock and memory limits for one ``faultmas diagnose`` run, in every phase.
+
+Why: the search honours its ``Deadline`` (it stops and reports what it found, INCOMPLETE), but a run
+also reads the model and builds the solver, and a search step in C (a cardinality encoding growing)
+does not look at the clock. A 6,000-gate chain once ran 49 s under ``--timeout 5`` and took 3.3 GB.
+Here one watcher thread samples the process's resident memory (psutil) and the clock; past the memory
+limit, or past the timeout plus a grace for the search to report on its own, it writes one line
+naming the phase and the limit and ends the process with ``EXIT_LIMIT``. The process is ended, not
+interrupted: a thread cannot interrupt C code, and memory must stop growing at once.
+"""
+from __future__ import annotations
+
+import os
+import sys
+import threading
+import time
+from typing import TextIO
+
+import psutil
+
+#: Exit status of a run stopped by a limit (0: answered, 2: bad input).
+EXIT_LIMIT = 3
+#: Default ``--max-memory`` in MiB: far above what the ISCAS-85 circuits need (a few hundred MiB),
+#: well below the machine (a run must not push the robot's other processes into swap).
+DEFAULT_MAX_MEMORY_MB = 2048
+#: Seconds past ``--timeout`` the search gets to stop by itself and report what it found.
+GRACE = 1.0
+POLL = 0.02
+
+
+class RunLimits:
+    """``with RunLimits(timeout, max_memory_mb) as limits: limits.phase("reading the model") ...``"""
+
+    def __init__(self, timeout: float | None, max_memory_mb: float | None = DEFAULT_MAX_MEMORY_MB,
+                 err: TextIO | None = None, prog: str = "faultmas diagnose") -> None:
+        self.timeout = timeout
+        self.max_bytes = None if max_memory_mb is None else int(max_memory_mb * 1024 * 1024)
+        self.err = err or sys.stderr
+        self.prog = prog
+        self.started = time.monotonic()
+        self.current = "starting"
+        self.peak = 0
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._watch, name="diagnose-limits", daemon=True)
+
+    def __enter__(self) -> "RunLimits":
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._done.set()
+
+    def phase(self, name: str) -> None:
+        self.current = name
+
+    def left(self) -> float | None:
+        """Seconds of the timeout left for the next phase (None: no timeout)."""
+        if self.timeout is None:
+            return None
+        return max(0.0, self.timeout - (time.monotonic() - self.started))
+
+    def _watch(self) -> None:
+        process = psutil.Process()
+        hard_end = None if self.timeout is None else self.started + self.timeout + GRACE
+        while not self._done.wait(POLL):
+            if self.max_bytes is not None:
+                rss = process.memory_info().rss
+                self.peak = max(self.peak, rss)
+                if rss > self.max_bytes:
+                    self._stop(f"memory limit of {self.max_bytes // 2 ** 20} MiB exceeded while {self.current} "
+                               f"(resident {rss // 2 ** 20} MiB); raise --max-memory, or bound the search "
+                               f"with --max-card or --max-count")
+            if hard_end is not None and time.monotonic() > hard_end:
+                self._stop(f"--timeout {self.timeout:g} s reached while {self.current}")
+
+    def _stop(self, message: str) -> None:
+        try:
+            print(f"{self.prog}: {message}", file=self.err, flush=True)
+        finally:
+            os._exit(EXIT_LIMIT)

@@ -1,0 +1,182 @@
+"""The inspector without a browser: an agent's mind over a real Zenoh session, pause/step exactly one
+reasoning cycle, the switch that refuses them, malformed state messages dropped with a log line, and
+the command line's loopback rule. (The page itself: test_inspector_browser.py.)"""
+from __future__ import annotations
+
+import json
+import logging
+import threading
+
+import pytest
+import zenoh
+
+from agents.inspector import keys
+from agents.inspector.cli import parse_listen
+from agents.inspector.hub import TeamHub
+from agents.inspector.publisher import MindPublisher
+from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
+from agents.transport.config import build_config
+from agents.zenoh_arch import TransportBridge
+from agentspeak.runtime import LocalRuntime
+from tests.agents.transport_fixtures import poll, unique_mas
+
+# .wait(1): a busy loop that never leaves the compiled interpreter keeps Python's interpreter lock, so
+# other threads (Zenoh's callbacks, the inspector's) wait for it; an agent of a robot waits on its robot.
+COUNTER = """
+count(0).
+!loop.
++!loop : count(N) & N < 100000000 <- -+count(N + 1); !inner(N); .wait(1); !loop.
++!inner(N) <- true.
+"""
+
+
+class Team:
+    """One busy agent in a runtime of its own thread, on a Zenoh transport, with its publisher; and a
+    second Zenoh session that plays the inspector's."""
+
+    def __init__(self, allow_control: bool) -> None:
+        self.mas = unique_mas("insp")
+        self.runtime = LocalRuntime()
+        self.agent = self.runtime.add_agent("counter", COUNTER, "counter.asl")
+        self.transport = ZenohTransport(self.mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
+        self.bridge = TransportBridge(self.runtime, self.transport, declared=["counter"]).attach()
+        self.publisher = MindPublisher(self.transport, self.runtime, self.bridge, allow_control=allow_control).start()
+        self.thread = threading.Thread(target=self.bridge.run, kwargs={"timeout": 120}, daemon=True)
+        self.thread.start()
+        self.viewer = zenoh.open(build_config(ZenohOptions(connect=tuple(self.transport.endpoints))))
+
+    def query(self, parameters: str = "") -> dict:
+        key = keys.state_key(self.mas, "counter") + (f"?{parameters}" if parameters else "")
+        for reply in self.viewer.get(key, timeout=5):
+            return json.loads(reply.ok.payload.to_bytes())
+        raise AssertionError("no reply")
+
+    def control(self, command: str) -> dict:
+        for reply in self.viewer.get(keys.control_key(self.mas, "counter"), payload=json.dumps({"command": command}),
+                                     timeout=10):
+            return json.loads(reply.ok.payload.to_bytes())
+        raise AssertionError("no reply")
+
+    def close(self) -> None:
+        self.publisher.close()
+        self.runtime.stop()
+        self.thread.join(10)
+        self.viewer.close()
+        self.transport.close()
+
+
+@pytest.fixture
+def controllable():
+    team = Team(allow_control=True)
+    yield team
+    team.close()
+
+
+def test_pause_then_each_step_runs_exactly_one_reasoning_cycle(controllable):
+    assert poll(lambda: controllable.query("summary")["cycles"] > 50, 20)
+    paused = controllable.control("pause")
+    assert paused["ok"] and paused["paused"]
+    cycles = paused["cycles"]
+    assert controllable.query("summary")["cycles"] == cycles          # held: it does not cycle
+    for n in range(1, 6):
+        stepped = controllable.control("step")
+        assert stepped["ok"], stepped
+        assert stepped["cycles"] == cycles + n
+        assert controllable.query()["cycles"] == cycles + n
+    resumed = controllable.control("resume")
+    assert resumed["ok"] and not resumed["paused"]
+    assert poll(lambda: controllable.query("summary")["cycles"] > cycles + 20, 20)
+
+
+def test_the_mind_shows_beliefs_intention_stacks_and_plans_with_their_source(controllable):
+    assert controllable.control("pause")["ok"]
+    mind = controllable.query("plans")
+    assert any(b.startswith("count(") and b.endswith("[source(self)]") for b in mind["beliefs"])
+    stacks = [i["stack"] for i in mind["intention_stacks"]]
+    assert stacks and stacks[0][-1]["event"] == "loop[source(self)]"          # the bottom: !loop
+    assert stacks[0][-1]["source"] == "counter.asl:4"
+    assert {p["source"] for p in mind["plans"]} == {"counter.asl:4", "counter.asl:5"}
+    assert mind["paused"] and mind["control"]
+    assert "plans" not in controllable.query()
+
+
+def test_pause_is_refused_unless_the_mas_allows_it():
+    team = Team(allow_control=False)
+    try:
+        answer = team.control("pause")
+        assert not answer["ok"] and "--allow-pause" in answer["error"]
+        before = team.query("summary")["cycles"]
+        assert poll(lambda: team.query("summary")["cycles"] > before, 10)   # still running
+    finally:
+        team.close()
+
+
+def test_a_malformed_state_message_is_dropped_with_a_log_line_and_the_hub_goes_on(controllable, caplog):
+    hub = TeamHub(controllable.viewer, controllable.mas).start()
+    try:
+        hub.watch("counter")
+        assert poll(lambda: "counter" in hub.minds, 10)
+        stream = keys.stream_key(controllable.mas, "counter")
+        percepts = f"faultmas/{controllable.mas}/robot/counter/percepts"
+        with caplog.at_level(logging.WARNING, logger="faultmas.inspector"):
+            for bad in (b"\xff not json", b"[1, 2]", json.dumps({"agent": "other", "cycles": 1}).encode()):
+                controllable.viewer.put(stream, bad)
+            controllable.viewer.put(percepts, b"{no")
+            assert poll(lambda: hub.dropped >= 4, 10)
+        lines = [r.getMessage() for r in caplog.records if "dropped a malformed message" in r.getMessage()]
+        assert sum(stream in line for line in lines) == 3 and any(percepts in line for line in lines), lines
+        hub.minds.pop("counter")
+        assert poll(lambda: "counter" in hub.minds, 10)      # later good messages are still taken
+        assert hub.view("counter")["mind"]["agent"] == "counter"
+    finally:
+        hub.close()
+
+
+def test_listen_is_loopback_unless_public_is_given(capsys):
+    assert parse_listen("127.0.0.1:8470", False) == ("127.0.0.1", 8470)
+    assert parse_listen("[::1]:0", False) == ("::1", 0)
+    with pytest.raises(ValueError, match="not a loopback address; add --public"):
+        parse_listen("0.0.0.0:8470", False)
+    with pytest.raises(ValueError, match="HOST:PORT"):
+        parse_listen("8470", False)
+    assert parse_listen("0.0.0.0:8470", True) == ("0.0.0.0", 8470)
+    assert "WARNING serving on 0.0.0.0, not loopback" in capsys.readouterr().err
+
+
+def test_the_mind_shows_what_the_agents_observers_see(tmp_path):
+    from agents.inspector.observers import observers_of
+    from tests.detection.test_agent_actions import AGENT, MODEL, OBSERVERS, RULES, record_slowing_scan
+
+    (tmp_path / "obs.yaml").write_text(OBSERVERS)
+    (tmp_path / "nav.yaml").write_text(MODEL)
+    (tmp_path / "nav.rules.yaml").write_text(RULES)
+    record_slowing_scan(tmp_path / "run")
+    runtime = LocalRuntime(printer=lambda name, text: None)
+    agent = runtime.add_agent("robot", AGENT, source_file=str(tmp_path / "robot.asl"))
+    runtime.run(timeout=30)          # the bag replayed: the scan slowed down, the rule asked for a repair
+    [seen] = observers_of(agent)
+    assert seen["config"] == "obs.yaml" and seen["obs"] == ["~hz(scan)"]
+    assert seen["possibly_faulty"] == ["laser_driver"]
+    assert [f["rule"] for f in seen["fired"]] == ["ask_for_repair"]
+    assert [(v["observation"], v["holds"]) for v in seen["verdicts"]] == [("hz(scan)", False)]
+
+
+def test_the_commands_refuse_a_taken_port_or_a_public_address_before_anything_starts():
+    import socket
+
+    from tests.agents.distributed_fixtures import Proc
+
+    taken = socket.socket()
+    taken.bind(("127.0.0.1", 0))
+    taken.listen(1)
+    port = taken.getsockname()[1]
+    try:
+        run = Proc(["run", "--inspect", "--listen", f"127.0.0.1:{port}"])
+        assert run.finish(60) == 1
+        assert f"cannot serve the inspector on 127.0.0.1:{port}: Address already in use" in "\n".join(run.err)
+        assert not any(line.startswith("[faulty]") for line in run.out)          # no run started
+    finally:
+        taken.close()
+    public = Proc(["inspect", "--listen", "0.0.0.0:8470"])
+    assert public.finish(60) == 2
+    assert "not a loopback address; add --public" in "\n".join(public.err)

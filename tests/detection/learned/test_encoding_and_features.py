@@ -1,0 +1,84 @@
+"""Generic event encoding (rosidl introspection, JSON envelopes) and the 1 Hz window features."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from detection.learned.encoding import EncodingError, JsonEncoder, flatten_json
+from detection.learned.features import ChannelBuffer, WINDOWS_S, feature_names, window_features
+
+
+def test_ros_messages_are_encoded_from_their_introspection():
+    pytest.importorskip("rclpy")
+    from nav_msgs.msg import Odometry
+    from rclpy.serialization import serialize_message
+    from sensor_msgs.msg import JointState
+
+    from detection.learned.encoding import RosEncoder
+
+    odom = RosEncoder.for_type("nav_msgs/msg/Odometry")
+    assert "pose.pose.position.x" in odom.columns and "child_frame_id#len" in odom.columns
+    assert not any("stamp" in c for c in odom.columns)           # absolute time is left out
+    assert not any("covariance" in c for c in odom.columns)      # fixed 36-element arrays say nothing
+    msg = Odometry()
+    msg.child_frame_id = "base_footprint"
+    msg.pose.pose.position.x = 1.5
+    msg.twist.twist.angular.z = -0.25
+    data = serialize_message(msg)
+    vector = odom.encode_raw(data)
+    columns = dict(zip(odom.columns, vector))
+    assert columns["size"] == len(data)
+    assert columns["pose.pose.position.x"] == 1.5 and columns["twist.twist.angular.z"] == -0.25
+    assert columns["child_frame_id#len"] == len("base_footprint")
+    joints = RosEncoder(JointState)
+    msg = JointState(name=["a", "b", "c"], position=[1.0, 2.0, 3.0])
+    assert dict(zip(joints.columns, joints.encode(msg, 99)))["position#len"] == 3.0
+    with pytest.raises(EncodingError, match="unknown ROS 2 message type 'nope_msgs/msg/X'"):
+        RosEncoder.for_type("nope_msgs/msg/X")
+
+
+def test_json_envelopes_give_numbers_and_lengths_by_path():
+    envelope = {"v": 1, "id": "ab.7", "from": "alice", "to": ["bob", "carol"], "perf": "tell",
+                "content": "position(3,4)", "meta": {"hops": 2, "ok": True}}
+    assert flatten_json(envelope) == {"v": 1.0, "id#len": 4.0, "from#len": 5.0, "to#len": 2.0, "perf#len": 4.0,
+                                      "content#len": 13.0, "meta.hops": 2.0, "meta.ok": 1.0}
+    payload = json.dumps(envelope).encode()
+    encoder = JsonEncoder.from_samples([payload])
+    batch = payload + b"\n" + json.dumps(dict(envelope, content="x")).encode()
+    first, second = encoder.encode(batch)                       # a batch: one vector per envelope
+    assert first[0] == len(payload)
+    assert second[encoder.columns.index("content#len")] == 1.0
+    with pytest.raises(EncodingError, match="not a JSON envelope"):
+        encoder.encode(b"{broken")
+
+
+def test_window_features_follow_the_definition():
+    times = np.array([0.5, 1.0, 3.0, 3.5, 9.0])
+    values = np.array([[1.0], [3.0], [5.0], [7.0], [11.0]])
+    rows = window_features(times, values, np.array([0.0, 3.5, 4.0, 8.0]))
+    names = feature_names("/t", ["v"])
+    assert names == ["/t|mean2.5s|v", "/t|count2.5s", "/t|mean6s|v", "/t|count6s", "/t|last|v"]
+    expected = [[0, 0, 0, 0, 0],                  # nothing yet
+                [6, 2, 4, 4, 7],                  # (1.0, 3.5]: 5, 7; (-2.5, 3.5]: all four
+                [6, 2, 4, 4, 7],
+                [0, 0, 6, 2, 7]]                  # (5.5, 8]: none; (2, 8]: 5, 7; last still 7
+    assert rows.tolist() == expected
+    assert window_features(np.empty(0), np.empty((0, 0)), np.array([1.0])).shape == (1, len(WINDOWS_S))  # counts only
+
+
+def test_online_buffer_gives_the_offline_features():
+    rng = np.random.default_rng(3)
+    times = np.sort(rng.uniform(0, 60, 900))
+    times[400:500] = np.linspace(times[399], times[399] + 0.01, 100)    # a burst
+    values = rng.normal(size=(900, 4))
+    ticks = np.arange(1.0, 61.0)
+    offline = window_features(times, values, ticks)
+    buffer, online, i = ChannelBuffer(4, capacity=64), [], 0
+    for tick in ticks:
+        while i < len(times) and times[i] <= tick:
+            buffer.add(times[i], values[i])
+            i += 1
+        online.append(buffer.features(tick))
+    np.testing.assert_allclose(np.array(online), offline, rtol=1e-12, atol=1e-12)
