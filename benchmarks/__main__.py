@@ -19,6 +19,7 @@ BENCHMARKS: dict[str, str] = {
     "sim": "benchmarks.bench_sim",
     "perception": "benchmarks.bench_perception",
     "imu": "benchmarks.bench_imu",
+    "observers": "benchmarks.bench_observers",
     "perfbugs": "benchmarks.bench_perfbugs",
     "inspect": "benchmarks.bench_inspect",
 }
