@@ -61,6 +61,10 @@ class Lines:
         for line in stream:
             self.lines.append(line.rstrip("\n"))
 
+    def join(self, timeout: float = 10.0) -> None:
+        """Every line, once the process has ended (its stdout closed)."""
+        self._thread.join(timeout)
+
     def wait_for(self, predicate, timeout):
         end = time.monotonic() + timeout
         while time.monotonic() < end:
@@ -106,6 +110,7 @@ def test_slow_publisher_is_diagnosed_and_repaired_and_the_bag_replays_the_same(t
         publisher.terminate()
         publisher.wait(10)
     assert observe.returncode == 0, observe.stderr.read()
+    obs_out.join()                                  # the last lines may still be in the pipe
     updates = [json.loads(line) for line in obs_out.lines]
     fault = next(u for u in updates if any(c["literal"] == "~hz(scan)" for c in u["changed"]))
     assert fault["diagnoses"] == [["laser_driver"]] and fault["possibly_faulty"] == ["laser_driver"]
