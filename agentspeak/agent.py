@@ -209,7 +209,7 @@ class Agent:
         self.cycles += 1
         if self.arch is not self._arch_seen:
             self._see_arch(self.arch)
-        if self.plans.has_jag and self.sleeping_evt:
+        if self.sleeping_evt:
             self._awaking()
         if self._perceive is not None or self.feedback or self.timers:
             did = self.sense()
@@ -225,14 +225,19 @@ class Agent:
             did = True
         if self.condition_waiters:
             self._check_conditions()
+        if self.plans.has_extras:
+            self._end_of_cycle()
+        return did
+
+    def _end_of_cycle(self) -> None:
+        """Goal conditions that now hold; Jason's +jag_sleeping when nothing is left to do (once, until
+        something wakes the agent). Only for agents with such plans."""
         if self.plans.has_goal_conditions:
             self._check_goal_conditions()
         if self.plans.has_jag and not self.sleeping_evt and not (
                 self.events or self.running or self.mailbox or self.feedback):
-            # nothing left to do: Jason's +jag_sleeping (once, until something wakes the agent)
             self.sleeping_evt = True
             self.post_external(Trigger(ADD, BEL, _JAG_SLEEPING))
-        return did
 
     # ------------------------------------------------------------------ deadlines and goal conditions
     def _check_deadline(self, goal: Literal, intention: Intention) -> None:

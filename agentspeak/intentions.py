@@ -126,6 +126,7 @@ class PlanLibrary:
         self.kqml_override = False  # a plan is relevant to +!kqml_received/4 (valid while _index is)
         self.has_meta = False       # a ^!g plan exists: the agent posts goal-state meta events
         self.has_goal_conditions = False  # a `+!g <: C` plan exists: C is checked every cycle
+        self.has_extras = False     # either of the two above: the end of a cycle checks them
         self.has_jag = False        # a +jag_sleeping/+jag_awaking plan exists: the agent posts them
 
     def add(self, plan: Plan, at_end: bool = True) -> None:
@@ -134,9 +135,11 @@ class PlanLibrary:
             self.has_meta = True
         if plan.goal_condition is not None:
             self.has_goal_conditions = True
+            self.has_extras = True
         lit = plan.trigger.literal
         if getattr(lit, "functor", None) in ("jag_sleeping", "jag_awaking"):
             self.has_jag = True
+            self.has_extras = True
         if at_end:
             self.plans.append(plan)
         else:

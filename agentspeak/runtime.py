@@ -278,7 +278,7 @@ class LocalRuntime:
                 agent = ready.popleft()
                 ready_set.discard(agent.name)
                 CURRENT.agent = agent  # whose beliefs functions such as .count(Q) read
-                started = monotonic()
+                started = 0.0
                 for i in turn:
                     agent.cycle()  # called on the agent (not a bound method kept aside): compiled, a C call
                     # that still honours a cycle() overridden in a Python subclass
@@ -286,8 +286,11 @@ class LocalRuntime:
                             or self._stop_at is not None or self._yield_turn:
                         self._yield_turn = False
                         break
-                    if i & 15 == 15 and monotonic() - started > TURN_SECONDS:
-                        break  # slow cycles: the others get their turn (timers stay timely)
+                    if i & 15 == 15:  # a long turn: the clock is read from its 16th cycle on
+                        if i == 15:
+                            started = monotonic()
+                        elif monotonic() - started > TURN_SECONDS:
+                            break  # slow cycles: the others get their turn (timers stay timely)
                 if self._yield_to is not None:
                     self._run_next(self._yield_to, agent)
                     self._yield_to = None
