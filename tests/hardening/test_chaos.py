@@ -4,6 +4,7 @@ exit code of ``faultmas run`` tells it from a wrong diagnosis."""
 from __future__ import annotations
 
 import signal
+import threading
 import time
 
 from agents.cooperative import paper_scenario, run_scenario
@@ -26,3 +27,20 @@ def test_a_killed_faulty_robot_ends_the_run_promptly_and_is_named():
     assert "the run ended early: agent faulty: killed by SIGKILL (exit -9)" in _summary(result)
     # ended by the death (a grace of seconds), not by the 240 s timeout; generous for a loaded machine
     assert time.monotonic() - killed[0] < 120, time.monotonic() - started
+
+
+def test_a_helper_frozen_for_seconds_is_taken_back_after_it_thaws():
+    frozen: list[str] = []
+
+    def freeze_the_helper(mark, kill):
+        if mark.agent == "faulty" and mark.step == "helper_found" and not frozen:
+            frozen.append(mark.detail)
+            kill(mark.detail, signal.SIGSTOP)   # its link lease (1 s) expires: faulty sees it gone
+            threading.Timer(5.0, kill, (mark.detail, signal.SIGCONT)).start()
+    result = run_scenario(paper_scenario("encoders", seed=5), processes=True, timeout=240,
+                          on_mark=freeze_the_helper)
+    assert frozen, "no helper was found"
+    assert result.died == [] and result.finished, [(m.agent, m.step, m.detail) for m in result.marks]
+    assert result.robots[0].diagnosis == "encoders"
+    helpers = [m.detail for m in result.marks if m.agent == "faulty" and m.step == "helper_found"]
+    assert helpers.count(frozen[0]) >= 2, helpers  # the thawed helper was taken back
