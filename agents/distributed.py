@@ -156,6 +156,8 @@ class Launcher:
             code = child.poll()
             if code is not None and code != 0 and (name, code) not in self.failures:
                 self.failures.append((name, code))
+                # the others may be waiting for it to become reachable (--wait-for-peers): it never will
+                self.hub.publish_control("died", agent=name, exit=code, token=self.token)
         return all(child.poll() is not None for child in self.children.values())
 
     def stop_all(self) -> None:

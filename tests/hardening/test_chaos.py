@@ -44,3 +44,17 @@ def test_a_helper_frozen_for_seconds_is_taken_back_after_it_thaws():
     assert result.robots[0].diagnosis == "encoders"
     helpers = [m.detail for m in result.marks if m.agent == "faulty" and m.step == "helper_found"]
     assert helpers.count(frozen[0]) >= 2, helpers  # the thawed helper was taken back
+
+
+def test_an_agent_that_dies_before_it_is_reachable_does_not_hold_the_others(tmp_path):
+    """``mas run --processes`` starts each agent with ``--wait-for-peers 60``: a peer whose process died
+    on start (here: bad initial beliefs) once held the others for the whole minute."""
+    from tests.agents.distributed_fixtures import mas_run, write_files
+    write_files(tmp_path, {"a.asl": '!start.\n+!start <- .print("started"); .stopMAS.\n', "b.asl": "",
+                           "m.mas2j": 'MAS m { agents: a; b [beliefs="((("]; }\n'})
+    started = time.monotonic()
+    run = mas_run(tmp_path / "m.mas2j", "--processes", "--timeout", "120")
+    assert run.finish(timeout=150) == 1  # an agent process failed
+    assert "[a] started" in run.out
+    assert time.monotonic() - started < 50  # not after the 60 s wait for b (generous for a loaded machine)
+    assert any("died before they became reachable" in line and "b" in line for line in run.err)
