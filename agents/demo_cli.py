@@ -78,7 +78,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     ev.add_argument("--jobs", type=int, default=2, help="worker processes (default %(default)s)")
     ev.add_argument("--json", action="store_true", help="print one JSON object: every run and the table")
     ev.add_argument("--timeout", type=float, default=150.0,
-                    help="wall seconds per run before it counts as failed (default %(default)s)")
+                    help="wall seconds per run before it counts as failed; a team of N gets N/2 times as much "
+                         "(default %(default)s)")
     ev.set_defaults(func=cmd_eval)
 
 
@@ -130,7 +131,10 @@ def cmd_run(args: argparse.Namespace) -> int:
                               out=agent_lines, err=sys.stderr, echo=lambda m: _echo(m, show), inspector=inspector)
     if args.plot and result.world is not None:
         from robot_bridge.cli import plot
-        plot(result.world, args.plot)
+        tested = [r for r in result.robots if r.fault != "none"] or result.robots[:1]
+        plot(result.world, args.plot, title="; ".join(
+            f"{r.name}: fault {r.fault}, diagnosis {r.diagnosis or 'none reached'}" for r in tested)
+            + f" (seed {result.scenario.seed})")
         print(f"faultmas: trajectories drawn to {args.plot}", file=show)
     if args.json:
         print(json.dumps(_as_json(result)))
@@ -202,6 +206,10 @@ def team_label(size: int) -> str:
     return f"team of {size}"
 
 
+def _team_size(scenario: str) -> int:
+    return int(scenario.rsplit(" ", 1)[1]) if scenario.startswith("team of ") else 2
+
+
 def eval_scenario(name: str, seed: int):
     """The scenario of one evaluation run: a pair with fault ``name``, or ``team of N``."""
     from agents.cooperative import random_pair_scenario, team_scenario
@@ -246,7 +254,9 @@ def cmd_eval(args: argparse.Namespace) -> int:
         print(f"faultmas eval: {why}", file=sys.stderr)
         return 2
     faults += [team_label(s) for s in sizes]
-    jobs = [(f, args.seed * 100_000 + i, args.timeout) for f in faults for i in range(args.runs)]
+    # a team's run gets more wall time: its cameras cost the simulator in proportion to the robots
+    jobs = [(f, args.seed * 100_000 + i, args.timeout * max(1.0, _team_size(f) / 2))
+            for f in faults for i in range(args.runs)]
     runs: list[dict] = []
     from tqdm import tqdm
 

@@ -284,6 +284,10 @@ class _ToProgram(Transformer):
             return PlanTerm(plan=Plan(body[0].trigger, None, (), None, self.source_file, self.line))
         return PlanTerm(body=body)
 
+    def plan_term_empty(self, c):
+        """``{}``: the empty plan body (Jason's meta-programming demos end a recursion on it)."""
+        return PlanTerm(body=())
+
     def plan_term_rule(self, c):
         return PlanTerm(rule=Rule(c[0], c[1], self.source_file, self.line))
 

@@ -96,9 +96,9 @@ def main(args: argparse.Namespace) -> int:
         print(f"{'':<28}" + "".join(f"{d:>8}" for d in table))
         for key in keys:
             print(f"{key:<28}" + "".join(f"{_fmt(table[d].get(key, float('nan'))):>8}" for d in table))
-    print("\nbug instances (flagged within 80 s of the start):")
+    print("\nbug instances: flagged within 80 s of the start (share of the bug's seconds flagged):")
     for f in result.detections():
         print(f"  run {f['run']:>3} {f['kind']:<22} in {f['component']:<26} " +
-              " ".join(f"{d}={'yes' if f[d] else 'no'}" for d in ("model", "ocsvm", "random")))
+              " ".join(f"{d}={'yes' if f[d] else 'no '} ({_fmt(f[d + '_share'])})" for d in ("model", "ocsvm", "random")))
     print(f"\ntraining: {result.training_s:.1f} s CPU for {len(result.models)} components")
     return 0
