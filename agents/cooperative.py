@@ -14,6 +14,7 @@ fault), so it raises an alarm that the diagnosis must dismiss.
 from __future__ import annotations
 
 import math
+import signal
 import random
 import threading
 import time
@@ -363,10 +364,11 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
         stop_serving = serve(hub) if serve is not None else None
         launcher = Launcher(load_mas2j(str(project_file)), hub, out, err, extra_args=extra_args)
 
-        def kill(name: str) -> None:
+        def kill(name: str, signum: int = signal.SIGKILL) -> None:
+            """SIGKILL ``name``'s process, or send it ``signum`` (SIGSTOP, SIGCONT: a freeze, for chaos tests)."""
             child = launcher.children.get(name)
             if child is not None and child.poll() is None:
-                child.kill()
+                child.send_signal(signum)
 
         def observe(mark: Mark) -> None:
             if echo is not None:

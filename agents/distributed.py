@@ -83,6 +83,7 @@ class Launcher:
         self.extra_args = list(extra_args or ())
         self.names = project.agent_names()
         self.token = secrets.token_hex(16)
+        self._announced = 0.0
         self.children: dict[str, subprocess.Popen] = {}
         self.relays: list[threading.Thread] = []
         self.statuses: dict = {}
@@ -156,7 +157,18 @@ class Launcher:
             code = child.poll()
             if code is not None and code != 0 and (name, code) not in self.failures:
                 self.failures.append((name, code))
+        self._announce_deaths()
         return all(child.poll() is not None for child in self.children.values())
+
+    def _announce_deaths(self) -> None:
+        """Tell the others, every second, which agents died: they may be waiting for them to become
+        reachable (``--wait-for-peers``), which they never will; a control message has no history, so an
+        agent that connects later hears it at the next announcement."""
+        now = time.monotonic()
+        if self.failures and now - self._announced >= 1.0:
+            self._announced = now
+            for name, code in self.failures:
+                self.hub.publish_control("died", agent=name, exit=code, token=self.token)
 
     def stop_all(self) -> None:
         """Ask every child to stop, then insist: control message, SIGINT, SIGTERM, SIGKILL."""

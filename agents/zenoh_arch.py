@@ -148,6 +148,7 @@ class TransportBridge:
         self.policy = TrustPolicy(transport.mas, frozenset(declared), frozenset(allowed_code_senders))
         self.members = None if members is None else frozenset(members) | self.policy.allowed_code_senders
         self.published_idle: bool | None = None
+        self.dead: set[str] = set()  # agents whose process the launcher saw die (control 'died')
         self.on_message = None
         """``on_message(direction, agent, message)``: sees each message to ('out', a ``Message``) or
         from ('in', an ``Envelope``) another process (the inspector keeps the last few)."""
@@ -244,16 +245,37 @@ class TransportBridge:
                 agent.post_feedback(partial(_presence_percept, agent, name, alive))
 
     def _on_control(self, message: dict) -> None:
+        if message.get("command") == "died" and self._from_launcher(message):
+            self.dead.add(str(message.get("agent")))
+            return
         if message.get("command") == "stop":
             by = message.get("by")
-            token = os.environ.get(LAUNCHER_TOKEN_ENV)
-            from_launcher = bool(token) and hmac.compare_digest(str(message.get("token", "")), token)
             if self.members is not None and by not in self.members and by not in self.runtime.agents \
-                    and not from_launcher:
+                    and not self._from_launcher(message):
                 self.transport.report_control_refused(message, "not_a_member")
                 return
             delay = message.get("delay", 0.0)
             self.runtime.stop(float(delay) if isinstance(delay, (int, float)) else 0.0)
+
+    @staticmethod
+    def _from_launcher(message: dict) -> bool:
+        token = os.environ.get(LAUNCHER_TOKEN_ENV)
+        return bool(token) and hmac.compare_digest(str(message.get("token", "")), token)
+
+    def wait_for_peers(self, names: Iterable[str], timeout: float) -> bool:
+        """Wait until every agent of ``names`` is reachable, or known dead (the launcher says so: a peer
+        killed before it became reachable must not hold the others for the whole ``timeout``)."""
+        deadline = time.monotonic() + timeout
+        wanted = set(names)
+        while True:
+            pending = wanted - self.dead
+            if self.transport.wait_for_agents(pending, timeout=min(0.2, max(0.0, deadline - time.monotonic()))):
+                if wanted & self.dead:
+                    log.warning("agents %s died before they became reachable; starting without them",
+                                ", ".join(sorted(wanted & self.dead)))
+                return True
+            if time.monotonic() >= deadline:
+                return False
 
     # -- status and the run loop ---------------------------------------------------------------
     def publish_status(self, busy: bool) -> None:
