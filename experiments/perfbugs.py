@@ -28,6 +28,8 @@ def data_dir(profile: str) -> Path:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.formatter_class = argparse.RawDescriptionHelpFormatter
+    parser.epilog = __doc__.split("\n\n", 1)[1] + "\nMethod, data, results and what remains: docs/perfbugs.md."
     parser.add_argument("--profile", choices=("smoke", "paper"), default="smoke",
                         help="which data set (default: smoke)")
     parser.add_argument("--data", metavar="DIR", help="data set directory (default: the profile's, "
