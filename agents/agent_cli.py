@@ -129,8 +129,8 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: runtime.stop())
     try:
-        bridge = TransportBridge(runtime, transport, declared=declared,
-                                 allowed_code_senders=args.allow_code_from).attach()
+        bridge = TransportBridge(runtime, transport, declared=declared, allowed_code_senders=args.allow_code_from,
+                                 members=declared if args.project else None).attach()
         from agents.inspector.publisher import MindPublisher  # state on demand for `faultmas inspect`
         inspected = MindPublisher(transport, runtime, bridge, allow_control=args.allow_pause).start()
         if args.wait_for_peers > 0 and not transport.wait_for_agents(declared, args.wait_for_peers):

@@ -14,7 +14,9 @@ the network and removed when it goes (its process exits, is killed, or its link 
 """
 from __future__ import annotations
 
+import hmac
 import logging
+import os
 import threading
 import time
 from collections import OrderedDict
@@ -38,6 +40,13 @@ log = logging.getLogger("faultmas.agents")
 
 PRESENCE_FUNCTOR = "agent_alive"
 """The percept ``agent_alive(Name)``: agent ``Name`` of this MAS is reachable right now."""
+
+MEMBERS_ONLY = frozenset({"achieve", "unachieve", "tellHow", "untellHow"})
+"""Performatives that make an agent act or change its plans: refused from non-members of a known MAS."""
+
+LAUNCHER_TOKEN_ENV = "FAULTMAS_LAUNCHER_TOKEN"
+"""The launcher of ``faultmas mas run --processes`` gives its children a random token in this variable
+and puts it in its ``stop``: a stop from outside the MAS must know it (agents.distributed)."""
 
 IDLE_GRACE = 0.01
 """Seconds the runtime must stay idle before 'idle' is published (a busy ring publishes nothing)."""
@@ -123,15 +132,21 @@ class TransportBridge:
     """Connects every agent of ``runtime`` to ``transport``; ``attach`` once the agents are added.
 
     ``declared``: the agents of the project file (trusted to send plans, part of ``.all_names``);
-    ``allowed_code_senders``: other agents the project allows to send plans.
+    ``allowed_code_senders``: other agents the project allows to send plans; ``members``: every agent of
+    the MAS when a project file says so (None: not known). Non-members may then not make an agent act
+    or learn plans (``MEMBERS_ONLY``) nor stop the MAS; anyone may still tell and ask. Envelope senders
+    are only what the sender claims (see ``trust``): this keeps out strangers that do not know the
+    project, and a message claiming to come from one of this process's own agents (they never arrive
+    over the network) is refused as forged.
     """
 
     def __init__(self, runtime: LocalRuntime, transport: Transport, *, declared: Iterable[str] = (),
-                 allowed_code_senders: Iterable[str] = ()) -> None:
+                 allowed_code_senders: Iterable[str] = (), members: Iterable[str] | None = None) -> None:
         self.runtime = runtime
         self.transport = transport
         self.mas = transport.mas
         self.policy = TrustPolicy(transport.mas, frozenset(declared), frozenset(allowed_code_senders))
+        self.members = None if members is None else frozenset(members) | self.policy.allowed_code_senders
         self.published_idle: bool | None = None
         self.on_message = None
         """``on_message(direction, agent, message)``: sees each message to ('out', a ``Message``) or
@@ -190,6 +205,15 @@ class TransportBridge:
 
     # -- incoming (network threads: never block, never raise) ---------------------------------
     def _on_envelope(self, agent: Agent, envelope: Envelope) -> None:
+        sender = envelope.sender
+        if sender in self.runtime.agents:  # this process's agents are delivered to locally, never from afar
+            self._refuse(agent, envelope, "forged_sender", f"{sender} is an agent of this process")
+            return
+        if (self.members is not None and sender not in self.members and envelope.performative in MEMBERS_ONLY
+                and envelope.performative not in CODE_PERFORMATIVES  # plans: 'untrusted_code' below
+                and envelope.in_reply_to not in agent.pending_asks):
+            self._refuse(agent, envelope, "not_a_member", f"{envelope.performative} only from agents of the MAS")
+            return
         if envelope.performative in CODE_PERFORMATIVES and not self.may_tell_how(envelope.sender) \
                 and envelope.in_reply_to not in agent.pending_asks:  # an askHow answer is not refused
             self._refuse(agent, envelope, "untrusted_code", "plans only from agents declared in the project")
@@ -221,6 +245,13 @@ class TransportBridge:
 
     def _on_control(self, message: dict) -> None:
         if message.get("command") == "stop":
+            by = message.get("by")
+            token = os.environ.get(LAUNCHER_TOKEN_ENV)
+            from_launcher = bool(token) and hmac.compare_digest(str(message.get("token", "")), token)
+            if self.members is not None and by not in self.members and by not in self.runtime.agents \
+                    and not from_launcher:
+                self.transport.report_control_refused(message, "not_a_member")
+                return
             delay = message.get("delay", 0.0)
             self.runtime.stop(float(delay) if isinstance(delay, (int, float)) else 0.0)
 

@@ -1079,6 +1079,13 @@ def _post_belief_event(ag: Agent, trigger: Trigger, intention: Intention, new_fo
 
 
 def _exec_add_bel(ag: Agent, intention, im, frame, instr, at_end: bool = False, new_focus: bool = False) -> None:
+    if type(instr.term) is not Literal:
+        rule = resolve(instr.term, im.b)
+        if isinstance(rule, PlanTerm) and rule.rule is not None:  # +R with R a rule term {h :- b}: Jason adds it
+            ag.bb.add_rule(rule.rule.__class__(rule.rule.head, rule.rule.body, rule.rule.source_file,
+                                               rule.rule.line), at_end=at_end)
+            frame.pc += 1
+            return
     lit = _belief_literal(instr.term, im.b)
     added = ag.bb.add(lit, at_end=at_end)
     frame.pc += 1

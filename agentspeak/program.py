@@ -412,10 +412,22 @@ class PlanTerm:
     ``body`` for a body term; ``rule`` for a rule term.
     """
 
-    __slots__ = ("plan", "body", "rule")
+    __slots__ = ("plan", "body", "rule", "_vars")
 
     def __init__(self, plan: Plan | None = None, body: tuple | None = None, rule: Rule | None = None) -> None:
         self.plan, self.body, self.rule = plan, body, rule
+        self._vars = None  # its variables, worked out on the first resolve
+
+    def _bound_in(self, b: Bindings) -> bool:
+        """Is any variable of this term bound in ``b``? (A plan term handed around, e.g. by
+        .relevant_plans, usually has none: resolving it is then a no-op, not a copy of the plan.)"""
+        vs = self._vars
+        if vs is None:
+            vs = self._vars = tuple(variables(self))
+        for v in vs:
+            if v in b:
+                return True
+        return False
 
     def as_trigger(self) -> Trigger | None:
         """The trigger this term stands for (``{+!g}`` or a one-formula body such as ``{+b}``)."""
@@ -438,6 +450,8 @@ class PlanTerm:
         return Plan(trig) if trig is not None else None
 
     def resolve(self, b: Bindings) -> "PlanTerm":
+        if not self._bound_in(b):
+            return self
         if self.plan is not None:
             return PlanTerm(plan=self.plan.resolved(b))
         if self.body is not None:
@@ -462,6 +476,8 @@ class PlanTerm:
     def subterms(self) -> list:
         out: list = []
         if self.plan is not None:
+            if self.plan.label is not None:
+                out.append(self.plan.label)
             out.append(self.plan.trigger.literal)
             if self.plan.context is not None:
                 out.append(self.plan.context)

@@ -26,6 +26,8 @@ log = logging.getLogger("faultmas.agentspeak")
 
 CYCLES_PER_TURN = 64
 """Reasoning cycles an agent runs before the next ready agent gets its turn (fairness)."""
+TURN_SECONDS = 0.005
+"""... or fewer, when its cycles are slow: with many busy agents a round stays short."""
 
 
 class LocalArch(AgentArch):
@@ -266,21 +268,26 @@ class LocalRuntime:
                     if not agent.timers:
                         timed.discard(agent)
                     elif agent.timers[0][0] <= now and agent.name not in ready_set:
+                        # first in line: a .wait or .at that is due goes on at once, as an agent on a
+                        # thread of its own would (Jason), not after a round of every busy agent
                         ready_set.add(agent.name)
-                        ready.append(agent)
+                        ready.appendleft(agent)
             if ready:
                 # no lock: a wake from another thread in between either finds the agent still marked
                 # ready (and the has_work() check after its turn sees the news) or queues it again
                 agent = ready.popleft()
                 ready_set.discard(agent.name)
                 CURRENT.agent = agent  # whose beliefs functions such as .count(Q) read
-                for _ in turn:
+                started = monotonic()
+                for i in turn:
                     agent.cycle()  # called on the agent (not a bound method kept aside): compiled, a C call
                     # that still honours a cycle() overridden in a Python subclass
                     if not (agent.events or agent.running or agent.mailbox or agent.feedback) \
                             or self._stop_at is not None or self._yield_turn:
                         self._yield_turn = False
                         break
+                    if i & 15 == 15 and monotonic() - started > TURN_SECONDS:
+                        break  # slow cycles: the others get their turn (timers stay timely)
                 if self._yield_to is not None:
                     self._run_next(self._yield_to, agent)
                     self._yield_to = None

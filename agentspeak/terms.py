@@ -271,6 +271,9 @@ def list_items(t: Term) -> list:
         out.append(t.head)
         t = t.tail
     if t is not NIL:
+        items = getattr(t, "list_items", None) if not out else None
+        if items is not None:  # a set or a queue (agentspeak.stdlib.containers) is seen as its elements
+            return items()
         raise TypeError(f"not a proper list (tail is {to_str(t)})")
     return out
 

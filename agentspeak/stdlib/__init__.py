@@ -5,7 +5,7 @@ Importing this package fills ``STDLIB`` and ``FUNCTIONS`` (the explicit list of 
 from agentspeak.stdlib.registry import (
     FUNCTIONS, STDLIB, IAError, Registry, Suspend, arith_function, internal_action, wrong_arguments,
 )
-from agentspeak.stdlib import output, lists, strings, bdi, beliefs, plans, communication, system, mas  # noqa: F401
+from agentspeak.stdlib import output, lists, strings, bdi, beliefs, plans, communication, system, mas, containers  # noqa: F401
 from agentspeak.stdlib import functions  # noqa: F401
 
 __all__ = ["FUNCTIONS", "STDLIB", "IAError", "Registry", "Suspend", "arith_function", "internal_action",

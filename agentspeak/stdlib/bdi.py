@@ -197,8 +197,14 @@ def _failing(agent, intention: Intention) -> set:
 
 @internal_action(".intend", args=(1, 2))
 def intend(ctx, goal, ident=None):
-    """Is ``goal`` currently intended? Backtracks over intentions."""
+    """Is ``goal`` currently intended? Backtracks over intentions (not over those .suspend set aside)."""
+    return _intended(ctx, goal, ident, False)
+
+
+def _intended(ctx, goal, ident, with_suspended: bool):
     for intention in ctx.agent.intentions() + ([ctx.intention] if ctx.intention and ctx.intention.dropped is False and ctx.intention not in ctx.agent.intentions() else []):
+        if not with_suspended and intention.suspended == "suspended" and intention is not ctx.intention:
+            continue  # Jason's .intend leaves out the intentions .suspend set aside (not those waiting)
         failing = _failing(ctx.agent, intention)
         for i in _goal_ims(intention, goal):
             im = intention.stack[i]
@@ -220,7 +226,7 @@ def desire(ctx, goal, ident=None):
             if ctx.unify(goal, t.literal):
                 yield
             undo(ctx.b, ctx.trail, mark)
-    yield from intend(ctx, goal, ident)
+    yield from _intended(ctx, goal, ident, True)
 
 
 @internal_action(".suspend", args=(0, 1))

@@ -51,7 +51,11 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
     sender = agent.name
     if answer is None or perf not in _ASK:
         for name in names:
-            agent.arch.send(agent, Message(sender, name, perf, content))
+            msg = Message(sender, name, perf, content)
+            if answer is not None and not isinstance(answer, Var):
+                # .send(S, tell, C, MsgId): the reply to the ask MsgId (Jason's 4th argument of a tell)
+                msg.in_reply_to = answer if isinstance(answer, str) else to_str(answer)
+            agent.arch.send(agent, msg)
         return True
     # a synchronous ask: wait for the replies
     futures = []

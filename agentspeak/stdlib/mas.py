@@ -171,9 +171,12 @@ def im_term(im) -> Literal:
     trig = im.plan.trigger
     literal = im.event_literal if im.event_literal is not None else trig.literal
     trigger = PlanTerm(plan=Plan(Trigger(trig.op, trig.kind, copy(literal))))
-    body = PlanTerm(body=tuple(instr.map_terms(copy) if hasattr(instr, "term") else instr
-                               for instr in _remaining_body(im)))
-    unifier = make_list([Literal("map", (Var(v.name), copy(v))) for v in body_variables(im.plan.body)
+    remaining = _remaining_body(im)
+    body = PlanTerm(body=tuple(instr.map_terms(copy) if hasattr(instr, "term") else instr for instr in remaining))
+    # the bindings of the variables the rest of the plan still uses (Jason lists the whole unifier; the
+    # values of variables the plan is done with can be large, e.g. a list of plans, and copying them
+    # for every assert made Jason's test harness slow)
+    unifier = make_list([Literal("map", (Var(v.name), copy(v))) for v in body_variables(remaining)
                          if v in b and not v.name.startswith("_")])
     return Literal("im", (_label_term(im.plan), trigger, body, unifier))
 
@@ -227,9 +230,12 @@ def eval_(ctx, result, formula):
 def relevant_rules(ctx, pattern, result):
     """``.relevant_rules(p(_,_), L)``: the rules whose head unifies with the pattern, as rule terms."""
     from agentspeak.unify import unifies
-    if not isinstance(pattern, Literal):
+    if isinstance(pattern, Var):  # every rule
+        rules = list(ctx.agent.bb.rules())
+    elif isinstance(pattern, Literal):
+        rules = [r for r in ctx.agent.bb.rules_for(pattern) if unifies(pattern, r.head, {})]
+    else:
         raise wrong_arguments(".relevant_rules needs a literal")
-    rules = [r for r in ctx.agent.bb.rules_for(pattern) if unifies(pattern, r.head, {})]
     return ctx.unify(result, make_list([PlanTerm(rule=r).rename({}) for r in rules]))
 
 
@@ -309,3 +315,228 @@ def add_nested_source(ctx, lit, source, result):
     if not isinstance(lit, Literal):
         raise wrong_arguments(".add_nested_source needs a literal")
     return ctx.unify(result, nested_source(lit, source))
+
+
+# ---------------------------------------------------------------------- directory facilitator (local)
+def _df(ctx) -> dict:
+    """The directory of the MAS this agent runs in (agents of one in-process run share it)."""
+    runtime = getattr(ctx.agent.arch, "runtime", None)
+    if runtime is None:
+        raise IAError("ia_failed", "no directory facilitator here: .df_* work among the agents of one "
+                                   "`faultmas mas run` (not across processes)")
+    return runtime.__dict__.setdefault("directory", {"services": {}, "subscribers": {}})
+
+
+def _service_key(service, kind) -> tuple:
+    return (_text(service), _text(kind) if kind is not None else "")
+
+
+def _tell_provider(ctx, subscriber: str, provider: str, service) -> None:
+    from agentspeak.communication import Message
+    ctx.agent.arch.send(ctx.agent, Message("df", subscriber, "tell", Literal("provider", (Literal(provider), service))))
+
+
+@internal_action(".df_register", args=(1, 2))
+def df_register(ctx, service, kind=None):
+    """``.df_register(S[, Type])``: this agent provides service S; subscribers get ``provider(Ag, S)``."""
+    df = _df(ctx)
+    key = _service_key(service, kind)
+    providers = df["services"].setdefault(key, [])
+    me = ctx.agent.name
+    if me not in providers:
+        providers.append(me)
+        for subscriber in df["subscribers"].get(key, []):
+            _tell_provider(ctx, subscriber, me, service)
+
+
+@internal_action(".df_deregister", args=(1, 2))
+def df_deregister(ctx, service, kind=None):
+    """``.df_deregister(S[, Type])``: this agent no longer provides S."""
+    providers = _df(ctx)["services"].get(_service_key(service, kind), [])
+    if ctx.agent.name in providers:
+        providers.remove(ctx.agent.name)
+
+
+@internal_action(".df_search", args=(2, 3))
+def df_search(ctx, service, kind_or_result, result=None):
+    """``.df_search(S[, Type], L)``: L is the list of the agents providing S."""
+    kind, result = (None, kind_or_result) if result is None else (kind_or_result, result)
+    providers = _df(ctx)["services"].get(_service_key(service, kind), [])
+    return ctx.unify(result, make_list([Literal(p) for p in providers]))
+
+
+@internal_action(".df_subscribe", args=(1, 2))
+def df_subscribe(ctx, service, kind=None):
+    """``.df_subscribe(S[, Type])``: be told ``provider(Ag, S)`` (from ``df``) for each provider of S."""
+    df = _df(ctx)
+    key = _service_key(service, kind)
+    subscribers = df["subscribers"].setdefault(key, [])
+    if ctx.agent.name not in subscribers:
+        subscribers.append(ctx.agent.name)
+        for provider in df["services"].get(key, []):
+            _tell_provider(ctx, ctx.agent.name, provider, service)
+
+
+# ---------------------------------------------------------------------- small terms and lists
+@internal_action(".copy_term", args=2)
+def copy_term(ctx, term, result):
+    """``.copy_term(T, C)``: C is T with fresh variables."""
+    from agentspeak.terms import rename
+    return ctx.unify(result, rename(term, {}))
+
+
+@internal_action(".rename_apart", args=2)
+def rename_apart(ctx, term, result):
+    """``.rename_apart(b(X,Y,a), R)``: R is ``b(_X,_Y,a)`` with variables no one else holds."""
+    from agentspeak.terms import rename
+    return ctx.unify(result, rename(term, {}))
+
+
+@internal_action(".remove_source_annot", args=2)
+def remove_source_annot(ctx, lit, result):
+    """``.remove_source_annot(p[source(a),x], R)``: R is ``p[x]``."""
+    if not isinstance(lit, Literal):
+        raise wrong_arguments(".remove_source_annot needs a literal")
+    kept = tuple(a for a in lit.annots or () if not (isinstance(a, Literal) and a.functor == "source"))
+    return ctx.unify(result, Literal(lit.functor, lit.args, kept or None, lit.neg, lit.annot_tail))
+
+
+def _seq(t, action: str):
+    from agentspeak.terms import list_items
+    if isinstance(t, str):
+        return t
+    try:
+        return list_items(t)
+    except TypeError:
+        raise wrong_arguments(f"{action}: '{t}' is neither a list nor a string") from None
+
+
+def _as_term(part, like):
+    return part if isinstance(like, str) else make_list(part)
+
+
+def _each_part(ctx, pattern, parts, like):
+    for part in parts:
+        mark = len(ctx.trail)
+        if ctx.unify(pattern, _as_term(part, like)):
+            yield
+        undo(ctx.b, ctx.trail, mark)
+
+
+@internal_action(".prefix", args=2)
+def prefix(ctx, pre, whole):
+    """``.prefix(P, L)``: P is a prefix of list or string L (backtracks, shortest first)."""
+    seq = _seq(whole, ".prefix")
+    return _each_part(ctx, pre, [seq[:i] for i in range(len(seq) + 1)], whole)
+
+
+@internal_action(".suffix", args=2)
+def suffix(ctx, suf, whole):
+    """``.suffix(S, L)``: S is a suffix of L (backtracks, longest first)."""
+    seq = _seq(whole, ".suffix")
+    return _each_part(ctx, suf, [seq[i:] for i in range(len(seq) + 1)], whole)
+
+
+@internal_action(".sublist", args=2)
+def sublist(ctx, sub, whole):
+    """``.sublist(S, L)``: S is a contiguous part of L (prefixes of each suffix, as Jason)."""
+    seq = _seq(whole, ".sublist")
+    parts = [seq[i:][:j] for i in range(len(seq) + 1) for j in range(len(seq) - i, -1, -1)]
+    return _each_part(ctx, sub, parts, whole)
+
+
+@internal_action(".relevant_plan", args=2)
+def relevant_plan(ctx, trigger_term, plan):
+    """``.relevant_plan({+!g}, P)``: backtracks over the plans relevant for the trigger (fresh copies)."""
+    from agentspeak.unify import unifies
+    trigger = trigger_term.as_trigger() if isinstance(trigger_term, PlanTerm) else None
+    if trigger is None:
+        raise wrong_arguments(".relevant_plan needs a trigger term such as {+!g}")
+    found = [PlanTerm(plan=p).rename({}) for p in ctx.agent.plans.relevant(trigger)
+             if p.trigger.op == trigger.op and p.trigger.kind == trigger.kind
+             and unifies(p.trigger.literal, trigger.literal, {})]
+    return _each(ctx, plan, found)
+
+
+def _each(ctx, pattern, values):
+    for v in values:
+        mark = len(ctx.trail)
+        if ctx.unify(pattern, v):
+            yield
+        undo(ctx.b, ctx.trail, mark)
+
+
+@internal_action(".signal", args=1)
+def signal(ctx, event):
+    """``.signal({+t})``, ``.signal({+!g})``: post that event (a new intention handles it)."""
+    trigger = event.as_trigger() if isinstance(event, PlanTerm) else None
+    if trigger is None:
+        raise wrong_arguments(".signal needs an event such as {+b} or {+!g}")
+    ctx.agent.post_external(Trigger(trigger.op, trigger.kind, ctx.resolve(trigger.literal)), force=True)
+
+
+@internal_action(".done", args=1)
+def done(ctx, goal):
+    """``.done(G)``: as ``.succeed_goal(G)`` (Jason's alias)."""
+    from agentspeak.stdlib.bdi import succeed_goal
+    return succeed_goal(ctx, goal)
+
+
+@internal_action(".drop_future_intention", args=1)
+def drop_future_intention(ctx, goal):
+    """``.drop_future_intention(G)``: drop the intentions that will pursue G (no event is produced)."""
+    from agentspeak.stdlib.bdi import drop_intention
+    return drop_intention(ctx, goal)
+
+
+@internal_action(".perceive", args=0)
+def perceive(ctx):
+    """Perceive now (here every reasoning cycle perceives already)."""
+
+
+@internal_action(".verbose", args=1)
+def verbose(ctx, level):
+    """``.verbose(0|1|2)``: how much the interpreter logs (Jason's verbose setting)."""
+    import logging
+    logging.getLogger("faultmas.agentspeak").setLevel(
+        {0: logging.ERROR, 1: logging.WARNING, 2: logging.DEBUG}.get(level if isinstance(level, int) else 1))
+
+
+@internal_action(".version", args=1)
+def version(ctx, result):
+    """``.version(V)``: the Jason version whose language this interpreter follows."""
+    return ctx.unify(result, "3.3.2 (faultmas)")
+
+
+@internal_action(".puts", args=(1, 2))
+def puts(ctx, text, result=None):
+    """``.puts("X is #{X}")``: print the text with each ``#{Term}`` replaced by the term with the
+    intention's bindings (or unify it with a second argument)."""
+    import re as _re
+    if not isinstance(text, str):
+        raise wrong_arguments(".puts needs a string")
+    from agentspeak.parser import parse_term
+    from agentspeak.terms import to_print_str, resolve
+
+    def value(m):
+        term = parse_term(m.group(1))
+        names = {v.name: v for v in ctx.b if isinstance(v, Var)}
+        from agentspeak.terms import rename
+        mapping = {}
+        term = rename(term, mapping)
+        for old, new in mapping.items():
+            if old.name in names:
+                ctx.b.setdefault(new, names[old.name])
+        return to_print_str(resolve(term, ctx.b))
+    out = _re.sub(r"#\{([^}]*)\}", value, text)
+    if result is not None:
+        return ctx.unify(result, out)
+    ctx.agent.arch.print_line(ctx.agent, out)
+
+
+@internal_action(".print_unifier", args=0)
+def print_unifier(ctx):
+    """Print the bindings of the running plan's named variables."""
+    from agentspeak.terms import resolve, to_str as _to_str
+    pairs = [f"{v.name}={_to_str(resolve(v, ctx.b))}" for v in ctx.b if isinstance(v, Var) and not v.name.startswith("_")]
+    ctx.agent.arch.print_line(ctx.agent, "{" + ", ".join(pairs) + "}")

@@ -325,3 +325,33 @@ def test_a_user_kqml_plan_does_not_swallow_other_messages():
     assert "[b] custom(hello)" in out
     assert "[b] greeted" in out
     assert "[a] v(1)[source(b)]" in out
+
+
+def test_directory_facilitator_register_search_subscribe():
+    # jason.stdlib.df_register/df_search/df_subscribe: subscribers are told provider(Ag, Service)
+    out = run_mas({
+        "c": asl("""
+            !start.
+            +!start <- .df_subscribe("seller"); .wait(200); .df_search("seller", L); .print(L).
+            +provider(A, S)[source(df)] <- .print(provider(A, S)).
+        """),
+        "s": asl("""
+            !start.
+            +!start <- .wait(50); .df_register("seller").
+        """),
+    }, timeout=5)
+    assert "[c] provider(s,\"seller\")" in out
+    assert "[c] [s]" in out
+
+
+def test_sets_queues_and_maps_as_jason():
+    # jason.stdlib.set/queue/map: mutable collections held by a variable; an unbound variable gets a new one
+    out = run_asl(asl("""
+        !t.
+        +!t <- .set.add_all(S, [c, a, b, a]); .print(S); .length(S, N); .print(N);
+               .queue.create(Q); .queue.add(Q, z); .queue.add(Q, y); .queue.remove(Q, H); .print(H, " ", Q);
+               .queue.create(P, priority); .queue.add_all(P, [d, b, c]); .print(P);
+               .map.create(M); .map.put(M, b, 2); .map.put(M, a, 1); .print(M);
+               .map.get(M, zz, V, none); .print(V); .findall(K, .map.key(M, K), Ks); .print(Ks).
+    """))
+    assert out == ["{a,b,c}", "3", "z [y]", "[b,c,d]", "{a->1,b->2}", "none", "[a,b]"]
