@@ -43,6 +43,8 @@ def _extensions() -> list[Extension]:
                            compiler_directives={"annotation_typing": False, "nonecheck": True})
     for extension in extensions:   # set here: cythonize's Extensions do not keep an ``optional`` given to it
         extension.optional = True  # a module the C compiler fails on (or no compiler at all) runs from source
+        # the C compiler's warnings on Cython's generated code say nothing to a user (errors still show)
+        extension.extra_compile_args = [*extension.extra_compile_args, "-w"]
     return extensions
 
 
@@ -69,6 +71,10 @@ class BuildWithManifest(build_ext):
 
     def run(self) -> None:
         self.compiled_now: set[str] = set()
+        if self.extensions:   # first-time set-up: say what is being built instead of scrolling compiler output
+            print(f"faultmas: compiling the interpreter ({len(self.extensions) - 1} modules) and the camera's "
+                  f"z-buffer loop with Cython and the C compiler, where the sources changed (optional: without "
+                  f"it everything runs from source; a few minutes on 2 cores the first time)", flush=True)
         super().run()
         if not self.extensions:
             return

@@ -129,12 +129,12 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: runtime.stop())
     try:
-        bridge = TransportBridge(runtime, transport, declared=declared,
-                                 allowed_code_senders=args.allow_code_from).attach()
+        bridge = TransportBridge(runtime, transport, declared=declared, allowed_code_senders=args.allow_code_from,
+                                 members=declared if args.project else None).attach()
         from agents.inspector.publisher import MindPublisher  # state on demand for `faultmas inspect`
         inspected = MindPublisher(transport, runtime, bridge, allow_control=args.allow_pause).start()
-        if args.wait_for_peers > 0 and not transport.wait_for_agents(declared, args.wait_for_peers):
-            missing = sorted(set(declared) - transport.alive_agents())
+        if args.wait_for_peers > 0 and not bridge.wait_for_peers(declared, args.wait_for_peers):
+            missing = sorted(set(declared) - transport.alive_agents() - bridge.dead)
             log.warning("agent %s: still missing after %.0f s: %s; starting anyway", args.name,
                         args.wait_for_peers, ", ".join(missing))
         why = bridge.run(timeout=args.timeout)

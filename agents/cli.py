@@ -30,6 +30,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "observe": ("detection.cli", "watch a running system: observers, diagnosis and rules"),
     "experiment": ("experiments.cli", "run an experiment that reproduces a paper's table"),
     "inspect": ("agents.inspector.cli", "a live web view of a running MAS: agents' minds, robots, timeline"),
+    "plans": ("plans.cli", "list, show or copy the fault plans and models shipped with faultmas"),
 }
 
 DESCRIPTION = ("faultmas: BDI agents in AgentSpeak with which a team of robots detects, diagnoses and reacts to "

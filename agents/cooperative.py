@@ -14,10 +14,11 @@ fault), so it raises an alarm that the diagnosis must dismiss.
 from __future__ import annotations
 
 import math
+import signal
 import random
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from typing import Callable, TextIO
 
@@ -27,6 +28,8 @@ EXPECTED = {"none": "none", "encoders": "encoders", "both_actuators": "both_actu
 """The outcome the plans must reach for each injected fault. Stuck wheels and dead motors both leave the
 robot still, but the model tells them apart by the motors' over-current flags (docs/cooperative.md)."""
 FINAL_STEPS = ("arrived", "diagnosed", "undiagnosed")
+DEATH_GRACE = 5.0
+"""Seconds a run goes on after a robot it waits for died (its process ended with a signal or an error)."""
 STEP_NAMES = ("fault_detection", "robot_detection", "diagnosis", "total")
 
 
@@ -148,6 +151,19 @@ class RunResult:
     finished: bool
     """Every robot ended its task or its diagnosis before the time limit."""
     world: object = None
+    died: list[tuple[str, int]] = field(default_factory=list)
+    """Agent processes that ended on their own with a non-zero status (negative: killed by that signal),
+    in the order seen: the run ends at once and names them (issue 22)."""
+
+    @property
+    def outcome(self) -> str:
+        """'died', 'correct', 'wrong' or 'timeout': what ended the run, for people and exit codes (a helper
+        that died while another finished its work is named in ``died`` but does not fail the run)."""
+        if self.died and not self.finished:
+            return "died"
+        if not self.finished:
+            return "timeout"
+        return "correct" if self.correct else "wrong"
 
     @property
     def correct(self) -> bool:
@@ -168,6 +184,7 @@ class ProgressLog:
         self._lock = threading.Lock()
         self._final: set[str] = set()
         self.done = threading.Event()
+        self.died: list[tuple[str, int]] = []  # (agent, exit status) of processes that died (processes only)
 
     def record(self, report) -> None:
         """Takes an ``agents.progress.ProgressReport`` (from any thread)."""
@@ -187,6 +204,13 @@ class ProgressLog:
         if complete and not self.done.is_set():
             self.done.set()
             self.on_done()
+
+    def needed(self, agent: str) -> bool:
+        """Whether the run still waits for ``agent``: under test (or not a helper) and no final step yet."""
+        robot = next((r for r in self.scenario.robots if r.name == agent), None)
+        with self._lock:
+            return robot is not None and (robot.under_test or robot.program != "helper.asl") \
+                and agent not in self._final
 
     def results(self) -> list[RobotResult]:
         return [self._result(r) for r in self.scenario.robots if r.under_test or r.program != "helper.asl"]
@@ -262,7 +286,7 @@ def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float =
         for bridge in bridges.values():
             bridge.shutdown()
     log = finished
-    return RunResult(scenario, log.results(), log.marks, log.done.is_set(), world)
+    return RunResult(scenario, log.results(), log.marks, log.done.is_set(), world, list(log.died))
 
 
 def _beliefs(scenario: Scenario, robot: RobotSetup) -> list[str]:
@@ -340,10 +364,11 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
         stop_serving = serve(hub) if serve is not None else None
         launcher = Launcher(load_mas2j(str(project_file)), hub, out, err, extra_args=extra_args)
 
-        def kill(name: str) -> None:
+        def kill(name: str, signum: int = signal.SIGKILL) -> None:
+            """SIGKILL ``name``'s process, or send it ``signum`` (SIGSTOP, SIGCONT: a freeze, for chaos tests)."""
             child = launcher.children.get(name)
             if child is not None and child.poll() is None:
-                child.kill()
+                child.send_signal(signum)
 
         def observe(mark: Mark) -> None:
             if echo is not None:
@@ -359,8 +384,15 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
         hub.on_control(on_control)
         try:
             launcher.start()
-            launcher.wait(timeout, stop_when_idle=False)
-            if hold is not None:
+            started = time.monotonic()
+            if launcher.wait(timeout, stop_when_idle=False, fatal=log.needed) == "failed":
+                # a robot the run waits for died: the others get a lease or two to notice and react
+                # (a helper releases it), then the run ends and names it, long before its timeout
+                left = timeout - (time.monotonic() - started)
+                launcher.stop_requested.wait(max(0.0, min(DEATH_GRACE, left)))
+            launcher._check_children()
+            log.died.extend(launcher.failures)
+            if hold is not None and not log.died:
                 hold()
         finally:
             launcher.stop_all()

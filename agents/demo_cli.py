@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import signal
 import statistics
 import sys
 
@@ -34,7 +35,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                          description="The main job: Faulty and Helper side by side 1.5 m apart (or a team with "
                                      "--robots), one agent process each over Zenoh, on the embedded simulator, "
                                      "with a fault injected. Shows the steps as they happen, then the diagnosis "
-                                     "and a table of step latencies in simulated and wall seconds.")
+                                     "and a table of step latencies in simulated and wall seconds. Exit status: 0 "
+                                     "correct, 1 a wrong diagnosis, 3 an agent process died (named), 124 the "
+                                     "run did not finish within --timeout.")
     run.add_argument("--fault", choices=FAULTS, default=None,
                      help="fault injected into the faulty robot(s) (default: encoders; with --robots: a random "
                           "fault per faulty robot)")
@@ -75,7 +78,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     ev.add_argument("--jobs", type=int, default=2, help="worker processes (default %(default)s)")
     ev.add_argument("--json", action="store_true", help="print one JSON object: every run and the table")
     ev.add_argument("--timeout", type=float, default=150.0,
-                    help="wall seconds per run before it counts as failed (default %(default)s)")
+                    help="wall seconds per run before it counts as failed; a team of N gets N/2 times as much "
+                         "(default %(default)s)")
     ev.set_defaults(func=cmd_eval)
 
 
@@ -127,13 +131,32 @@ def cmd_run(args: argparse.Namespace) -> int:
                               out=agent_lines, err=sys.stderr, echo=lambda m: _echo(m, show), inspector=inspector)
     if args.plot and result.world is not None:
         from robot_bridge.cli import plot
-        plot(result.world, args.plot)
+        tested = [r for r in result.robots if r.fault != "none"] or result.robots[:1]
+        plot(result.world, args.plot, title="; ".join(
+            f"{r.name}: fault {r.fault}, diagnosis {r.diagnosis or 'none reached'}" for r in tested)
+            + f" (seed {result.scenario.seed})")
         print(f"faultmas: trajectories drawn to {args.plot}", file=show)
     if args.json:
         print(json.dumps(_as_json(result)))
     else:
         print(_summary(result))
-    return 0 if result.correct else 1
+    return RUN_EXIT_CODES[result.outcome]
+
+
+#: Exit codes of ``faultmas run`` by outcome: a scripted campaign must tell a dead agent from a timeout
+#: from a wrong diagnosis (issue 22).
+RUN_EXIT_CODES = {"correct": 0, "wrong": 1, "died": 3, "timeout": 124}
+
+
+def died_text(agent: str, status: int) -> str:
+    """``Faulty: killed by SIGKILL (exit -9)`` / ``Helper: exited with status 1``."""
+    if status < 0:
+        try:
+            name = signal.Signals(-status).name
+        except ValueError:
+            name = f"signal {-status}"
+        return f"{agent}: killed by {name} (exit {status})"
+    return f"{agent}: exited with status {status}"
 
 
 def _echo(mark, stream) -> None:
@@ -150,7 +173,9 @@ def _seconds(steps: dict) -> dict:
 def _as_json(result) -> dict:
     """One schema for the pair and the team: the run's verdict and one entry per robot that had a task or a
     fault (``fault``, ``diagnosis``: strings; steps in simulated and wall seconds)."""
-    return {"correct": result.correct, "finished": result.finished, "seed": result.scenario.seed,
+    return {"correct": result.correct, "finished": result.finished, "outcome": result.outcome,
+            "died": [{"agent": agent, "exit": status} for agent, status in result.died],
+            "seed": result.scenario.seed,
             "robots": [{"robot": r.name, "fault": r.fault, "expected": r.expected, "diagnosis": r.diagnosis,
                         "correct": r.correct, "steps": _seconds(r.steps_sim), "steps_wall": _seconds(r.steps_wall)}
                        for r in result.robots]}
@@ -169,7 +194,9 @@ def _summary(result) -> str:
     for r in result.robots:
         for step in STEP_NAMES:
             lines.append(f"| {r.name} | {step} | {_fmt(r.steps_sim[step])} | {_fmt(r.steps_wall[step])} |")
-    if not result.finished:
+    for agent, status in result.died:
+        lines.append(f"\nthe run ended early: agent {died_text(agent, status)}")
+    if not result.finished and not result.died:
         lines.append("\nthe run did not finish in time")
     return "\n".join(lines)
 
@@ -177,6 +204,10 @@ def _summary(result) -> str:
 # ---- evaluation ------------------------------------------------------------------------------------
 def team_label(size: int) -> str:
     return f"team of {size}"
+
+
+def _team_size(scenario: str) -> int:
+    return int(scenario.rsplit(" ", 1)[1]) if scenario.startswith("team of ") else 2
 
 
 def eval_scenario(name: str, seed: int):
@@ -223,7 +254,9 @@ def cmd_eval(args: argparse.Namespace) -> int:
         print(f"faultmas eval: {why}", file=sys.stderr)
         return 2
     faults += [team_label(s) for s in sizes]
-    jobs = [(f, args.seed * 100_000 + i, args.timeout) for f in faults for i in range(args.runs)]
+    # a team's run gets more wall time: its cameras cost the simulator in proportion to the robots
+    jobs = [(f, args.seed * 100_000 + i, args.timeout * max(1.0, _team_size(f) / 2))
+            for f in faults for i in range(args.runs)]
     runs: list[dict] = []
     from tqdm import tqdm
 

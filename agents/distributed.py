@@ -13,13 +13,15 @@ from __future__ import annotations
 
 import logging
 import os
+import secrets
 import subprocess
 import sys
 import threading
 import time
 from pathlib import Path
-from typing import IO
+from typing import IO, Callable
 
+from agents.zenoh_arch import LAUNCHER_TOKEN_ENV
 from robot_bridge.processes import ESCALATION, stop_processes
 
 log = logging.getLogger("faultmas.agents")
@@ -80,6 +82,8 @@ class Launcher:
         self.project, self.hub, self.out, self.err = project, hub, out, err
         self.extra_args = list(extra_args or ())
         self.names = project.agent_names()
+        self.token = secrets.token_hex(16)
+        self._announced = 0.0
         self.children: dict[str, subprocess.Popen] = {}
         self.relays: list[threading.Thread] = []
         self.statuses: dict = {}
@@ -95,9 +99,11 @@ class Launcher:
 
     def start(self) -> None:
         # each agent starts in the user's working directory (relative sources, aslSourcePath and
-        # .create_agent resolve as in the in-process run) and finds this package where it is installed
+        # .create_agent resolve as in the in-process run) and finds this package where it is installed;
+        # the children accept the launcher's stop by a token (agents.zenoh_arch.LAUNCHER_TOKEN_ENV):
+        # a stop that merely claims to come from the launcher is refused
         path = os.pathsep.join(p for p in (str(REPO), os.environ.get("PYTHONPATH", "")) if p)
-        env = dict(os.environ, PYTHONUNBUFFERED="1", PYTHONPATH=path)
+        env = dict(os.environ, PYTHONUNBUFFERED="1", PYTHONPATH=path, **{LAUNCHER_TOKEN_ENV: self.token})
         endpoint = self.hub.endpoints[0]
         for decl in self.project.agents:
             for name in decl.instance_names():
@@ -118,8 +124,12 @@ class Launcher:
                 sink.write(line)
                 sink.flush()
 
-    def wait(self, timeout: float | None, stop_when_idle: bool = True) -> str:
-        """Block until the MAS ends; the reason ('stopped', 'idle', 'timeout' or 'failed')."""
+    def wait(self, timeout: float | None, stop_when_idle: bool = True,
+             fatal: Callable[[str], bool] | None = None) -> str:
+        """Block until the MAS ends; the reason ('stopped', 'idle', 'timeout' or 'failed').
+        ``fatal(name)``: 'failed' as soon as a child for which it is true ends with a non-zero status or a
+        signal (``failures`` names it), not only once all have ended (a run whose agent was killed must
+        not wait for its timeout)."""
         from agents.transport.status import quiescent, totals
 
         deadline = None if timeout is None else time.monotonic() + timeout
@@ -129,7 +139,7 @@ class Launcher:
                 return "stopped"
             if deadline is not None and time.monotonic() >= deadline:
                 return "timeout"
-            if self._check_children():
+            if self._check_children() or (fatal is not None and any(fatal(name) for name, _ in self.failures)):
                 return "failed"
             statuses = [self.statuses.get(name) for name in self.names]
             snapshot = None
@@ -147,13 +157,24 @@ class Launcher:
             code = child.poll()
             if code is not None and code != 0 and (name, code) not in self.failures:
                 self.failures.append((name, code))
+        self._announce_deaths()
         return all(child.poll() is not None for child in self.children.values())
+
+    def _announce_deaths(self) -> None:
+        """Tell the others, every second, which agents died: they may be waiting for them to become
+        reachable (``--wait-for-peers``), which they never will; a control message has no history, so an
+        agent that connects later hears it at the next announcement."""
+        now = time.monotonic()
+        if self.failures and now - self._announced >= 1.0:
+            self._announced = now
+            for name, code in self.failures:
+                self.hub.publish_control("died", agent=name, exit=code, token=self.token)
 
     def stop_all(self) -> None:
         """Ask every child to stop, then insist: control message, SIGINT, SIGTERM, SIGKILL."""
         running = [c for c in self.children.values() if c.poll() is None]
         if running:
-            self.hub.publish_control("stop", by="launcher", delay=0.0)
+            self.hub.publish_control("stop", by="launcher", delay=0.0, token=self.token)
         stop_processes(running, GRACE, (None, *ESCALATION))
         for relay in self.relays:
             relay.join(5.0)

@@ -103,7 +103,8 @@ def _run_networked(runtime, project, args) -> int:
 
     options = ZenohOptions(listen=tuple(args.listen) if args.listen else None, connect=tuple(args.connect))
     with ZenohTransport(project.name, options) as transport:
-        bridge = TransportBridge(runtime, transport, declared=project.agent_names()).attach()
+        bridge = TransportBridge(runtime, transport, declared=project.agent_names(),
+                                 members=project.agent_names()).attach()
         from agents.inspector.publisher import MindPublisher  # state on demand for `faultmas inspect`
         inspected = MindPublisher(transport, runtime, bridge).start()
         why = bridge.run(timeout=args.timeout)

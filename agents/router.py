@@ -36,6 +36,19 @@ def _add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="stop after S seconds (default: run until interrupted)")
 
 
+def start_failure(endpoints: list[str], error: str) -> str:
+    """Zenoh's error as one line a person can act on: without the Rust source paths it carries, and with what
+    to do when the port is taken (the usual case)."""
+    import re
+
+    where = " ".join(endpoints)
+    if "Address already in use" in error:
+        return (f"cannot listen on {where}: the port is already in use (another router or program); "
+                f"choose another with --listen, e.g. tcp/127.0.0.1:7448")
+    plain = re.sub(r"\s*at /\S+\.rs:\d+\.?", "", error).replace("[", "").replace("]", "").strip()
+    return f"cannot start on {where}: {plain}"
+
+
 def run_router(args: argparse.Namespace) -> int:
     """Open the router session and keep it until SIGINT/SIGTERM, end of ``--timeout``; exit code."""
     import zenoh
@@ -52,7 +65,7 @@ def run_router(args: argparse.Namespace) -> int:
     try:
         session = zenoh.open(config)
     except zenoh.ZError as exc:
-        print(f"faultmas router: cannot start on {listen_endpoints(config)}: {exc}", file=sys.stderr)
+        print(f"faultmas router: {start_failure(listen_endpoints(config), str(exc))}", file=sys.stderr)
         return 1
     stop = threading.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):

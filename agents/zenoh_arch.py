@@ -14,7 +14,9 @@ the network and removed when it goes (its process exits, is killed, or its link 
 """
 from __future__ import annotations
 
+import hmac
 import logging
+import os
 import threading
 import time
 from collections import OrderedDict
@@ -38,6 +40,13 @@ log = logging.getLogger("faultmas.agents")
 
 PRESENCE_FUNCTOR = "agent_alive"
 """The percept ``agent_alive(Name)``: agent ``Name`` of this MAS is reachable right now."""
+
+MEMBERS_ONLY = frozenset({"achieve", "unachieve", "tellHow", "untellHow"})
+"""Performatives that make an agent act or change its plans: refused from non-members of a known MAS."""
+
+LAUNCHER_TOKEN_ENV = "FAULTMAS_LAUNCHER_TOKEN"
+"""The launcher of ``faultmas mas run --processes`` gives its children a random token in this variable
+and puts it in its ``stop``: a stop from outside the MAS must know it (agents.distributed)."""
 
 IDLE_GRACE = 0.01
 """Seconds the runtime must stay idle before 'idle' is published (a busy ring publishes nothing)."""
@@ -123,16 +132,23 @@ class TransportBridge:
     """Connects every agent of ``runtime`` to ``transport``; ``attach`` once the agents are added.
 
     ``declared``: the agents of the project file (trusted to send plans, part of ``.all_names``);
-    ``allowed_code_senders``: other agents the project allows to send plans.
+    ``allowed_code_senders``: other agents the project allows to send plans; ``members``: every agent of
+    the MAS when a project file says so (None: not known). Non-members may then not make an agent act
+    or learn plans (``MEMBERS_ONLY``) nor stop the MAS; anyone may still tell and ask. Envelope senders
+    are only what the sender claims (see ``trust``): this keeps out strangers that do not know the
+    project, and a message claiming to come from one of this process's own agents (they never arrive
+    over the network) is refused as forged.
     """
 
     def __init__(self, runtime: LocalRuntime, transport: Transport, *, declared: Iterable[str] = (),
-                 allowed_code_senders: Iterable[str] = ()) -> None:
+                 allowed_code_senders: Iterable[str] = (), members: Iterable[str] | None = None) -> None:
         self.runtime = runtime
         self.transport = transport
         self.mas = transport.mas
         self.policy = TrustPolicy(transport.mas, frozenset(declared), frozenset(allowed_code_senders))
+        self.members = None if members is None else frozenset(members) | self.policy.allowed_code_senders
         self.published_idle: bool | None = None
+        self.dead: set[str] = set()  # agents whose process the launcher saw die (control 'died')
         self.on_message = None
         """``on_message(direction, agent, message)``: sees each message to ('out', a ``Message``) or
         from ('in', an ``Envelope``) another process (the inspector keeps the last few)."""
@@ -190,6 +206,15 @@ class TransportBridge:
 
     # -- incoming (network threads: never block, never raise) ---------------------------------
     def _on_envelope(self, agent: Agent, envelope: Envelope) -> None:
+        sender = envelope.sender
+        if sender in self.runtime.agents:  # this process's agents are delivered to locally, never from afar
+            self._refuse(agent, envelope, "forged_sender", f"{sender} is an agent of this process")
+            return
+        if (self.members is not None and sender not in self.members and envelope.performative in MEMBERS_ONLY
+                and envelope.performative not in CODE_PERFORMATIVES  # plans: 'untrusted_code' below
+                and envelope.in_reply_to not in agent.pending_asks):
+            self._refuse(agent, envelope, "not_a_member", f"{envelope.performative} only from agents of the MAS")
+            return
         if envelope.performative in CODE_PERFORMATIVES and not self.may_tell_how(envelope.sender) \
                 and envelope.in_reply_to not in agent.pending_asks:  # an askHow answer is not refused
             self._refuse(agent, envelope, "untrusted_code", "plans only from agents declared in the project")
@@ -220,9 +245,37 @@ class TransportBridge:
                 agent.post_feedback(partial(_presence_percept, agent, name, alive))
 
     def _on_control(self, message: dict) -> None:
+        if message.get("command") == "died" and self._from_launcher(message):
+            self.dead.add(str(message.get("agent")))
+            return
         if message.get("command") == "stop":
+            by = message.get("by")
+            if self.members is not None and by not in self.members and by not in self.runtime.agents \
+                    and not self._from_launcher(message):
+                self.transport.report_control_refused(message, "not_a_member")
+                return
             delay = message.get("delay", 0.0)
             self.runtime.stop(float(delay) if isinstance(delay, (int, float)) else 0.0)
+
+    @staticmethod
+    def _from_launcher(message: dict) -> bool:
+        token = os.environ.get(LAUNCHER_TOKEN_ENV)
+        return bool(token) and hmac.compare_digest(str(message.get("token", "")), token)
+
+    def wait_for_peers(self, names: Iterable[str], timeout: float) -> bool:
+        """Wait until every agent of ``names`` is reachable, or known dead (the launcher says so: a peer
+        killed before it became reachable must not hold the others for the whole ``timeout``)."""
+        deadline = time.monotonic() + timeout
+        wanted = set(names)
+        while True:
+            pending = wanted - self.dead
+            if self.transport.wait_for_agents(pending, timeout=min(0.2, max(0.0, deadline - time.monotonic()))):
+                if wanted & self.dead:
+                    log.warning("agents %s died before they became reachable; starting without them",
+                                ", ".join(sorted(wanted & self.dead)))
+                return True
+            if time.monotonic() >= deadline:
+                return False
 
     # -- status and the run loop ---------------------------------------------------------------
     def publish_status(self, busy: bool) -> None:

@@ -62,6 +62,21 @@ def _parser() -> Lark:
     return _PARSER
 
 
+_WORDS = {"NAME": "a name", "QNAME": "a class name", "FILE_NAME": "a file name (x.asl)", "STRING": "a string",
+          "NUMBER": "a number", "$END": "end of file"}
+
+
+def _in_words(terminal: str) -> str:
+    """A grammar terminal as a person names it: ``"agents"``-like keywords and punctuation quoted as written,
+    the rest in words (not Lark's names such as ``LSQB`` or ``HASH``)."""
+    if terminal in _WORDS:
+        return _WORDS[terminal]
+    for definition in _parser().terminals:
+        if definition.name == terminal and type(definition.pattern).__name__ == "PatternStr":
+            return f"'{definition.pattern.value}'"
+    return terminal.lower()
+
+
 def parse_mas2j(text: str, file: str = "<mas2j>") -> MasProject:
     try:
         tree = _parser().parse(text)
@@ -69,11 +84,12 @@ def parse_mas2j(text: str, file: str = "<mas2j>") -> MasProject:
         lines = text.split("\n")
         line = getattr(exc, "line", 1) or 1
         col = getattr(exc, "column", 1) or 1
-        expected = sorted(getattr(exc, "expected", None) or getattr(exc, "allowed", None) or [])
+        expected = sorted({_in_words(t) for t in getattr(exc, "expected", None) or getattr(exc, "allowed", None) or []})
         found = getattr(getattr(exc, "token", None), "value", None)
         msg = f"unexpected {found!r}" if found else "syntax error"
         if expected:
-            msg += "; expected one of " + ", ".join(expected[:8])
+            msg += "; expected " + (expected[0] if len(expected) == 1 else
+                                    ", ".join(expected[:-1][:7]) + " or " + expected[-1])
         raise AslSyntaxError(msg, file, line, col, lines[line - 1] if 0 < line <= len(lines) else None) from None
     base = os.path.dirname(file) if file and not file.startswith("<") else "."
     name = str(tree.children[0])

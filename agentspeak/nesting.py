@@ -30,10 +30,14 @@ def nesting_depth(value: object, limit: int = MAX_NESTING) -> int:
     deepest = 0
     stack: list[tuple[object, int]] = [(value, 0)]
     pop, push = stack.pop, stack.append
+    reached: dict[int, int] = {}  # a shared subterm is walked again only when reached deeper
     while stack:
         node, depth = pop()
         if isinstance(node, _LEAVES):
             continue
+        if reached.get(id(node), -1) >= depth:
+            continue
+        reached[id(node)] = depth
         if depth > deepest:
             deepest = depth
             if deepest > limit:

@@ -533,7 +533,7 @@ def _parse(text: str, source_file: str, stop_at_first: bool) -> tuple[Program, l
         column = too_deep - (text.rfind("\n", 0, too_deep) + 1) + 1
         source_line = text.split("\n")[line - 1]
         errors.append(AslSyntaxError(too_deep_message(), source_file, line, column,
-                                     source_line[:200] if len(source_line) > 200 else source_line))
+                                     None if len(source_line) > 200 else source_line))  # no caret far off
         return program, errors
     offset_line = 0
     remaining = text

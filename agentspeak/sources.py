@@ -32,8 +32,18 @@ def find_source(name: str, base_dir: str | None = None, source_path: list[str] |
         return name if os.path.isfile(name) else None
     if not base_dir and os.path.isfile(name):  # relative to the working directory, kept as written
         return name
-    for d in ([base_dir] if base_dir else []) + list(source_path):
+    for d in ([base_dir] if base_dir else []) + list(source_path) + _shipped_plans():
         path = os.path.join(d, name)
         if os.path.isfile(path):
             return path
     return None
+
+
+def _shipped_plans() -> list[str]:
+    """The folder of the fault plans shipped with faultmas (package ``plans``), looked at last, so that
+    ``{ include("team_robot.asl") }`` works from any folder (a file of that name beside yours wins).
+    Found by its location only: the language never imports the plans package's code."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("plans")
+    return [os.path.dirname(spec.origin)] if spec is not None and spec.origin else []

@@ -18,6 +18,8 @@ BENCHMARKS: dict[str, str] = {
     "diagnosis": "benchmarks.bench_diagnosis",
     "sim": "benchmarks.bench_sim",
     "perception": "benchmarks.bench_perception",
+    "imu": "benchmarks.bench_imu",
+    "observers": "benchmarks.bench_observers",
     "perfbugs": "benchmarks.bench_perfbugs",
     "inspect": "benchmarks.bench_inspect",
 }

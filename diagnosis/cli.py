@@ -18,7 +18,8 @@ from diagnosis.limits import DEFAULT_MAX_MEMORY_MB, RunLimits
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("diagnose", help="all minimal diagnoses of a model given observations",
                               description=__doc__.splitlines()[0])
-    p.add_argument("model", help="a .yaml system description or a .bench netlist")
+    p.add_argument("model", help="a .yaml system description or a .bench netlist, or the name of a model shipped "
+                                 "with faultmas (e.g. turtlebot_hardware; `faultmas plans list`)")
     p.add_argument("--obs", required=True, metavar="OBS.json", help="JSON object: observation name -> 0/1")
     p.add_argument("--max-card", type=int, default=None, metavar="K",
                    help="largest diagnosis size to enumerate (default: no bound)")
@@ -59,6 +60,22 @@ def read_observations(path: str) -> dict[str, bool]:
     return out
 
 
+def model_file(name: str) -> str:
+    """``name`` as given when it is a file; else a model shipped with faultmas by that name
+    (``turtlebot_hardware`` is ``plans/turtlebot_hardware.yaml``, as ``.diagnose`` finds it)."""
+    import os
+    from importlib import resources
+
+    if os.path.exists(name) or os.sep in name:
+        return name
+    shipped = resources.files("plans")
+    for suffix in ("", ".yaml", ".bench"):
+        candidate = shipped.joinpath(name + suffix)
+        if candidate.is_file():
+            return str(candidate)
+    return name          # load_model says it is not there
+
+
 def run(args: argparse.Namespace) -> int:
     from agentspeak.errors import SourceError
     from diagnosis.engine import Diagnoser
@@ -70,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         with RunLimits(args.timeout, args.max_memory) as limits:
             limits.phase("reading the model")
-            model = load_model(args.model)
+            model = load_model(model_file(args.model))
             limits.phase("reading the observations")
             observations = read_observations(args.obs)
             limits.phase("building the solver")

@@ -41,6 +41,8 @@ class RunLimits:
         self.current = "starting"
         self.peak = 0
         self._done = threading.Event()
+        self._process = psutil.Process()
+        self._stopping = threading.Lock()  # one message, whichever thread finds the limit first
         self._thread = threading.Thread(target=self._watch, name="diagnose-limits", daemon=True)
 
     def __enter__(self) -> "RunLimits":
@@ -51,6 +53,8 @@ class RunLimits:
         self._done.set()
 
     def phase(self, name: str) -> None:
+        """Enter phase ``name``; the limits are checked here too (a run quicker than one poll is checked)."""
+        self._check()
         self.current = name
 
     def left(self) -> float | None:
@@ -60,20 +64,22 @@ class RunLimits:
         return max(0.0, self.timeout - (time.monotonic() - self.started))
 
     def _watch(self) -> None:
-        process = psutil.Process()
-        hard_end = None if self.timeout is None else self.started + self.timeout + GRACE
         while not self._done.wait(POLL):
-            if self.max_bytes is not None:
-                rss = process.memory_info().rss
-                self.peak = max(self.peak, rss)
-                if rss > self.max_bytes:
-                    self._stop(f"memory limit of {self.max_bytes // 2 ** 20} MiB exceeded while {self.current} "
-                               f"(resident {rss // 2 ** 20} MiB); raise --max-memory, or bound the search "
-                               f"with --max-card or --max-count")
-            if hard_end is not None and time.monotonic() > hard_end:
-                self._stop(f"--timeout {self.timeout:g} s reached while {self.current}")
+            self._check()
+
+    def _check(self) -> None:
+        if self.max_bytes is not None:
+            rss = self._process.memory_info().rss
+            self.peak = max(self.peak, rss)
+            if rss > self.max_bytes:
+                self._stop(f"memory limit of {self.max_bytes // 2 ** 20} MiB exceeded while {self.current} "
+                           f"(resident {rss // 2 ** 20} MiB); raise --max-memory, or bound the search "
+                           f"with --max-card or --max-count")
+        if self.timeout is not None and time.monotonic() > self.started + self.timeout + GRACE:
+            self._stop(f"--timeout {self.timeout:g} s reached while {self.current}")
 
     def _stop(self, message: str) -> None:
+        self._stopping.acquire()
         try:
             print(f"{self.prog}: {message}", file=self.err, flush=True)
         finally:

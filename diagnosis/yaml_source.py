@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import NoReturn
 
 import yaml
+import yaml.reader
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
 from agentspeak.errors import SourceError
@@ -25,6 +26,11 @@ class YamlSource:
         self.lines = self.text.splitlines()
         try:
             self.root = yaml.compose(self.text, Loader=yaml.SafeLoader)
+        except yaml.reader.ReaderError as exc:  # a control character (NUL, say): found by the fuzz campaign
+            line = self.text.count("\n", 0, exc.position) + 1
+            column = exc.position - (self.text.rfind("\n", 0, exc.position) + 1) + 1
+            raise SourceError(f"YAML does not allow the character U+{exc.character:04X} here", file=self.path,
+                              line=line, column=column) from None
         except RecursionError:  # PyYAML's composer recurses once per level: a list nested 20,000 deep
             raise SourceError(f"nested too deeply (YAML lists or mappings inside each other beyond "
                               f"{sys.getrecursionlimit() // 2} levels)", file=self.path) from None

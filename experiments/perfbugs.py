@@ -4,7 +4,7 @@ Trains, per component, the learned detector of performance bugs (detection/learn
 fault-free runs and scores the held-out fault-free runs and every run with an injected bug: F0.1, FPR,
 detection rate (flagged within 80 s of the bug's start) and micro-averaged ROC AUC, then AUC per bug
 kind and per component. The data sets live in experiments/data/perfbugs/PROFILE; --generate records
-the missing runs of the profile first (real ROS 2 nodes; smoke: ~12 min, paper: ~2.5 h on 2 cores):
+the missing runs of the profile first (real ROS 2 nodes; smoke: ~23 min, paper: ~2.5 h on 2 cores):
 
     faultmas experiment perfbugs --profile smoke
     faultmas experiment perfbugs --profile paper --generate       # makes the paper's data set once
@@ -28,6 +28,8 @@ def data_dir(profile: str) -> Path:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.formatter_class = argparse.RawDescriptionHelpFormatter
+    parser.epilog = __doc__.split("\n\n", 1)[1] + "\nMethod, data, results and what remains: docs/perfbugs.md."
     parser.add_argument("--profile", choices=("smoke", "paper"), default="smoke",
                         help="which data set (default: smoke)")
     parser.add_argument("--data", metavar="DIR", help="data set directory (default: the profile's, "
@@ -96,9 +98,9 @@ def main(args: argparse.Namespace) -> int:
         print(f"{'':<28}" + "".join(f"{d:>8}" for d in table))
         for key in keys:
             print(f"{key:<28}" + "".join(f"{_fmt(table[d].get(key, float('nan'))):>8}" for d in table))
-    print("\nbug instances (flagged within 80 s of the start):")
+    print("\nbug instances: flagged within 80 s of the start (share of the bug's seconds flagged):")
     for f in result.detections():
         print(f"  run {f['run']:>3} {f['kind']:<22} in {f['component']:<26} " +
-              " ".join(f"{d}={'yes' if f[d] else 'no'}" for d in ("model", "ocsvm", "random")))
+              " ".join(f"{d}={'yes' if f[d] else 'no '} ({_fmt(f[d + '_share'])})" for d in ("model", "ocsvm", "random")))
     print(f"\ntraining: {result.training_s:.1f} s CPU for {len(result.models)} components")
     return 0

@@ -23,7 +23,10 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "perceive", help="find a robot by its two coloured cylinders in one RGB-D frame",
         description=__doc__.splitlines()[0], formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog="Output: robot(Name,Angle,Depth,Yaw) as in the seed paper, or JSON with --json.")
+        epilog="Output: robot(Name,Angle,Depth,Yaw), or JSON with --json. Angle: bearing from the optical axis "
+               "in degrees, counter-clockwise (left) positive, as the robot_seen percept (turn(Angle) faces the "
+               "robot; the seed paper's formula has the opposite sign); Depth in metres; Yaw: the robot's heading "
+               "relative to the camera's, counter-clockwise positive.")
     p.add_argument("--rgb", required=True, metavar="IMG.png", help="colour image (BGR PNG from cv2.imwrite)")
     p.add_argument("--depth", required=True, metavar="DEPTH.npy", help="float32 metres, 0 = no reading")
     p.add_argument("--hfov", type=float, default=57.0, help="horizontal field of view, degrees (default 57)")
@@ -87,14 +90,16 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(out))
     elif result.found:
         for d in (result.all if args.all else (result.detection,)):
-            print(f"robot({args.name},{d.angle_deg:.0f},{d.depth_m:.2f},{d.yaw_deg:.0f})")
+            print(f"robot({args.name},{-d.angle_deg:.0f},{d.depth_m:.2f},{-d.yaw_deg:.0f})")
     else:
         print(f"no robot: {result.reason}")
     return 0
 
 
 def _fields(d) -> dict:
-    return {"angle_deg": round(d.angle_deg, 3), "depth_m": round(d.depth_m, 4), "yaw_deg": round(d.yaw_deg, 2),
+    # the percepts' convention (robot_seen): counter-clockwise (left) positive; the detector's optical frame
+    # (perception.detect) is +right, as image x grows
+    return {"angle_deg": round(-d.angle_deg, 3), "depth_m": round(d.depth_m, 4), "yaw_deg": round(-d.yaw_deg, 2),
             "x_m": round(d.x_m, 4), "confidence": d.confidence,
             "front_px": [round(v, 1) for v in d.front_px], "rear_px": [round(v, 1) for v in d.rear_px]}
 

@@ -238,6 +238,9 @@ where_i_am(unknown) :- not team_pose(_, _, _).    // no start_pose: the helper l
       ?candidates(Ds);
       !broadcastHelp(Ds).
 
+// a helper that comes back (a frozen process thawed, a link restored) may be asked again
++agent_alive(H) : tried(H) & not helper(H) <- -tried(H).
+
 +!undiagnosed(Ds, Why)
    <- .print("undiagnosed (", Why, "); candidates: ", Ds);
       -diagnosing;

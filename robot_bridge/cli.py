@@ -143,26 +143,33 @@ def write_csv(world, path: str) -> None:
                 writer.writerow((name, *(f"{v:.4f}" for v in point)))
 
 
-def plot(world, path: str) -> None:
-    """Ground truth (solid) and odometry (dashed) of every robot, to an image file."""
+def plot(world, path: str, title: str | None = None) -> None:
+    """Ground truth (solid) and odometry (dashed, drawn on top so that it shows where the two agree) of every
+    robot, to an image file; the legend beside the axes, never over the data."""
     import math
 
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6, 6))
+    fig, ax = plt.subplots(figsize=(8.5, 6))
     for name in world.robots:
         log = world.trajectory(name)
-        line, = ax.plot([p.x for p in log], [p.y for p in log], label=f"{name} truth")
+        line, = ax.plot([p.x for p in log], [p.y for p in log], linewidth=4, alpha=0.45, label=f"{name} truth")
         x0, y0, yaw0 = log[0].x, log[0].y, math.radians(log[0].yaw_deg)
         c, s = math.cos(yaw0), math.sin(yaw0)
         ax.plot([x0 + c * p.odom_x - s * p.odom_y for p in log], [y0 + s * p.odom_x + c * p.odom_y for p in log],
-                "--", color=line.get_color(), label=f"{name} odometry (placed at its start)")
-        ax.plot([x0], [y0], "o", color=line.get_color())
+                "--", linewidth=1.5, color=line.get_color(), zorder=3,
+                label=f"{name} odometry (from its start)")
+        ax.plot([x0], [y0], "o", color=line.get_color(), zorder=4)
+        ax.plot([log[-1].x], [log[-1].y], "s", color=line.get_color(), zorder=4)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.legend(loc="best", fontsize="small")
-    fig.savefig(path, dpi=100)
+    ax.grid(True, alpha=0.3)
+    if title:
+        ax.set_title(title, fontsize="medium")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize="small", borderaxespad=0.0,
+              title="o start, \u25a0 end", title_fontsize="small")
+    fig.savefig(path, dpi=100, bbox_inches="tight")
     plt.close(fig)

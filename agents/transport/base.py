@@ -335,6 +335,12 @@ class Transport(ABC):
         ``untrusted_code``) with the same single log line and the same ``dropped`` counter."""
         self._drop(reason, f"agent {receiver}", envelope.sender, detail)
 
+    def report_control_refused(self, message: dict, reason: str) -> None:
+        """For the agent layer: a control message (e.g. ``stop``) refused, logged and counted as a drop."""
+        by = message.get("by")
+        self._drop(reason, "the control key", by if isinstance(by, str) else None,
+                   f"command {str(message.get('command'))[:30]!r}")
+
     def _drop(self, reason: str, where: str, sender: str | None, detail: str = "") -> None:
         with self._counters:
             self.dropped[reason] += 1

@@ -86,22 +86,43 @@ def build_config(options: ZenohOptions | None = None) -> "zenoh.Config":  # noqa
         if force or unset(key):
             config.insert_json5(key, json.dumps(value))
 
-    put("mode", options.mode, force=options.config_file is None or unset("mode"))
+    file_sets_mode = options.config_file is not None and not unset("mode")
+    put("mode", options.mode, force=not file_sets_mode)
     mode = json.loads(config.get_json("mode")) or options.mode
     config.insert_json5("scouting/multicast/enabled", "false")  # never scout the LAN
     put("scouting/gossip/enabled", options.gossip)
+    if options.connect:
+        put("connect/endpoints", list(options.connect), force=True)
     if options.listen is not None:
         put("listen/endpoints", list(options.listen), force=True)
     elif unset("listen/endpoints"):
-        put("listen/endpoints", [] if mode == "client" else [loopback_endpoint()])
-    if options.connect:
-        put("connect/endpoints", list(options.connect), force=True)
+        # A secured profile (TLS or QUIC links) gets no default listener: a plain tcp/ one on loopback
+        # let any local process without a certificate connect and deliver (issue 22). Such an agent
+        # connects out to its hub or router, and listens only where its file says (e.g. on tls/).
+        plain_default = mode != "client" and not uses_secure_links(config)
+        put("listen/endpoints", [loopback_endpoint()] if plain_default else [])
+        if not plain_default and mode == "peer" and not file_sets_mode:
+            # a peer without a listener reaches only the peers it links to itself; as a client, its
+            # hub or router routes everything for it
+            config.insert_json5("mode", json.dumps("client"))
     put("transport/link/tx/lease", options.lease_ms)
     put("transport/link/tx/keep_alive", options.keep_alive)
     put("transport/shared_memory/enabled", options.shared_memory)
     for key, value in options.extra.items():
         config.insert_json5(key, json.dumps(value))
     return config
+
+
+def uses_secure_links(config: "zenoh.Config") -> bool:  # noqa: F821
+    """Whether the configuration secures its links: TLS settings (certificates), or a ``tls/`` or ``quic/``
+    listen endpoint. (Merely connecting to a ``tls/`` endpoint without a CA is not: that link fails.)"""
+    endpoints = json.dumps(json.loads(config.get_json("listen/endpoints")))
+    if '"tls/' in endpoints or '"quic/' in endpoints:
+        return True
+    tls = json.loads(config.get_json("transport/link/tls")) or {}
+    return any(tls.get(key) for key in ("root_ca_certificate", "listen_certificate", "connect_certificate",
+                                        "root_ca_certificate_base64", "listen_certificate_base64",
+                                        "connect_certificate_base64", "enable_mtls"))
 
 
 def listen_endpoints(config: "zenoh.Config") -> list[str]:  # noqa: F821

@@ -55,9 +55,11 @@ class Evaluation:
         return {name: auc_by(s, "component") for name, s in self.scores.items()}
 
     def detections(self) -> list[dict]:
-        """Every fault instance and whether each detector flagged it within the window."""
-        from detection.learned.metrics import detected
-        return [dict(f, **{name: detected(s, f) for name, s in self.scores.items()}) for f in self.faults]
+        """Every fault instance, whether each detector flagged it within the window, and the share of
+        its seconds each flagged (``<detector>_share``: a single lucky flag also counts as detected)."""
+        from detection.learned.metrics import detected, flagged_share
+        return [dict(f, **{name: detected(s, f) for name, s in self.scores.items()},
+                     **{f"{name}_share": flagged_share(s, f) for name, s in self.scores.items()}) for f in self.faults]
 
 
 def train_models(dataset: Dataset, parts, target_fpr: float, progress: Callable[[str], None] = lambda _: None) -> dict[str, ComponentModel]:

@@ -53,6 +53,13 @@ def detected(scores: Scores, fault: dict) -> bool:
     return bool(scores.flag[mask].any())
 
 
+def flagged_share(scores: Scores, fault: dict) -> float:
+    """The share of ``fault``'s seconds flagged in its component."""
+    mask = (scores.component == fault["component"]) & (scores.run == fault["run"]) & \
+        (scores.tick >= fault["start"]) & (scores.tick < fault["end"])
+    return float(scores.flag[mask].mean()) if mask.any() else float("nan")
+
+
 def detection_rate(scores: Scores, faults: list[dict]) -> float:
     return float(np.mean([detected(scores, f) for f in faults])) if faults else float("nan")
 

@@ -62,6 +62,7 @@ class LearnedResourceObserver:
         self.ok: dict[str, bool | None] = {c: None for c in models}        # None: not known yet
         self.last_distance: dict[str, float] = {}
         self.tick_seconds: list[float] = []
+        self.tick_cpu_seconds: list[float] = []
 
     def on_event(self, t: float, topic: str, vector: np.ndarray) -> None:
         buffer = self.buffers.get(topic)
@@ -77,7 +78,7 @@ class LearnedResourceObserver:
         ``counters`` (component → ``COUNTER_NAMES`` sample) replaces reading the processes: a recorded
         run replayed through this very code (``replay``)."""
         now = time.time() if now is None else now
-        started = time.perf_counter()
+        started, started_cpu = time.perf_counter(), time.thread_time()
         samples = {}
         for c, process in self.processes.items():
             if counters is not None:
@@ -106,6 +107,7 @@ class LearnedResourceObserver:
                 self.ok[c] = ok
                 changes.append(Observation(f"resource({c})", ok, now, measured=distance, source=SOURCE))
         self.tick_seconds.append(time.perf_counter() - started)
+        self.tick_cpu_seconds.append(time.thread_time() - started_cpu)     # what a busy machine does not inflate
         if changes:
             self.emit(changes)
         return changes
@@ -154,16 +156,34 @@ def load_models(directory: str | Path, components: Iterable[str] | None = None) 
     return models
 
 
-def node_processes(components) -> dict[str, object]:
+def node_processes(components, domain_id: int | None = None) -> dict[str, object]:
     """The process of each ROS component (``ros_tap.Component``), found by its command line
-    (``-m robot_bridge.ros2.<node> --robot <robot>``, as ``robot_bridge.ros2.launch`` starts them)."""
+    (``-m robot_bridge.ros2.<node> --robot <robot>``, as ``robot_bridge.ros2.launch`` starts them) and,
+    with ``domain_id``, its ROS domain (``--domain-id N`` or ``ROS_DOMAIN_ID`` in its environment): two
+    teams on one host have the same command lines otherwise. Raises ``ValueError`` when a component
+    matches several processes (another team in the same domain) rather than watch the wrong one."""
     import psutil
 
-    found = {}
+    def in_domain(process, cmdline: list[str]) -> bool:
+        if domain_id is None:
+            return True
+        if "--domain-id" in cmdline:
+            i = cmdline.index("--domain-id")
+            return i + 1 < len(cmdline) and cmdline[i + 1] == str(domain_id)
+        try:
+            return process.environ().get("ROS_DOMAIN_ID", "0") == str(domain_id)
+        except psutil.Error:
+            return False
+
+    found: dict[str, list] = {}
     for process in psutil.process_iter(["cmdline"]):
         cmdline = process.info.get("cmdline") or []
         for c in components:
             robot = c.namespace.strip("/")
-            if f"robot_bridge.ros2.{c.node}" in cmdline and (not robot or robot in cmdline):
-                found[c.name] = process
-    return found
+            if f"robot_bridge.ros2.{c.node}" in cmdline and (not robot or robot in cmdline) \
+                    and in_domain(process, cmdline):
+                found.setdefault(c.name, []).append(process)
+    ambiguous = {name: [p.pid for p in ps] for name, ps in found.items() if len(ps) > 1}
+    if ambiguous:
+        raise ValueError(f"several processes look like the same node (pids {ambiguous}); give the ROS domain id")
+    return {name: ps[0] for name, ps in found.items()}

@@ -7,14 +7,17 @@ taken (``/rosout`` and ``/parameter_events`` are every node's housekeeping, not 
 """
 from __future__ import annotations
 
+import logging
 import time
 from dataclasses import dataclass, field
 from typing import Callable, Iterable
 
 import numpy as np
 
-from detection.learned.encoding import EncodingError, RosEncoder
+from detection.learned.encoding import RosEncoder
 from robot_bridge.ros2.perfbugs import component_name
+
+log = logging.getLogger("faultmas.detection")
 
 
 @dataclass
@@ -86,8 +89,10 @@ class RawTap:
         now = self._clock()
         try:
             vector = encoder.encode_raw(data)
-        except (EncodingError, Exception):      # a bad message is counted, never kills the tap
+        except Exception as exc:                # a bad message is counted and logged, never kills the tap
             self.dropped[topic] = self.dropped.get(topic, 0) + 1
+            if self.dropped[topic] == 1 or self.dropped[topic] % 1000 == 0:
+                log.warning("learned tap: %d message(s) on %s could not be encoded (%s)", self.dropped[topic], topic, exc)
             return
         self.received += 1
         self._on_event(now, topic, vector)

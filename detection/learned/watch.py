@@ -65,7 +65,7 @@ class LiveLearnedObserver:
             if self.unfit and not skip_unfit:
                 raise ModelFileError("; ".join(self.unfit.values()))
             models = {c: m for c, m in models.items() if c not in self.unfit}
-            processes = node_processes([self.components[c] for c in models])
+            processes = node_processes([self.components[c] for c in models], domain_id)
             self.observer = LearnedResourceObserver(models, processes, emit, confirm)
             self.tap = RawTap(node, {t: ty for t, ty in topic_types.items()
                                      if t in self.observer.buffers}, self.observer.on_event)

@@ -29,6 +29,7 @@ class LiveTap:
         self.clock = clock
         self._lock = threading.Lock()      # callbacks may come from several threads (Zenoh)
         self._graph: frozenset[str] | None = None
+        self._last_ns = 0
         self._last_resource = 0.0
         self._sampler = ProcessSampler(config.processes) if config.processes else None
 
@@ -40,10 +41,14 @@ class LiveTap:
             if self.recorder is not None:
                 self.recorder.start(t0)
 
-    def feed(self, channel: str, raw: bytes | None = None, data=None, decode=None, msgtype: str | None = None) -> None:
-        """One message, stamped now; the recording and the observers see it in the same order."""
+    def feed(self, channel: str, raw: bytes | None = None, data=None, decode=None, msgtype: str | None = None,
+             t_ns: int | None = None) -> None:
+        """One message received at ``t_ns`` (default: now); the recording and the observers see it in
+        the same order, on a clock that never goes back (a message taken late keeps its place)."""
         with self._lock:
-            msg = Message(channel, self.clock(), data, raw, decode)
+            t_ns = max(self.clock() if t_ns is None else t_ns, self._last_ns)
+            self._last_ns = t_ns
+            msg = Message(channel, t_ns, data, raw, decode)
             if self.recorder is not None:
                 self.recorder.write(msg, msgtype)
             changed = self.observers.feed(msg)
@@ -64,7 +69,8 @@ class LiveTap:
             for node, sample in self._sampler.sample().items():
                 self.feed(RESOURCE_CHANNEL + node, data=sample)
         with self._lock:
-            changed = self.observers.advance(self.clock())
+            self._last_ns = max(self.clock(), self._last_ns)
+            changed = self.observers.advance(self._last_ns)
         if changed:
             self.on_observations(changed)
 

@@ -106,3 +106,20 @@ def test_every_option_and_argument_has_help_and_descriptions_read_as_sentences()
 def test_plain_description_drops_the_usage_line_and_rst_quotes() -> None:
     assert cli.plain_description("``faultmas router``: a Zenoh router for ``MAS`` use") == "A Zenoh router for 'MAS' use."
     assert cli.plain_description("``faultmas diagnose MODEL --obs OBS.json``.") is None
+
+
+def test_router_on_a_busy_port_says_so_in_one_line() -> None:
+    import socket
+
+    from agents.router import start_failure
+
+    with socket.socket() as busy:            # a real port taken by someone else
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        done = subprocess.run([sys.executable, "-m", "agents", "router", "--listen", f"tcp/127.0.0.1:{port}",
+                               "--timeout", "1"], capture_output=True, text=True, timeout=120)
+    lines = [ln for ln in done.stderr.splitlines() if not ln.startswith("WARNING")]
+    assert done.returncode == 1 and len(lines) == 1, done.stderr
+    assert "already in use" in lines[0] and ".rs:" not in lines[0]
+    assert start_failure(["tcp/x:1"], "boom [x] at /root/src/lib.rs:12.") == "cannot start on tcp/x:1: boom x"

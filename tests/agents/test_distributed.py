@@ -38,6 +38,8 @@ def test_every_performative_across_processes_as_in_one_process(tmp_path):
     assert run.finish() == 0, run.err[-20:]
 
     assert _by_agent(run.out) == _by_agent(here)
+    # Jason 3.3 answers askOne/askAll with the belief's annotations but source(self) (kqmlPlans'
+    # bel_no_source_self), and the asker nests them in the answer's source (add_nested_source)
     for expected in ("[alice] askOne price(apple,3)[source(bob)[source(alice)]]", "[alice] askOne unknown false",
                      "[alice] after untell [price(apple,3)[source(bob)[source(alice)]]]", "[bob] double 42",
                      "[alice] askHow after untellHow []", "[bob] signal 7 from alice",
@@ -148,27 +150,32 @@ def test_ten_thousand_bad_messages_during_a_conversation(team):
 
     def logged() -> list[str]:
         return [line for line in list(watcher.err) if "dropped message on" in line]
-    poll(lambda: len(logged()) >= 10_000, 60)  # the network thread may still be working through them
+    def accounted() -> int:  # lines of their own, plus the drops summed up per reason (issue 22: no flood)
+        return len(logged()) + sum(int(m) for line in list(watcher.err)
+                                   for m in re.findall(r"dropped (\d+) more messages", line))
+    poll(lambda: len(logged()) >= 4 * 10, 60)  # the network thread may still be working through them
     assert watcher.process.poll() is None
     assert watcher.stop() == 0
-    assert len(logged()) == 10_000
+    assert len(logged()) < 200 and accounted() == 10_000
     summary = next(line for line in watcher.err if "agent watcher: dropped" in line)
     counts = dict(re.findall(r"(\w+)=(\d+)", summary))
     assert counts == {reason: "2500" for reason in bad}
 
 
 def test_agent_joins_a_mas_running_in_one_process(tmp_path):
-    """``mas run --listen`` keeps its agents in one process but reachable; ``agent run`` joins it,
-    asks, and its ``.stopMAS`` stops the other process too."""
+    """``mas run --listen`` keeps its agents in one process but reachable; ``agent run`` joins it and
+    asks; its ``.stopMAS`` stops only itself: it is not a member of the project, and a stop from outside
+    the MAS is refused (issue 22)."""
     write_files(tmp_path, {"a.asl": "x(1).\n", "rr.mas2j": "MAS rr { agents: a; }\n",
                            "b.asl": '+agent_alive(a) <- .send(a, askOne, x(X), A); .print("got ", A); .stopMAS.\n'})
     endpoint = loopback_endpoint()
-    host = mas_run(tmp_path / "rr.mas2j", "--listen", endpoint, "--timeout", "60")
+    host = mas_run(tmp_path / "rr.mas2j", "--listen", endpoint, "--timeout", "20")
     with ZenohTransport("rr", ZenohOptions(connect=(endpoint,))) as probe:
         assert probe.wait_for_agents(["a"], 60)
     joined = agent_run(tmp_path, "b", "rr", endpoint, "--timeout", "60")
     assert joined.finish() == 0 and joined.out == ["[b] got x(1)[source(a)]"]
-    assert host.finish() == 0
+    assert host.finish() == 124  # ran to its --timeout
+    assert any("not_a_member" in line and "from b" in line for line in host.err)
 
 
 def test_processes_from_a_non_editable_install(tmp_path):

@@ -30,3 +30,12 @@ def test_unknown_internal_actions_and_wrong_arities_fail_the_check(tmp_path: Pat
 def test_the_shipped_plans_pass_the_check(capsys) -> None:
     files = [str(p) for p in sorted(PLANS.glob("*.asl"))]
     assert main(["asl", "check", *files]) == 0, capsys.readouterr().err
+
+
+def test_mas2j_syntax_errors_say_what_was_expected_in_words(tmp_path: Path, capsys) -> None:
+    project = tmp_path / "bad.mas2j"
+    project.write_text('MAS m {\n  agents: a a.asl [beliefs="x"] foo;\n}\n')
+    assert main(["asl", "check", str(project)]) == 2
+    err = capsys.readouterr().err
+    assert f"{project}:2:33: unexpected 'foo'; expected '#', ';', 'agentArchClass'" in err
+    assert "HASH" not in err and "SEMICOLON" not in err and "LSQB" not in err

@@ -95,3 +95,27 @@ def test_an_unknown_topic_type_is_named_before_anything_starts(write, capsys):
     assert main(["observe", str(config), "--domain-id", "99", "--duration", "1"]) == 2
     err = capsys.readouterr().err
     assert "unknown topic type 'nav_msgs/msg/Nope'" in err and "Traceback" not in err
+
+
+def test_the_status_table_shows_each_observer_the_diagnoses_and_the_rules(write, bag):
+    import io
+
+    from detection.session import open_session, replay_bag
+    from detection.status import StatusTable
+
+    model = write("nav.yaml", "architecture: nav\nnodes:\n  laser: {pub: [scan]}\n  battery: {pub: [battery]}\n"
+                              "observations: [hz(scan), score(battery)]\n")
+    write("nav.rules.yaml", "rules:\n  - {name: restart_laser, posObs: [~hz(scan)], posPosAb: [laser], log: restart}\n")
+    session = open_session(write("obs.yaml", GOOD), model)
+    out = io.StringIO()
+    table = StatusTable(session.observers, out)
+    session.pipeline.add_listener(table.record)
+    replay_bag(session, bag)
+    table.draw()
+    screen = out.getvalue()
+    assert screen.startswith("\x1b[H\x1b[2J")                    # redrawn in place
+    rows = {line.split()[0]: line for line in screen.splitlines()[1:3]}
+    assert "FAULT" in rows["hz(scan)"] and "Hz" in rows["hz(scan)"]
+    assert "ok" in rows["score(battery)"] and "(1 unreadable)" in rows["score(battery)"]
+    assert "diagnoses: {laser}" in screen and "restart_laser" in screen
+    session.close()

@@ -61,6 +61,10 @@ class Lines:
         for line in stream:
             self.lines.append(line.rstrip("\n"))
 
+    def join(self, timeout: float = 10.0) -> None:
+        """Every line, once the process has ended (its stdout closed)."""
+        self._thread.join(timeout)
+
     def wait_for(self, predicate, timeout):
         end = time.monotonic() + timeout
         while time.monotonic() < end:
@@ -106,6 +110,7 @@ def test_slow_publisher_is_diagnosed_and_repaired_and_the_bag_replays_the_same(t
         publisher.terminate()
         publisher.wait(10)
     assert observe.returncode == 0, observe.stderr.read()
+    obs_out.join()                                  # the last lines may still be in the pipe
     updates = [json.loads(line) for line in obs_out.lines]
     fault = next(u for u in updates if any(c["literal"] == "~hz(scan)" for c in u["changed"]))
     assert fault["diagnoses"] == [["laser_driver"]] and fault["possibly_faulty"] == ["laser_driver"]
@@ -122,3 +127,44 @@ def test_slow_publisher_is_diagnosed_and_repaired_and_the_bag_replays_the_same(t
     replayed = changes(out.splitlines())
     assert replayed == live
     assert "messages observed" in err
+
+
+AGENT_RULES = """\
+rules:
+  - name: ask_for_repair
+    posObs: [~hz(scan)]
+    posPosAb: [laser_driver]
+    post: {agent: robot, literal: "+!repair(laser_driver)"}
+"""
+AGENT = """\
+!start.
++!start <- .observe("obs.yaml", [model("nav.yaml"), domain(%d)]).
++observation(hz(scan), false) <- .observations(Obs, PosAb); .print("fault ", Obs, " ", PosAb).
++!repair(C) <- .print("repair ", C); .stopMAS.
+"""
+
+
+def test_the_same_chain_makes_an_agents_plan_run(tmp_path):
+    from agentspeak.runtime import LocalRuntime
+    from detection import agent_actions
+
+    (tmp_path / "obs.yaml").write_text(OBSERVERS)
+    (tmp_path / "nav.yaml").write_text(MODEL)
+    (tmp_path / "nav.rules.yaml").write_text(AGENT_RULES)
+    source = tmp_path / "robot.asl"
+    source.write_text(AGENT % DOMAIN)
+    publisher = subprocess.Popen([sys.executable, str(HERE / "publisher_node.py"), "--domain-id", str(DOMAIN),
+                                  "--name", "laser_driver", "--pub", "/scan:10", "--slow-to", "3",
+                                  "--slow-after", "6"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                 text=True, env=loopback_env())
+    lines: list[str] = []
+    try:
+        assert publisher.stdout.readline().strip() == "ready"
+        rt = LocalRuntime(printer=lambda name, text: lines.append(text))
+        rt.add_agent("robot", source.read_text(), source_file=str(source))
+        rt.run(timeout=60)
+    finally:
+        agent_actions._close_all()
+        publisher.terminate()
+        publisher.wait(10)
+    assert lines[-2:] == ["fault [~hz(scan)] [laser_driver]", "repair laser_driver"], lines

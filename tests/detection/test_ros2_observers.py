@@ -24,11 +24,14 @@ DOMAIN = 1 + (os.getpid() + 37) % 100      # not the other ROS test modules' dom
 HERE = Path(__file__).resolve().parent
 
 
-def start_publisher(*args: str) -> subprocess.Popen:
-    proc = subprocess.Popen([sys.executable, str(HERE / "publisher_node.py"), "--domain-id", str(DOMAIN), *args],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=loopback_env())
-    assert proc.stdout.readline().strip() == "ready", proc.stderr.read()
-    return proc
+def start_publishers(*arg_lists: list[str]) -> list[subprocess.Popen]:
+    """Publisher processes started together (rclpy takes seconds to import), returned once all are ready."""
+    procs = [subprocess.Popen([sys.executable, str(HERE / "publisher_node.py"), "--domain-id", str(DOMAIN), *args],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=loopback_env())
+             for args in arg_lists]
+    for proc in procs:
+        assert proc.stdout.readline().strip() == "ready", proc.stderr.read()
+    return procs
 
 
 def stop(proc: subprocess.Popen) -> None:
@@ -64,6 +67,26 @@ setup:
         states: [{state: calibrated, score: {type: student_t, true_mean: 0.0, significance_level: 0.01}}]
   - type: activated
     nodes: [{name: /victim}]
+  - type: timeout
+    topics: [{name: /ten, timeout: 1.0}, {name: /never, msg_type: std_msgs/msg/Float64, timeout: 1.0}]
+  - type: timestamp
+    topics:
+      - name: /stamped
+        filter: {type: median, window_size: 5}
+        states: [{state: fresh, delay: {type: in_between, lower_bound: 0.0, upper_bound: 0.5}}]
+  - type: timing
+    topics:
+      - name_a: /ten
+        name_b: /three
+        filter: {type: mean, window_size: 5}
+        states: [{state: ok, delay: {type: in_between, lower_bound: 0.0, upper_bound: 0.35}}]
+  - type: movement
+    correlations:
+      - source_a: {topic: /centered, field: data}
+        source_b: {topic: /shifted, field: data}
+        differentiate: false
+        filter: {type: mean, window_size: 40}
+        states: [{state: agree, residual: {type: student_t, true_mean: 0.0, significance_level: 0.01}}]
   - type: resource
     nodes:
       - name: talker
@@ -94,9 +117,10 @@ def live(tmp_path_factory):
     path = tmp_path_factory.mktemp("observers") / "obs.yaml"
     path.write_text(CONFIG)
     config = load_observers(path)
-    pubs = [start_publisher("--name", "talker", "--pub", "/ten:10", "--pub", "/three:3",
-                            "--pub", "/centered:40:0.0", "--pub", "/shifted:40:1.0"),
-            start_publisher("--name", "victim", "--pub", "/victim_out:5")]
+    pubs = start_publishers(["--name", "talker", "--pub", "/ten:10", "--pub", "/three:3",
+                             "--pub", "/centered:40:0.0", "--pub", "/shifted:40:1.0"],
+                            ["--name", "victim", "--pub", "/victim_out:5"],
+                            ["--name", "stamper", "--stamped", "--pub", "/stamped:20"])
     collector = Collector()
     tap = Ros2Tap(config, config.build(), collector, domain_id=DOMAIN).start()
     try:
@@ -154,3 +178,14 @@ def test_resource_reads_the_publisher_process_with_psutil(live):
     assert o.holds and o.state == "ok" and 0 <= o.measured < 95
     memory = next(x for x in tap.observers.observers if x.name == "resource(talker)").filters["memory"].value()
     assert 10 < memory < 4000             # MB: a Python process with rclpy loaded
+
+
+def test_timeout_timestamp_timing_and_movement_on_live_topics(live):
+    tap, seen, _ = live
+    assert wait_for(lambda: all(seen.latest(n) for n in ("timeout(ten)", "timeout(never)")), 30)
+    assert seen.latest("timeout(ten)").holds and not seen.latest("timeout(never)").holds
+    stamped = settled(tap, "timestamp(stamped)")
+    assert stamped.holds and 0.0 <= stamped.measured < 0.5, stamped        # header stamp read from raw CDR
+    assert settled(tap, "timing(ten,three)").holds
+    movement = settled(tap, "movement(centered,shifted)")                  # residual mean -1: rejected
+    assert not movement.holds and movement.measured == pytest.approx(-1.0, abs=0.6)

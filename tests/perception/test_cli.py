@@ -33,9 +33,11 @@ def test_json_output_matches_ground_truth(files, capsys):
     out = json.loads(capsys.readouterr().out)
     truth = true_view(RIG, (0.0, 0.0, 0.0), ROBOT)
     assert out["found"] is True
-    assert out["angle_deg"] == pytest.approx(truth.angle_deg, abs=0.3)
+    # one angle convention everywhere: counter-clockwise (left) positive, as the robot_seen percept;
+    # true_view answers in the optical frame (+right)
+    assert abs(truth.angle_deg) > 3 and out["angle_deg"] == pytest.approx(-truth.angle_deg, abs=0.3)
     assert out["depth_m"] == pytest.approx(truth.depth_m, abs=0.03)
-    assert out["yaw_deg"] == pytest.approx(truth.yaw_deg, abs=6)
+    assert out["yaw_deg"] == pytest.approx(-truth.yaw_deg, abs=6)
 
 
 def test_not_found_reports_a_reason(files, capsys):

@@ -185,7 +185,7 @@ function renderTimeline(clock) {
   const marks = state.marks, svg = $("timeline");
   $("clock").textContent = `(${clock} seconds)`;
   const agents = [...new Set(marks.map((m) => m.agent))].sort();
-  const lane = 54, left = 80, end = Math.max(10, ...marks.map((m) => m.t));
+  const lane = 60, left = 80, end = Math.max(10, ...marks.map((m) => m.t));
   if (state.fit) state.zoom = Math.max(2, ($("timeline-scroll").clientWidth - left - 160) / end);
   const width = left + end * state.zoom + 160;
   svg.setAttribute("width", width); svg.setAttribute("height", Math.max(60, 20 + agents.length * lane));
@@ -198,13 +198,16 @@ function renderTimeline(clock) {
     svg.append(node("text", { x: left + t * state.zoom + 2, y: 10, fill: "#90a4ae" }, `${t}s`));
   }
   agents.forEach((a, i) => svg.append(node("text", { x: 4, y: 28 + i * lane, fill: colour(a) }, a)));
-  const nth = {};
+  const ends = {};   // per agent: where the label of each of its rows ends, so labels do not overlap
   for (const m of marks) {
     const i = agents.indexOf(m.agent), x = left + m.t * state.zoom, y = 24 + i * lane;
-    const k = (nth[m.agent] = (nth[m.agent] ?? -1) + 1);
+    const rows = (ends[m.agent] = ends[m.agent] || [0, 0, 0, 0]);
+    let k = rows.findIndex((end) => end < x);
+    if (k < 0) k = rows.indexOf(Math.min(...rows));
+    rows[k] = x + 6 * m.step.length + 8;
     const g = node("g", { class: "mark", "data-step": m.step, "data-agent": m.agent });
     g.append(node("circle", { cx: x, cy: y, r: 4, fill: colour(m.agent) }));
-    g.append(node("text", { x: x + 3, y: y + 12 + (k % 3) * 10, fill: "#37474f" }, m.step));
+    g.append(node("text", { x: x + 3, y: y + 12 + k * 10, fill: "#37474f" }, m.step));
     g.append(node("title", {}, `${m.t.toFixed(2)} s ${m.agent}: ${m.step} ${m.detail}`));
     svg.append(g);
   }

@@ -10,17 +10,21 @@ import pytest
 from detection.learned.observer import LearnedResourceObserver, replay
 
 
-def test_every_injected_bug_is_flagged_within_80_s_of_its_start(smoke_evaluation):
-    bugs = smoke_evaluation.detections()
-    assert {b["kind"] for b in bugs} >= {"memory_leak"}
-    missed = [b for b in bugs if not b["model"]]
+RESOURCE_HUNGRY = {"memory_leak", "thread_leak", "fd_leak", "wasted_cpu"}
+"""The kinds this method is for: they change a counter while on (docs/perfbugs.md says where it fails)."""
+
+
+def test_every_resource_hungry_bug_is_flagged_within_80_s_and_most_of_its_seconds(smoke_evaluation):
+    bugs = [b for b in smoke_evaluation.detections() if b["kind"] in RESOURCE_HUNGRY]
+    assert {b["kind"] for b in bugs} == RESOURCE_HUNGRY
+    missed = [b for b in bugs if not b["model"] or b["model_share"] < 0.8]
     assert not missed, missed
 
 
 def test_the_model_beats_the_baselines(smoke_evaluation):
     rows = smoke_evaluation.rows
-    assert rows["model"]["f0.1"] > rows["ocsvm"]["f0.1"] and rows["model"]["f0.1"] > rows["random"]["f0.1"]
-    assert rows["model"]["auc"] > 0.9
+    assert rows["model"]["f0.1"] > rows["ocsvm"]["f0.1"] + 0.3 and rows["model"]["f0.1"] > rows["random"]["f0.1"]
+    assert rows["model"]["auc"] > rows["ocsvm"]["auc"] > rows["random"]["auc"] - 0.1
 
 
 def _observer(models):

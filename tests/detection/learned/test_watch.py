@@ -27,3 +27,25 @@ def test_a_failed_resource_observation_names_its_component():
         assert update.diagnoses == (("faulty_motion_decomposer",),)
     finally:
         pipeline.close()
+
+
+def test_a_nodes_process_is_found_in_its_own_domain_and_never_guessed():
+    import subprocess
+    import sys
+
+    import pytest
+
+    from detection.learned.observer import node_processes
+
+    sleepers = [subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)", "robot_bridge.ros2.kobuki_sim",
+                                  "--robot", "faulty", "--domain-id", str(domain)]) for domain in (5, 6)]
+    try:
+        component = Component("faulty_kobuki_sim", "/faulty", "kobuki_sim")
+        assert node_processes([component], 6)["faulty_kobuki_sim"].pid == sleepers[1].pid
+        assert node_processes([component], 7) == {}
+        with pytest.raises(ValueError, match="several processes look like the same node"):
+            node_processes([component])                    # two teams, no domain: ambiguous
+    finally:
+        for sleeper in sleepers:
+            sleeper.kill()
+            sleeper.wait()

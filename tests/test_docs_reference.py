@@ -1,0 +1,30 @@
+"""docs/fault-plans.md is the fault-plan author's reference: it names every internal action faultmas adds,
+every percept and every action, so a new one without documentation fails here (issue 23)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+DOC = (Path(__file__).resolve().parents[1] / "docs" / "fault-plans.md").read_text(encoding="utf-8")
+
+
+def test_every_percept_and_action_is_in_the_reference() -> None:
+    from robot_bridge.actions import ACTIONS, REASONS
+    from robot_bridge.percepts import VOCABULARY
+
+    missing = [f"percept {name}" for name, _ in VOCABULARY if f"`{name}" not in DOC]
+    missing += [f"action {name}" for name in ACTIONS if f"`{name}" not in DOC]
+    missing += [f"reason {name}" for name in REASONS if f"`{name}`" not in DOC]
+    assert missing == []
+
+
+def test_every_plug_in_internal_action_is_in_the_reference() -> None:
+    from agentspeak.stdlib.registry import Registry, STDLIB
+
+    before = set(Registry().names())          # a fresh registry: nothing
+    STDLIB.load_extensions()
+    from importlib.metadata import entry_points
+    plug_in_modules = {ep.value for ep in entry_points(group="faultmas.internal_actions")}
+    added = [spec.name for spec in STDLIB.actions.values()
+             if getattr(spec.function, "__module__", "") in plug_in_modules]
+    assert added and not before
+    assert [name for name in added if f"`{name}(" not in DOC] == []
