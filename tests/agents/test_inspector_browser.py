@@ -51,6 +51,10 @@ def main_job(browser):
     pages["faulty"].wait_for_function(
         "![...document.querySelectorAll('#beliefs li')].some((b) => b.textContent.startsWith('diagnosing['))",
         timeout=30_000)
+    # the recorder samples every 100 ms: its last snapshot must have caught up with the page too
+    pages["faulty"].wait_for_function(
+        "window.__seen.length > 0 && !window.__seen[window.__seen.length - 1].beliefs"
+        ".some((b) => b.startsWith('diagnosing['))", timeout=5_000)
     yield proc, url, pages
     proc.stop(signal.SIGINT, timeout=30)
 
