@@ -44,8 +44,8 @@ def replay_bag(session: Session, bag: str | Path) -> list[Update]:
     """Every message of the bag through the observers and the pipeline; the updates, in order.
 
     The clock starts where the live run that recorded the bag started (else at the first message) and
-    runs to the last message."""
-    from detection.taps.bag import replay, start_time_ns
+    runs to where its clock stopped (else to the last message)."""
+    from detection.taps.bag import replay, start_time_ns, stop_time_ns
 
     updates: list[Update] = []
     start = start_time_ns(bag)
@@ -57,8 +57,9 @@ def replay_bag(session: Session, bag: str | Path) -> list[Update]:
         if update is not None:
             updates.append(update)
         last = msg.t_ns
+    stop = stop_time_ns(bag)
     if last is not None:
-        update = session.pipeline.observe(session.observers.advance(last))
+        update = session.pipeline.observe(session.observers.advance(max(last, stop or last)))
         if update is not None:
             updates.append(update)
     return updates

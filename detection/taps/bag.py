@@ -23,9 +23,18 @@ class BagError(SourceError):
 
 def start_time_ns(path: str | Path) -> int | None:
     """The start of the live run recorded in the bag (None: not recorded by a tap)."""
+    return _marker_time_ns(path, codec.START_TOPIC)
+
+
+def stop_time_ns(path: str | Path) -> int | None:
+    """How far the live run's clock went (None: not recorded, e.g. a bag of another tool)."""
+    return _marker_time_ns(path, codec.STOP_TOPIC)
+
+
+def _marker_time_ns(path: str | Path, topic: str) -> int | None:
     reader = _open(path)
     try:
-        conns = [c for c in reader.connections if c.topic == codec.START_TOPIC]
+        conns = [c for c in reader.connections if c.topic == topic]
         for _conn, t_ns, _raw in reader.messages(connections=conns):
             return t_ns
         return None
@@ -120,6 +129,11 @@ class BagRecorder:
 
     def start(self, t_ns: int) -> None:
         self._writer.write(self._connection(codec.START_TOPIC, codec.STRING), t_ns, codec.encode_string("start"))
+
+    def stop(self, t_ns: int) -> None:
+        """The live clock's last evaluation: the timer may have evaluated after the last message (a rate
+        that recovered, a timeout), and a replay must run its clock that far too to see the same."""
+        self._writer.write(self._connection(codec.STOP_TOPIC, codec.STRING), t_ns, codec.encode_string("stop"))
 
     def write(self, msg: Message, msgtype: str | None = None) -> None:
         if msg.channel.startswith("@"):

@@ -13,6 +13,7 @@ from typing import Any, Callable
 
 TAP_PREFIX = "/observers/tap/"
 START_TOPIC = TAP_PREFIX + "start"
+STOP_TOPIC = TAP_PREFIX + "stop"      # how far the live clock went (evaluations after the last message)
 STRING = "std_msgs/msg/String"
 
 
@@ -47,8 +48,8 @@ def tap_topic(channel: str) -> str:
 
 
 def tap_channel(topic: str) -> str | None:
-    """The inverse of ``tap_topic``; None for ordinary topics and for the start marker."""
-    if not topic.startswith(TAP_PREFIX) or topic == START_TOPIC:
+    """The inverse of ``tap_topic``; None for ordinary topics and for the start and stop markers."""
+    if not topic.startswith(TAP_PREFIX) or topic in (START_TOPIC, STOP_TOPIC):
         return None
     return "@" + topic[len(TAP_PREFIX):]
 

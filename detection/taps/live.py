@@ -77,5 +77,6 @@ class LiveTap:
     def close_recorder(self) -> None:
         with self._lock:
             if self.recorder is not None:
+                self.recorder.stop(self._last_ns)
                 self.recorder.close()
                 self.recorder = None
