@@ -126,6 +126,7 @@ def test_a_killed_agent_greys(main_job):
     page.wait_for_selector("#team tr[data-agent=helper].dead", timeout=5000)
     latency = time.monotonic() - killed
     print(f"helper greyed {latency:.2f} s after it was killed")
+    assert latency < 1.0, f"a dead agent must turn grey within 1 s (issue 27); took {latency:.2f} s"
     assert "alive" in page.get_attribute("#team tr[data-agent=faulty]", "class")
 
 
