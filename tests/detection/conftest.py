@@ -8,6 +8,15 @@ import pytest
 
 from detection.message import Message
 
+# The architecture the pipeline, CLI and agent tests share: a laser driver publishing scan, amcl using it.
+NAV_MODEL = """\
+architecture: nav
+nodes:
+  laser_driver: {pub: [scan]}
+  amcl: {sub: [scan], pub: [pose]}
+observations: [hz(scan), hz(pose)]
+"""
+
 
 @pytest.fixture
 def write(tmp_path: Path) -> Callable[[str, str], Path]:

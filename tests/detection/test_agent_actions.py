@@ -6,6 +6,7 @@ from agentspeak.runtime import LocalRuntime
 from detection.message import Message
 from detection.taps import codec
 from detection.taps.bag import BagRecorder
+from .conftest import NAV_MODEL
 
 OBSERVERS = """\
 start_up_time: 0.5
@@ -15,13 +16,6 @@ setup:
       - name: /scan
         filter: {type: median, window_size: 5}
         states: [{state: nominal, frequency: {type: gauss, mean: 10, std_deviation: 1}}]
-"""
-MODEL = """\
-architecture: nav
-nodes:
-  laser_driver: {pub: [scan]}
-  amcl: {sub: [scan], pub: [pose]}
-observations: [hz(scan), hz(pose)]
 """
 RULES = """\
 rules:
@@ -53,7 +47,7 @@ def record_slowing_scan(path):
 
 def test_a_plan_reacts_to_an_observation_found_by_the_observers(tmp_path):
     (tmp_path / "obs.yaml").write_text(OBSERVERS)
-    (tmp_path / "nav.yaml").write_text(MODEL)
+    (tmp_path / "nav.yaml").write_text(NAV_MODEL)
     (tmp_path / "nav.rules.yaml").write_text(RULES)
     record_slowing_scan(tmp_path / "run")
     source = tmp_path / "robot.asl"

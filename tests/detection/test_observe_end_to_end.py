@@ -19,6 +19,7 @@ import pytest
 pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'faultmas[ros2]')")
 
 from robot_bridge.ros2.runtime import loopback_env  # noqa: E402
+from .conftest import NAV_MODEL  # noqa: E402
 
 DOMAIN = 1 + (os.getpid() + 63) % 100
 HERE = Path(__file__).resolve().parent
@@ -32,13 +33,6 @@ setup:
         msg_type: std_msgs/msg/Float64
         filter: {type: median, window_size: 5}
         states: [{state: nominal, frequency: {type: gauss, mean: 10, std_deviation: 1}}]
-"""
-MODEL = """\
-architecture: nav
-nodes:
-  laser_driver: {pub: [scan]}
-  amcl: {sub: [scan], pub: [pose]}
-observations: [hz(scan), hz(pose)]
 """
 RULES = """\
 rules:
@@ -89,7 +83,7 @@ def changes(json_lines: list[str]) -> list[tuple]:
 
 def test_slow_publisher_is_diagnosed_and_repaired_and_the_bag_replays_the_same(tmp_path):
     (tmp_path / "obs.yaml").write_text(OBSERVERS)
-    (tmp_path / "nav.yaml").write_text(MODEL)
+    (tmp_path / "nav.yaml").write_text(NAV_MODEL)
     (tmp_path / "nav.rules.yaml").write_text(RULES)
     publisher = subprocess.Popen([sys.executable, str(HERE / "publisher_node.py"), "--domain-id", str(DOMAIN),
                                   "--name", "laser_driver", "--pub", "/scan:10", "--slow-to", "3",
@@ -149,7 +143,7 @@ def test_the_same_chain_makes_an_agents_plan_run(tmp_path):
     from detection import agent_actions
 
     (tmp_path / "obs.yaml").write_text(OBSERVERS)
-    (tmp_path / "nav.yaml").write_text(MODEL)
+    (tmp_path / "nav.yaml").write_text(NAV_MODEL)
     (tmp_path / "nav.rules.yaml").write_text(AGENT_RULES)
     source = tmp_path / "robot.asl"
     source.write_text(AGENT % DOMAIN)

@@ -10,15 +10,8 @@ from diagnosis.actions import ActionEnvironment
 from diagnosis.loader import load_model
 from diagnosis.rules import load_rules
 
-from .conftest import merged, stream
+from .conftest import NAV_MODEL, merged, stream
 
-MODEL = """\
-architecture: nav
-nodes:
-  laser_driver: {pub: [scan]}
-  amcl: {sub: [scan], pub: [pose]}
-observations: [hz(scan), hz(pose)]
-"""
 RULES = """\
 rules:
   - name: slow_laser
@@ -50,7 +43,7 @@ class Parameters:
 
 @pytest.fixture
 def pipeline(write):
-    model = load_model(write("nav.yaml", MODEL))
+    model = load_model(write("nav.yaml", NAV_MODEL))
     params = Parameters()
     pipe = Pipeline(model, load_rules(write("nav.rules.yaml", RULES), model), ActionEnvironment(parameters=params))
     yield pipe, params
@@ -89,7 +82,7 @@ def test_diagnosis_runs_only_when_an_observation_flips(pipeline, monkeypatch):
 
 
 def test_observations_outside_the_model_reach_the_rules_but_not_the_diagnoser(write, caplog):
-    model = load_model(write("nav.yaml", MODEL))
+    model = load_model(write("nav.yaml", NAV_MODEL))
     fired = []
     rules = load_rules(write("r.yaml", "rules:\n  - {name: hot, posObs: [~resource(amcl)], call: note}\n"))
     pipe = Pipeline(model, rules, ActionEnvironment(callables={"note": fired.append}))
