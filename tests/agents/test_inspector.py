@@ -145,10 +145,11 @@ def test_listen_is_loopback_unless_public_is_given(capsys):
 
 def test_the_mind_shows_what_the_agents_observers_see(tmp_path):
     from agents.inspector.observers import observers_of
-    from tests.detection.test_agent_actions import AGENT, MODEL, OBSERVERS, RULES, record_slowing_scan
+    from tests.detection.conftest import NAV_MODEL
+    from tests.detection.test_agent_actions import AGENT, OBSERVERS, RULES, record_slowing_scan
 
     (tmp_path / "obs.yaml").write_text(OBSERVERS)
-    (tmp_path / "nav.yaml").write_text(MODEL)
+    (tmp_path / "nav.yaml").write_text(NAV_MODEL)
     (tmp_path / "nav.rules.yaml").write_text(RULES)
     record_slowing_scan(tmp_path / "run")
     runtime = LocalRuntime(printer=lambda name, text: None)
