@@ -16,6 +16,14 @@ nodes:
   amcl: {sub: [scan], pub: [pose]}
 observations: [hz(scan), hz(pose)]
 """
+# A rule that asks the agent `robot` to repair the laser driver when the scan is slow.
+REPAIR_RULES = """\
+rules:
+  - name: ask_for_repair
+    posObs: [~hz(scan)]
+    posPosAb: [laser_driver]
+    post: {agent: robot, literal: "+!repair(laser_driver)"}
+"""
 
 
 @pytest.fixture

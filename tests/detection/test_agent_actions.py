@@ -6,7 +6,7 @@ from agentspeak.runtime import LocalRuntime
 from detection.message import Message
 from detection.taps import codec
 from detection.taps.bag import BagRecorder
-from .conftest import NAV_MODEL
+from .conftest import NAV_MODEL, REPAIR_RULES as RULES
 
 OBSERVERS = """\
 start_up_time: 0.5
@@ -16,13 +16,6 @@ setup:
       - name: /scan
         filter: {type: median, window_size: 5}
         states: [{state: nominal, frequency: {type: gauss, mean: 10, std_deviation: 1}}]
-"""
-RULES = """\
-rules:
-  - name: ask_for_repair
-    posObs: [~hz(scan)]
-    posPosAb: [laser_driver]
-    post: {agent: robot, literal: "+!repair(laser_driver)"}
 """
 AGENT = """\
 !start.

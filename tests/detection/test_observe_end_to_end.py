@@ -19,7 +19,7 @@ import pytest
 pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'faultmas[ros2]')")
 
 from robot_bridge.ros2.runtime import loopback_env  # noqa: E402
-from .conftest import NAV_MODEL  # noqa: E402
+from .conftest import NAV_MODEL, REPAIR_RULES  # noqa: E402
 
 DOMAIN = 1 + (os.getpid() + 63) % 100
 HERE = Path(__file__).resolve().parent
@@ -123,13 +123,6 @@ def test_slow_publisher_is_diagnosed_and_repaired_and_the_bag_replays_the_same(t
     assert "messages observed" in err
 
 
-AGENT_RULES = """\
-rules:
-  - name: ask_for_repair
-    posObs: [~hz(scan)]
-    posPosAb: [laser_driver]
-    post: {agent: robot, literal: "+!repair(laser_driver)"}
-"""
 AGENT = """\
 !start.
 +!start <- .observe("obs.yaml", [model("nav.yaml"), domain(%d)]).
@@ -144,7 +137,7 @@ def test_the_same_chain_makes_an_agents_plan_run(tmp_path):
 
     (tmp_path / "obs.yaml").write_text(OBSERVERS)
     (tmp_path / "nav.yaml").write_text(NAV_MODEL)
-    (tmp_path / "nav.rules.yaml").write_text(AGENT_RULES)
+    (tmp_path / "nav.rules.yaml").write_text(REPAIR_RULES)
     source = tmp_path / "robot.asl"
     source.write_text(AGENT % DOMAIN)
     publisher = subprocess.Popen([sys.executable, str(HERE / "publisher_node.py"), "--domain-id", str(DOMAIN),
