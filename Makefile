@@ -8,7 +8,7 @@ PURE_PYTHON := FAULTMAS_PURE_PYTHON=1
 
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: run test test-install bench install speedups browser clean jason-tests campaign
+.PHONY: run test test-install bench install speedups browser clean jason-tests campaign soak
 
 # constraints.txt: the exact versions (pyproject.toml publishes ranges; issue 23). Installs go through it.
 $(STAMP): pyproject.toml constraints.txt Makefile setup.py
@@ -47,9 +47,14 @@ test: speedups browser
 
 # The reliability campaign (docs/reliability.md): every input boundary fuzzed with FAULTMAS_FUZZ_EXAMPLES
 # inputs each (default 20,000; `make test` runs 40), compiled and from source. Hours at the default.
+# Then the chaos matrix (tests/hardening/test_chaos_campaign.py: SIGKILL/SIGSTOP of agents and ROS 2 nodes in
+# `faultmas run`, the pair, a team of 6 and --bridge ros2; ~30 min), each case's outcome printed (CHAOS | ...),
+# and the multi-host run in three network namespaces with a cut link (tests/hardening/test_multihost_netns.py, root).
 campaign: speedups
 	FAULTMAS_FUZZ_PROFILE=campaign $(PY) -m pytest -q -p no:cacheprovider tests/hardening/test_fuzz_boundaries.py
 	FAULTMAS_FUZZ_PROFILE=campaign $(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider tests/hardening/test_fuzz_boundaries.py
+	FAULTMAS_CHAOS=campaign $(PY) -m pytest -q -s -p no:cacheprovider tests/hardening/test_chaos_campaign.py \
+		tests/hardening/test_multihost_netns.py
 
 # Jason 3.3.2's own AgentSpeak unit tests, run unchanged from ../shared (see tests/jason_suite): fails
 # unless every executed test passes, and prints executed/passed

@@ -153,7 +153,10 @@ class RunResult:
     world: object = None
     died: list[tuple[str, int]] = field(default_factory=list)
     """Agent processes that ended on their own with a non-zero status (negative: killed by that signal),
-    in the order seen: the run ends at once and names them (issue 22)."""
+    in the order seen: the run ends at once and names them (issue 22). Robot processes (ROS 2 nodes) are
+    named ``robot/node``."""
+    frozen: list[str] = field(default_factory=list)
+    """Processes stopped (SIGSTOP) when the run ran out of time: named with the timeout."""
 
     @property
     def outcome(self) -> str:
@@ -185,6 +188,7 @@ class ProgressLog:
         self._final: set[str] = set()
         self.done = threading.Event()
         self.died: list[tuple[str, int]] = []  # (agent, exit status) of processes that died (processes only)
+        self.frozen: list[str] = []  # processes found stopped (SIGSTOP) when the run ran out of time
 
     def record(self, report) -> None:
         """Takes an ``agents.progress.ProgressReport`` (from any thread)."""
@@ -286,7 +290,7 @@ def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float =
         for bridge in bridges.values():
             bridge.shutdown()
     log = finished
-    return RunResult(scenario, log.results(), log.marks, log.done.is_set(), world, list(log.died))
+    return RunResult(scenario, log.results(), log.marks, log.done.is_set(), world, list(log.died), list(log.frozen))
 
 
 def _beliefs(scenario: Scenario, robot: RobotSetup) -> list[str]:
@@ -338,11 +342,15 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
                         err: TextIO | None = None, echo: Callable[[Mark], None] | None = None,
                         on_mark: Callable[[Mark, Callable[[str], None]], bool | None] | None = None,
                         serve: Callable[[object], Callable[[], None]] | None = None,
-                        hold: Callable[[], None] | None = None) -> ProgressLog:
+                        hold: Callable[[], None] | None = None,
+                        others: Callable[[], list[tuple[str, int]]] | None = None,
+                        other_processes: Callable[[], dict] | None = None) -> ProgressLog:
     """One ``faultmas agent run ... EXTRA_ARGS`` process per robot of ``scenario`` over a Zenoh hub on
     loopback; ``serve(hub)`` starts what the robots need on the hub (returns its stop). The progress
     reports the agents publish are recorded until every robot is done, ``on_mark`` says stop, or ``timeout``;
-    then ``hold()`` runs (the agents still alive) before they are stopped."""
+    then ``hold()`` runs (the agents still alive) before they are stopped. ``others()``: the robot processes
+    (e.g. ROS 2 nodes) that ended, as (name, status): one ends the run as an agent's death does, named;
+    ``other_processes()``: {name: Popen} of them, checked with the agents for a freeze when time runs out."""
     import os
     import sys
     import tempfile
@@ -365,8 +373,9 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
         launcher = Launcher(load_mas2j(str(project_file)), hub, out, err, extra_args=extra_args)
 
         def kill(name: str, signum: int = signal.SIGKILL) -> None:
-            """SIGKILL ``name``'s process, or send it ``signum`` (SIGSTOP, SIGCONT: a freeze, for chaos tests)."""
-            child = launcher.children.get(name)
+            """SIGKILL ``name``'s process (an agent, or a robot process of ``other_processes``), or send it
+            ``signum`` (SIGSTOP, SIGCONT: a freeze, for chaos tests)."""
+            child = launcher.children.get(name) or (other_processes() if other_processes else {}).get(name)
             if child is not None and child.poll() is None:
                 child.send_signal(signum)
 
@@ -385,13 +394,16 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
         try:
             launcher.start()
             started = time.monotonic()
-            if launcher.wait(timeout, stop_when_idle=False, fatal=log.needed) == "failed":
+            if launcher.wait(timeout, stop_when_idle=False, fatal=log.needed, others=others) == "failed":
                 # a robot the run waits for died: the others get a lease or two to notice and react
                 # (a helper releases it), then the run ends and names it, long before its timeout
                 left = timeout - (time.monotonic() - started)
                 launcher.stop_requested.wait(max(0.0, min(DEATH_GRACE, left)))
             launcher._check_children()
             log.died.extend(launcher.failures)
+            if not log.done.is_set() and not log.died:  # out of time: a frozen process is the likely cause
+                from robot_bridge.processes import frozen
+                log.frozen.extend(frozen({**launcher.children, **(other_processes() if other_processes else {})}))
             if hold is not None and not log.died:
                 hold()
         finally:

@@ -32,3 +32,19 @@ def stop_processes(processes: Iterable[subprocess.Popen], grace: float,
                 proc.wait(max(0.0, deadline - time.monotonic()))
             except subprocess.TimeoutExpired:
                 pass
+
+
+def frozen(processes: dict[str, subprocess.Popen]) -> list[str]:
+    """The names of the processes stopped now (SIGSTOP, a debugger): alive, yet doing nothing. A run that
+    times out names them, so a freeze is not mistaken for slowness."""
+    import psutil
+
+    names = []
+    for name, proc in processes.items():
+        try:
+            if proc.poll() is None and psutil.Process(proc.pid).status() in (psutil.STATUS_STOPPED,
+                                                                            psutil.STATUS_TRACING_STOP):
+                names.append(name)
+        except psutil.Error:  # ended meanwhile
+            pass
+    return names

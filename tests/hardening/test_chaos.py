@@ -58,3 +58,30 @@ def test_an_agent_that_dies_before_it_is_reachable_does_not_hold_the_others(tmp_
     assert "[a] started" in run.out
     assert time.monotonic() - started < 50  # not after the 60 s wait for b (generous for a loaded machine)
     assert any("died before they became reachable" in line and "b" in line for line in run.err)
+
+
+def test_a_stopped_process_is_named_as_frozen_and_no_longer_once_it_continues():
+    """What a run that times out says about a freeze (``RunResult.frozen``): the process stopped by SIGSTOP."""
+    import subprocess
+    import sys
+
+    import psutil
+
+    from robot_bridge.processes import frozen
+
+    sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        assert frozen({"sleeper": sleeper}) == []
+        sleeper.send_signal(signal.SIGSTOP)
+        deadline = time.monotonic() + 10
+        while psutil.Process(sleeper.pid).status() != psutil.STATUS_STOPPED and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert frozen({"sleeper": sleeper, "gone": subprocess.Popen([sys.executable, "-c", ""])}) == ["sleeper"]
+        sleeper.send_signal(signal.SIGCONT)
+        deadline = time.monotonic() + 10
+        while psutil.Process(sleeper.pid).status() == psutil.STATUS_STOPPED and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert frozen({"sleeper": sleeper}) == []
+    finally:
+        sleeper.kill()
+        sleeper.wait()
