@@ -56,6 +56,13 @@ campaign: speedups
 	FAULTMAS_CHAOS=campaign $(PY) -m pytest -q -s -p no:cacheprovider tests/hardening/test_chaos_campaign.py \
 		tests/hardening/test_multihost_netns.py
 
+# The soak (tests/hardening/soak.py): team-of-6 runs back to back until SOAK_SIM_SECONDS of simulated time
+# (default 1 h) or SOAK_WALL_SECONDS of wall time; RSS slope, threads, descriptors, intentions left per run.
+SOAK_SIM_SECONDS ?= 3600
+SOAK_WALL_SECONDS ?= 36000
+soak: speedups
+	$(PY) -m tests.hardening.soak --sim-seconds $(SOAK_SIM_SECONDS) --wall-seconds $(SOAK_WALL_SECONDS) --out soak.jsonl
+
 # Jason 3.3.2's own AgentSpeak unit tests, run unchanged from ../shared (see tests/jason_suite): fails
 # unless every executed test passes, and prints executed/passed
 JASON_TESTS ?= ../shared/jason-unit-tests

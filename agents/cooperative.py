@@ -156,7 +156,7 @@ class RunResult:
     in the order seen: the run ends at once and names them (issue 22). Robot processes (ROS 2 nodes) are
     named ``robot/node``."""
     frozen: list[str] = field(default_factory=list)
-    """Processes stopped (SIGSTOP) when the run ran out of time: named with the timeout."""
+    """Processes stopped (SIGSTOP) when the run ended: named in its summary (they explain a timeout)."""
 
     @property
     def outcome(self) -> str:
@@ -401,9 +401,8 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
                 launcher.stop_requested.wait(max(0.0, min(DEATH_GRACE, left)))
             launcher._check_children()
             log.died.extend(launcher.failures)
-            if not log.done.is_set() and not log.died:  # out of time: a frozen process is the likely cause
-                from robot_bridge.processes import frozen
-                log.frozen.extend(frozen({**launcher.children, **(other_processes() if other_processes else {})}))
+            from robot_bridge.processes import frozen  # named whatever the outcome: it explains a timeout too
+            log.frozen.extend(frozen({**launcher.children, **(other_processes() if other_processes else {})}))
             if hold is not None and not log.died:
                 hold()
         finally:

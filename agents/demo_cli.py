@@ -199,8 +199,9 @@ def _summary(result) -> str:
         what = "robot process" if "/" in agent else "agent"  # ROS 2 nodes are named robot/node
         lines.append(f"\nthe run ended early: {what} {died_text(agent, status)}")
     if not result.finished and not result.died:
-        lines.append("\nthe run did not finish in time"
-                     + (f"; stopped (SIGSTOP) at the end: {', '.join(result.frozen)}" if result.frozen else ""))
+        lines.append("\nthe run did not finish in time")
+    if result.frozen:
+        lines.append(f"\nstopped (SIGSTOP) when the run ended: {', '.join(result.frozen)}")
     return "\n".join(lines)
 
 

@@ -46,7 +46,7 @@ def _outcome_line(case: str, result, elapsed: float, struck: list[str]) -> str:
             f"{elapsed:.0f} s of {TIMEOUT:.0f}")
 
 
-def _check(case: str, result, elapsed: float, struck: list[str], signum: int) -> None:
+def _check(case: str, result, elapsed: float, struck: list[str], signum: int, thawed: bool = False) -> None:
     print(_outcome_line(case, result, elapsed, struck))
     assert struck, f"{case}: the moment never came"
     assert elapsed < TIMEOUT + SLACK, f"{case}: ran {elapsed:.0f} s"
@@ -56,6 +56,8 @@ def _check(case: str, result, elapsed: float, struck: list[str], signum: int) ->
             assert (struck[0], -signal.SIGKILL) in result.died
     elif result.outcome == "timeout":
         assert struck[0] in result.frozen, f"{case}: timed out without naming the frozen {struck[0]}"
+    if signum == signal.SIGSTOP and thawed is False:
+        assert struck[0] in result.frozen or struck[0] in dict(result.died), f"{case}: the frozen process is not named"
     # else finished: correct, or wrong with every robot's diagnosis named in the result
 
 
@@ -66,13 +68,19 @@ SIM_CASES = [
      lambda mark: mark.detail, signal.SIGKILL, None),
     ("pair: SIGSTOP helper for good at helper_found", lambda: paper_scenario("encoders", seed=13), "helper_found",
      lambda mark: mark.detail, signal.SIGSTOP, None),
-    ("team of 6: SIGKILL the chosen helper", lambda: team_scenario(6, 1, seed=14), "helper_found",
-     lambda mark: mark.detail, signal.SIGKILL, None),
+    ("team of 6: SIGKILL another robot when the fault is detected", lambda: team_scenario(6, 1, seed=14),
+     "fault_detected", lambda mark: _another_robot(mark, 14), signal.SIGKILL, None),
     ("team of 6: SIGKILL the faulty robot", lambda: team_scenario(6, 1, seed=15), "fault_detected",
      lambda mark: mark.agent, signal.SIGKILL, None),
-    ("team of 6: SIGSTOP a helper 5 s", lambda: team_scenario(6, 1, seed=16), "helper_found",
-     lambda mark: mark.detail, signal.SIGSTOP, 5.0),
+    ("team of 6: SIGSTOP another robot 5 s when the fault is detected", lambda: team_scenario(6, 1, seed=16),
+     "fault_detected", lambda mark: _another_robot(mark, 16), signal.SIGSTOP, 5.0),
 ]
+
+
+def _another_robot(mark, seed: int) -> str:
+    """A robot of the team other than the one that reported ``mark`` (a possible helper), chosen by seed."""
+    others = [r.name for r in team_scenario(6, 1, seed=seed).robots if r.name != mark.agent]
+    return random.Random(seed).choice(others)
 
 
 @pytest.mark.timeout(TIMEOUT + 3 * SLACK)
@@ -81,7 +89,7 @@ def test_chaos_on_the_embedded_simulator(case, scenario, step, target, signum, t
     on_mark, struck = _kill_at(step, target, signum, thaw, delay=random.Random(case).uniform(0.0, 2.0))
     started = time.monotonic()
     result = run_scenario(scenario(), processes=True, timeout=TIMEOUT, on_mark=on_mark)
-    _check(case, result, time.monotonic() - started, struck, signum)
+    _check(case, result, time.monotonic() - started, struck, signum, thawed=thaw is not None)
 
 
 ROS_CASES = [
