@@ -155,8 +155,9 @@ class RunResult:
     """Agent processes that ended on their own with a non-zero status (negative: killed by that signal),
     in the order seen: the run ends at once and names them (issue 22). Robot processes (ROS 2 nodes) are
     named ``robot/node``."""
-    frozen: list[str] = field(default_factory=list)
-    """Processes stopped (SIGSTOP) when the run ended: named in its summary (they explain a timeout)."""
+    frozen: list[tuple[str, float]] = field(default_factory=list)
+    """(process, seconds) of the processes seen stopped (SIGSTOP) during the run, continued since or not:
+    named in its summary (a freeze explains a timeout)."""
 
     @property
     def outcome(self) -> str:
@@ -188,7 +189,7 @@ class ProgressLog:
         self._final: set[str] = set()
         self.done = threading.Event()
         self.died: list[tuple[str, int]] = []  # (agent, exit status) of processes that died (processes only)
-        self.frozen: list[str] = []  # processes found stopped (SIGSTOP) when the run ran out of time
+        self.frozen: list[tuple[str, float]] = []  # (process, seconds) seen stopped (SIGSTOP) during the run
 
     def record(self, report) -> None:
         """Takes an ``agents.progress.ProgressReport`` (from any thread)."""
@@ -350,7 +351,7 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
     reports the agents publish are recorded until every robot is done, ``on_mark`` says stop, or ``timeout``;
     then ``hold()`` runs (the agents still alive) before they are stopped. ``others()``: the robot processes
     (e.g. ROS 2 nodes) that ended, as (name, status): one ends the run as an agent's death does, named;
-    ``other_processes()``: {name: Popen} of them, checked with the agents for a freeze when time runs out."""
+    ``other_processes()``: {name: Popen} of them, watched with the agents for freezes (``ProgressLog.frozen``)."""
     import os
     import sys
     import tempfile
@@ -391,18 +392,21 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
             if report is not None:
                 log.record(report)
         hub.on_control(on_control)
+        from robot_bridge.processes import FreezeWatch
+        watch = FreezeWatch(lambda: {**launcher.children, **(other_processes() if other_processes else {})})
         try:
             launcher.start()
             started = time.monotonic()
-            if launcher.wait(timeout, stop_when_idle=False, fatal=log.needed, others=others) == "failed":
+            with watch:
+                ended = launcher.wait(timeout, stop_when_idle=False, fatal=log.needed, others=others)
+            if ended == "failed":
                 # a robot the run waits for died: the others get a lease or two to notice and react
                 # (a helper releases it), then the run ends and names it, long before its timeout
                 left = timeout - (time.monotonic() - started)
                 launcher.stop_requested.wait(max(0.0, min(DEATH_GRACE, left)))
             launcher._check_children()
             log.died.extend(launcher.failures)
-            from robot_bridge.processes import frozen  # named whatever the outcome: it explains a timeout too
-            log.frozen.extend(frozen({**launcher.children, **(other_processes() if other_processes else {})}))
+            log.frozen.extend(watch.report())  # named whatever the outcome: a freeze explains a timeout
             if hold is not None and not log.died:
                 hold()
         finally:

@@ -175,7 +175,7 @@ def _as_json(result) -> dict:
     fault (``fault``, ``diagnosis``: strings; steps in simulated and wall seconds)."""
     return {"correct": result.correct, "finished": result.finished, "outcome": result.outcome,
             "died": [{"agent": agent, "exit": status} for agent, status in result.died],
-            "frozen": list(result.frozen),
+            "frozen": [{"process": name, "seconds": seconds} for name, seconds in result.frozen],
             "seed": result.scenario.seed,
             "robots": [{"robot": r.name, "fault": r.fault, "expected": r.expected, "diagnosis": r.diagnosis,
                         "correct": r.correct, "steps": _seconds(r.steps_sim), "steps_wall": _seconds(r.steps_wall)}
@@ -201,7 +201,8 @@ def _summary(result) -> str:
     if not result.finished and not result.died:
         lines.append("\nthe run did not finish in time")
     if result.frozen:
-        lines.append(f"\nstopped (SIGSTOP) when the run ended: {', '.join(result.frozen)}")
+        lines.append("\nstopped (SIGSTOP) during the run: "
+                     + ", ".join(f"{name} for {seconds:.1f} s" for name, seconds in result.frozen))
     return "\n".join(lines)
 
 
