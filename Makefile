@@ -45,12 +45,15 @@ test: speedups browser
 	# the language suite again on the interpreter run from source (what runs without a C compiler)
 	$(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider tests/agentspeak
 
-# The reliability campaign (docs/reliability.md): every input boundary fuzzed with FAULTMAS_FUZZ_EXAMPLES
-# inputs each (default 20,000; `make test` runs 40), compiled and from source. Hours at the default.
+# The reliability campaign (docs/reliability.md): every input boundary fuzzed for FUZZ_MINUTES (compiled,
+# tests/hardening/fuzz_campaign.py), then with FAULTMAS_FUZZ_EXAMPLES inputs each (default 20,000; `make test`
+# runs 40), compiled and from source. Hours at the default.
 # Then the chaos matrix (tests/hardening/test_chaos_campaign.py: SIGKILL/SIGSTOP of agents and ROS 2 nodes in
 # `faultmas run`, the pair, a team of 6 and --bridge ros2; ~30 min), each case's outcome printed (CHAOS | ...),
 # and the multi-host run in three network namespaces with a cut link (tests/hardening/test_multihost_netns.py, root).
+FUZZ_MINUTES ?= 60
 campaign: speedups
+	$(PY) -m tests.hardening.fuzz_campaign --minutes $(FUZZ_MINUTES) --found fuzz-found
 	FAULTMAS_FUZZ_PROFILE=campaign $(PY) -m pytest -q -p no:cacheprovider tests/hardening/test_fuzz_boundaries.py
 	FAULTMAS_FUZZ_PROFILE=campaign $(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider tests/hardening/test_fuzz_boundaries.py
 	FAULTMAS_CHAOS=campaign $(PY) -m pytest -q -s -p no:cacheprovider tests/hardening/test_chaos_campaign.py \
