@@ -352,6 +352,7 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
     then ``hold()`` runs (the agents still alive) before they are stopped. ``others()``: the robot processes
     (e.g. ROS 2 nodes) that ended, as (name, status): one ends the run as an agent's death does, named;
     ``other_processes()``: {name: Popen} of them, watched with the agents for freezes (``ProgressLog.frozen``)."""
+    import contextlib
     import os
     import sys
     import tempfile
@@ -362,9 +363,10 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
     from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
     from agentspeak.mas2j import load_mas2j
 
-    out = out if out is not None else open(os.devnull, "w")     # None: the agents' lines are not shown
+    discard = open(os.devnull, "w") if out is None else None    # None: the agents' lines are not shown
+    out = out if out is not None else discard
     err = err or sys.stderr
-    with tempfile.TemporaryDirectory(prefix="faultmas-run-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="faultmas-run-") as tmp, discard or contextlib.nullcontext():
         project_file = Path(tmp) / f"{scenario.mas}.mas2j"
         lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{", ".join(_beliefs(scenario, r))}"];'
                  for r in scenario.robots]

@@ -206,3 +206,10 @@ class Launcher:
         stop_processes(running, GRACE, (None, *ESCALATION))
         for relay in self.relays:
             relay.join(5.0)
+        for child in self.children.values():  # not left to the garbage collector (a soak's descriptors grew)
+            for stream in (child.stdout, child.stderr):
+                if stream is not None:
+                    try:
+                        stream.close()
+                    except OSError:
+                        pass
