@@ -71,7 +71,7 @@ def main(argv: list[str] | None = None) -> int:
     totals = {name: {"inputs": 0, "cpu_s": 0.0} for name in BOUNDARIES}
     found: list = []
     deadline = time.monotonic() + args.minutes * 60
-    round_number = 0
+    round_number = reported = 0
     while time.monotonic() < deadline:
         round_number += 1
         for name in BOUNDARIES:
@@ -80,13 +80,15 @@ def main(argv: list[str] | None = None) -> int:
             cpu = time.process_time()
             totals[name]["inputs"] += fuzz_round(name, args.chunk, args.input_seconds, found)
             totals[name]["cpu_s"] += time.process_time() - cpu
+        for item in found[reported:]:  # at once: a long run killed midway keeps what it found
+            print(f"ESCAPED {item[0]}: {item[1]}\n{item[3] if len(item) > 3 else ''}", flush=True)
+        reported = len(found)
         print(json.dumps({"round": round_number, "inputs": sum(t["inputs"] for t in totals.values()),
                           "escaped": len(found)}), flush=True)
     folder = Path(args.found)
     for index, item in enumerate(found):
         folder.mkdir(exist_ok=True)
         (folder / f"{index}.{item[0]}").write_bytes(item[2])
-        print(f"ESCAPED {item[0]}: {item[1]}\n{item[3] if len(item) > 3 else ''}", flush=True)
     print(json.dumps({"summary": {name: {"inputs": t["inputs"], "cpu_s": round(t["cpu_s"], 1)}
                                   for name, t in totals.items()}, "escaped": len(found),
                       "minutes": args.minutes}), flush=True)
