@@ -7,15 +7,14 @@ every component is a node with the topics it publishes and subscribes, and decla
 from __future__ import annotations
 
 import re
-from queue import SimpleQueue
 from typing import Callable, Iterable, Sequence
 
-from detection.learned.encoding import RosEncoder, vector_of
+from detection.learned.encoding import RosEncoder
 from detection.learned.features import feature_names
 from detection.learned.model import ComponentModel, ModelFileError
 from detection.learned.observer import LearnedResourceObserver, model_channels, model_columns, node_processes
 from detection.learned.ros_tap import Component, RawTap, discover
-from detection.learned.zenoh_events import (AGENT_NODE, ZenohEventTap, adopt_bridge_nodes, agent_component,
+from detection.learned.zenoh_events import (AGENT_NODE, ZenohFeed, adopt_bridge_nodes, agent_component,
                                             agent_processes, is_zenoh_channel)
 
 AGENT_SUFFIX = "_" + AGENT_NODE
@@ -66,8 +65,7 @@ class LiveLearnedObserver:
         zenoh_columns = {c: {t: cols for t, cols in model_columns(m).items() if is_zenoh_channel(t)}
                          for c, m in models.items()}
         agents = [c[:-len(AGENT_SUFFIX)] for c, cols in zenoh_columns.items() if cols and c.endswith(AGENT_SUFFIX)]
-        self.zenoh_tap: ZenohEventTap | None = None
-        self._zenoh_events: SimpleQueue = SimpleQueue()
+        self.zenoh: ZenohFeed | None = None
         self.ros = RosContext(domain_id=domain_id).start()
         try:
             node = self.ros.add(rclpy.create_node("faultmas_learned_resource", context=self.ros.context))
@@ -92,23 +90,17 @@ class LiveLearnedObserver:
             self.observer = LearnedResourceObserver(models, processes, emit, confirm)
             self.tap = RawTap(node, {t: ty for t, ty in topic_types.items()
                                      if t in self.observer.buffers}, self.observer.on_event)
-            keys = {t: {c: i for i, c in enumerate(cols)} for m in zenoh_columns.values() for t, cols in m.items()
-                    if t in self.observer.buffers}
+            keys = {t: cols for c in models for t, cols in zenoh_columns[c].items()}
             if keys:
-                self._zenoh_index = keys
-                self.zenoh_tap = ZenohEventTap(lambda t, key, size, flat: self._zenoh_events.put((t, key, size, flat)),
-                                               connect=zenoh_connect)
+                self.zenoh = ZenohFeed(keys, self.observer.on_event, connect=zenoh_connect)
             node.create_timer(1.0, self._tick)                       # the executor's thread: no race with the tap
         except BaseException:
             self.close()
             raise
 
     def _tick(self) -> None:
-        while not self._zenoh_events.empty():
-            t, key, size, flat = self._zenoh_events.get()
-            index = self._zenoh_index.get(key)
-            if index is not None:
-                self.observer.on_event(t, key, vector_of(size, flat, index))
+        if self.zenoh is not None:
+            self.zenoh.drain()
         self.observer.tick()
 
     @staticmethod
@@ -125,6 +117,6 @@ class LiveLearnedObserver:
                 f"gone: {sorted(trained - set(channels))[:3]}, or other message types); train it again")
 
     def close(self) -> None:
-        if self.zenoh_tap is not None:
-            self.zenoh_tap.close()
+        if self.zenoh is not None:
+            self.zenoh.close()
         self.ros.close()

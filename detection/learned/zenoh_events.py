@@ -21,7 +21,7 @@ import threading
 import time
 from typing import Any, Callable, Iterable, Sequence
 
-from detection.learned.encoding import EncodingError, decode_json_lines, flatten_json
+from detection.learned.encoding import EncodingError, decode_json_lines, flatten_json, vector_of
 from detection.learned.ros_tap import Component
 from robot_bridge.ros2.perfbugs import component_name
 
@@ -115,6 +115,37 @@ class ZenohEventTap:
     def close(self) -> None:
         if self._owns:
             self.keys.close()
+
+
+class ZenohFeed:
+    """The Zenoh keys a live observer watches: samples are queued on Zenoh's threads and handed to
+    ``on_event(t, key, vector)`` by ``drain()``, in the caller's thread (the observer's buffers are
+    then touched by one thread only), encoded with the columns each key had in training."""
+
+    def __init__(self, columns: dict[str, list[str]], on_event: Callable[[float, str, Any], None], *,
+                 connect: Sequence[str] = (), keys=None) -> None:
+        from queue import SimpleQueue
+
+        self._index = {key: {c: i for i, c in enumerate(cols)} for key, cols in columns.items()}
+        self._queue: SimpleQueue = SimpleQueue()
+        self._on_event = on_event
+        self.tap = ZenohEventTap(self._keep, connect=connect, keys=keys)
+
+    def _keep(self, t: float, key: str, size: int, flat: dict[str, float]) -> None:
+        if key in self._index:
+            self._queue.put((t, key, size, flat))
+
+    def drain(self) -> int:
+        """Hand every queued sample over; returns how many."""
+        n = 0
+        while not self._queue.empty():
+            t, key, size, flat = self._queue.get()
+            self._on_event(t, key, vector_of(size, flat, self._index[key]))
+            n += 1
+        return n
+
+    def close(self) -> None:
+        self.tap.close()
 
 
 def adopt_bridge_nodes(components: dict[str, Component], agents: Iterable[str]) -> dict[str, Component]:
