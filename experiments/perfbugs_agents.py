@@ -6,7 +6,8 @@ them: one process each (``agents.distributed.Launcher``), over a Zenoh hub on lo
 robots through the ROS 2 bridge, the faulty robot with a hardware fault chosen by the run's seed so
 that it raises an alarm, asks the helper and is diagnosed. The plans do this once; so that the agents
 work for the whole run, Faulty is asked to ``achieve goToDestination`` again every ``episode_s``
-seconds (a speech act from ``supervisor`` through the hub, as any agent of the MAS may send). The
+seconds (a speech act from ``supervisor`` through the hub; the agents take it as from a member of the
+MAS, ``--allow-code-from supervisor``, since ``achieve`` is refused from anyone else). The
 workload keeps patrolling both robots meanwhile (the agents' and the workload's actions interleave:
 more varied work, not a clean episode).
 The hook lives here, not in ``detection``, because detection never imports ``agents/``.
@@ -21,6 +22,9 @@ import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
+
+
+SUPERVISOR = "supervisor"
 
 
 @dataclass
@@ -58,7 +62,9 @@ class CooperativeAgents:
         hub = ZenohTransport(scenario.mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
         quiet = open(os.devnull, "w")                      # the agents' lines; their errors go to stderr
         launcher = Launcher(load_mas2j(str(write_project(scenario, Path(tmp.name)))), hub, quiet, sys.stderr,
-                            extra_args=["--bridge", "ros2", "--bridge-option", f"domain_id={domain_id}"])
+                            extra_args=["--bridge", "ros2", "--bridge-option", f"domain_id={domain_id}",
+                                        # the episodes' sender counts as a member (achieve is members-only)
+                                        "--allow-code-from", SUPERVISOR])
 
         stopping = threading.Event()
 
@@ -66,7 +72,7 @@ class CooperativeAgents:
             from agents.transport.envelope import Envelope
             while not stopping.wait(self.episode_s):
                 try:
-                    hub.send(Envelope(scenario.mas, "supervisor", ("faulty",), "achieve", "goToDestination"))
+                    hub.send(Envelope(scenario.mas, SUPERVISOR, ("faulty",), "achieve", "goToDestination"))
                 except Exception as exc:        # an agent that is gone: the run notices it (lost process)
                     print(f"perfbugs agents: could not start an episode: {exc}", file=sys.stderr)
         repeater = threading.Thread(target=episodes, daemon=True, name="perfbugs-episodes")
