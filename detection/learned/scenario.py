@@ -241,24 +241,10 @@ def record_run(run: dict, profile: Profile, out_dir: Path, progress: Callable[[s
 
 
 def _wait_for_bridge_nodes(probe, team: RunningAgents, run_id: int, timeout: float = 90.0) -> None:
-    """Until every agent's ROS 2 bridge node is in the graph with its topics (they are its channels;
-    a node appears before its publishers and subscriptions do)."""
-    from robot_bridge.ros2.bridge import agent_node_name
+    from detection.learned.zenoh_events import wait_for_bridge_nodes
 
-    def ready(node: str, namespace: str) -> bool:
-        try:
-            return bool(probe.get_publisher_names_and_types_by_node(node, namespace)) and \
-                bool(probe.get_subscriber_names_and_types_by_node(node, namespace))
-        except Exception:                   # the node went between the two queries
-            return False
-
-    deadline = time.monotonic() + timeout
-    wanted = {agent_node_name(a) for a in team.pids}
-    while wanted - {name for name, ns in probe.get_node_names_and_namespaces() if ready(name, ns)}:
-        if time.monotonic() > deadline:
-            raise RuntimeError(f"run {run_id}: the agents' ROS 2 nodes did not come up within {timeout:.0f} s")
-        time.sleep(0.2)
-    time.sleep(1.0)                         # the last of their topics
+    if wait_for_bridge_nodes(probe, team.pids, timeout):
+        raise RuntimeError(f"run {run_id}: the agents' ROS 2 nodes did not come up within {timeout:.0f} s")
 
 
 def generate(out_dir: str | Path, profile_name: str, seed: int = 0, out: TextIO = sys.stderr,

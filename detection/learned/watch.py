@@ -15,7 +15,7 @@ from detection.learned.model import ComponentModel, ModelFileError
 from detection.learned.observer import LearnedResourceObserver, model_channels, model_columns, node_processes
 from detection.learned.ros_tap import Component, RawTap, discover
 from detection.learned.zenoh_events import (AGENT_NODE, ZenohFeed, adopt_bridge_nodes, agent_component,
-                                            agent_processes, is_zenoh_channel)
+                                            agent_processes, is_zenoh_channel, wait_for_bridge_nodes)
 
 AGENT_SUFFIX = "_" + AGENT_NODE
 from detection.observation import Observation
@@ -53,9 +53,10 @@ class LiveLearnedObserver:
 
     def __init__(self, models: dict[str, ComponentModel], namespaces: list[str], emit: Callable[[list[Observation]], object],
                  domain_id: int | None = None, confirm: tuple[int, int] = (3, 5), settle_s: float = 2.0,
-                 skip_unfit: bool = False, zenoh_connect: Sequence[str] = ()) -> None:
+                 skip_unfit: bool = False, zenoh_connect: Sequence[str] = (), agents_timeout_s: float = 30.0) -> None:
         """``skip_unfit``: watch only the components whose model fits the live system (the others are
-        listed in ``unfit``) instead of refusing with a ``ModelFileError``."""
+        listed in ``unfit``) instead of refusing with a ``ModelFileError``. ``agents_timeout_s``: how
+        long to wait for the ROS 2 bridge nodes of the agents the models watch (agents start slowly)."""
         import time
 
         import rclpy
@@ -70,6 +71,7 @@ class LiveLearnedObserver:
         try:
             node = self.ros.add(rclpy.create_node("faultmas_learned_resource", context=self.ros.context))
             time.sleep(settle_s)                                     # discovery has no fixed delay
+            wait_for_bridge_nodes(node, agents, agents_timeout_s)    # missing ones: their models are unfit
             components, topic_types = discover(node, namespaces, ignore_nodes=[node.get_name()])
             self.components = adopt_bridge_nodes(components, agents)
             for agent in agents:                   # an agent whose bridge node is not (yet) in the graph

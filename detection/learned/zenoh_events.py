@@ -164,6 +164,28 @@ def adopt_bridge_nodes(components: dict[str, Component], agents: Iterable[str]) 
     return out
 
 
+def wait_for_bridge_nodes(probe, agents: Iterable[str], timeout: float) -> set[str]:
+    """Until every agent's ROS 2 bridge node is in the graph with its topics (a node appears before its
+    publishers and subscriptions do); returns the nodes still missing at ``timeout``."""
+    from robot_bridge.ros2.bridge import agent_node_name
+
+    def ready(node: str, namespace: str) -> bool:
+        try:
+            return bool(probe.get_publisher_names_and_types_by_node(node, namespace)) and \
+                bool(probe.get_subscriber_names_and_types_by_node(node, namespace))
+        except Exception:                   # the node went between the two queries
+            return False
+
+    deadline = time.monotonic() + timeout
+    wanted = {agent_node_name(a) for a in agents}
+    while (missing := wanted - {name for name, ns in probe.get_node_names_and_namespaces() if ready(name, ns)}):
+        if time.monotonic() > deadline:
+            return missing
+        time.sleep(0.2)
+    time.sleep(1.0)                         # the last of their topics
+    return set()
+
+
 def merge_zenoh(components: dict[str, Component], zenoh: dict[str, Component]) -> None:
     """Add the Zenoh channels of ``zenoh`` (``ZenohChannels.components``) to ``components``, in place."""
     for name, z in zenoh.items():
