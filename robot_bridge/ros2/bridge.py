@@ -42,6 +42,15 @@ class Ros2Bridge(RobotBridge):
     """
 
     name: ClassVar[str] = "ros2"
+    known_options: ClassVar[dict[str, str]] = {
+        "namespace": "the robot's ROS namespace (default /<robot>)",
+        "agent_name": "the agent name in the wire messages (default the robot name)",
+        "domain_id": "the ROS domain id (default ROS_DOMAIN_ID)",
+        "action_timeout": "seconds an action may take (default: from the action's own time bound)",
+        "actions_manifest": "a jason_ros actions manifest (INI file)",
+        "perceptions_manifest": "a jason_ros perceptions manifest (INI file)",
+        "wait_for_robot": "setup waits until a decomposer listens (default true)",
+    }
 
     def __init__(self, robot: str, **options: Any) -> None:
         super().__init__(robot, **options)
