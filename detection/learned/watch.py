@@ -15,7 +15,7 @@ from detection.learned.model import ComponentModel, ModelFileError
 from detection.learned.observer import LearnedResourceObserver, model_channels, model_columns, node_processes
 from detection.learned.ros_tap import Component, RawTap, discover
 from detection.learned.zenoh_events import (AGENT_NODE, ZenohFeed, adopt_bridge_nodes, agent_component,
-                                            agent_processes, is_zenoh_channel, wait_for_bridge_nodes)
+                                            agent_processes, is_zenoh_channel, mas_of, wait_for_bridge_nodes)
 
 AGENT_SUFFIX = "_" + AGENT_NODE
 from detection.observation import Observation
@@ -88,7 +88,9 @@ class LiveLearnedObserver:
             agent_names = {agent_component(a): a for a in agents}
             nodes = [self.components[c] for c in models if c not in agent_names]
             processes = node_processes(nodes, domain_id) if nodes else {}
-            processes.update(agent_processes([a for c, a in agent_names.items() if c in models]))
+            for c, agent in agent_names.items():   # by MAS too: another MAS on this host may have an agent of that name
+                if c in models:
+                    processes.update(agent_processes([agent], mas_of(zenoh_columns[c]), zenoh_connect))
             self.observer = LearnedResourceObserver(models, processes, emit, confirm)
             self.tap = RawTap(node, {t: ty for t, ty in topic_types.items()
                                      if t in self.observer.buffers}, self.observer.on_event)

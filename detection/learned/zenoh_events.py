@@ -10,8 +10,8 @@ on which agent A's values go out is an *output* of A, one on which values addres
 *input* of A; the channel is the key itself (``faultmas/coop/agent/helper/inbox``; ROS 2 topics
 start with ``/``, keys never do). Detection never imports ``agents/``: this reads the wire only.
 
-An agent's process is found by its command line (``... agents agent run FILE --name A ...``, as the
-launcher of ``faultmas mas run --processes`` and ``faultmas run`` starts it); its component is
+An agent's process is found by its command line (``... agent run FILE --name A ...``, as the launcher
+of ``faultmas mas run --processes`` and ``faultmas run`` starts it, or a user by hand); its component is
 ``A_agent``, beside the ROS nodes' ``robot_node``.
 """
 from __future__ import annotations
@@ -40,6 +40,12 @@ def agent_component(agent: str) -> str:
 
 def is_zenoh_channel(channel: str) -> bool:
     return not channel.startswith("/")
+
+
+def mas_of(keys: Iterable[str]) -> str | None:
+    """The MAS of faultmas keys (``faultmas/<mas>/...``); None when they name none or several."""
+    names = {k.split("/")[1] for k in keys if k.startswith("faultmas/") and k.count("/") >= 2}
+    return names.pop() if len(names) == 1 else None
 
 
 def parties(value: Any) -> tuple[str | None, list[str]]:
@@ -194,10 +200,11 @@ def merge_zenoh(components: dict[str, Component], zenoh: dict[str, Component]) -
         c.outputs += [k for k in z.outputs if k not in c.outputs]
 
 
-def agent_processes(agents: Iterable[str], mas: str | None = None) -> dict[str, object]:
+def agent_processes(agents: Iterable[str], mas: str | None = None, connect: Sequence[str] = ()) -> dict[str, object]:
     """The process of each agent (component name → ``psutil.Process``), found by its command line
-    ``agents agent run ... --name A`` (and ``--mas M`` when ``mas`` is given). Raises ``ValueError``
-    when an agent matches several processes (two MAS with the same agent names: give ``mas``)."""
+    ``... agent run ... --name A`` (and ``--mas M`` when ``mas`` is given). When several match, those
+    connected (``--connect``) to one of ``connect`` (the endpoints we watch the agents through) are
+    taken. Raises ``ValueError`` when an agent still matches several processes."""
     import psutil
 
     def option(cmdline: list[str], name: str) -> str | None:
@@ -207,11 +214,14 @@ def agent_processes(agents: Iterable[str], mas: str | None = None) -> dict[str, 
     found: dict[str, list] = {}
     for process in psutil.process_iter(["cmdline"]):
         cmdline = process.info.get("cmdline") or []
-        if "agents" not in cmdline or "agent" not in cmdline or "run" not in cmdline:
-            continue
+        if not any(cmdline[i:i + 2] == ["agent", "run"] for i in range(len(cmdline))):
+            continue                    # 'python -m agents agent run ...' or 'faultmas agent run ...'
         name = option(cmdline, "--name")
         if name in wanted and (mas is None or option(cmdline, "--mas") == mas):
             found.setdefault(agent_component(name), []).append(process)
+    for name, ps in found.items():
+        if len(ps) > 1 and connect:
+            found[name] = [p for p in ps if option(p.info.get("cmdline") or [], "--connect") in connect] or ps
     ambiguous = {name: [p.pid for p in ps] for name, ps in found.items() if len(ps) > 1}
     if ambiguous:
         raise ValueError(f"several processes look like the same agent (pids {ambiguous}); name the MAS")

@@ -4,6 +4,7 @@ themselves, a bad payload dropped and counted, and the recorder's columns made f
 from __future__ import annotations
 
 import json
+import os
 import socket
 import time
 
@@ -106,3 +107,29 @@ def test_a_key_gives_the_same_features_online_as_recorded(tmp_path):
     online = buffer.features(tick)
     assert offline[columns.index("content#len")] > 0                       # the 2.5 s window's mean
     np.testing.assert_allclose(online, offline, rtol=0, atol=1e-6)
+
+
+def test_an_agents_process_is_found_by_its_command_line_and_never_guessed():
+    import subprocess
+    import sys
+
+    from detection.learned.zenoh_events import agent_processes
+
+    def sleeper(*argv: str) -> subprocess.Popen:          # a process with an agent's command line
+        return subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)", *argv])
+    me, mas = f"probe{os.getpid()}", f"mas{os.getpid()}"    # names no other run on this host uses
+    procs = [sleeper("agent", "run", "a.asl", "--name", me, "--mas", mas),
+             sleeper("agent", "run", "a.asl", "--name", me, "--mas", mas + "x"),
+             sleeper("agent", "list", "--name", me + "h")]
+    try:
+        assert wait_for(lambda: len(agent_processes([me], mas)) == 1, 10.0)
+        assert agent_processes([me], mas)[f"{me}_agent"].pid == procs[0].pid
+        assert agent_processes([me + "h"]) == {}                              # not 'agent run'
+        with pytest.raises(ValueError, match="several processes look like the same agent"):
+            agent_processes([me])                                             # two MAS, none named
+        procs.append(sleeper("agent", "run", "a.asl", "--name", me, "--mas", mas, "--connect", "tcp/127.0.0.1:9"))
+        assert wait_for(lambda: len(agent_processes([me], mas, ["tcp/127.0.0.1:9"])) == 1, 10.0)
+        assert agent_processes([me], mas, ["tcp/127.0.0.1:9"])[f"{me}_agent"].pid == procs[-1].pid
+    finally:
+        for p in procs:
+            p.kill()
