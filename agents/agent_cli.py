@@ -34,6 +34,9 @@ def add_agent_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--config", default=None, metavar="FILE", help="Zenoh JSON5 file (TLS, access control)")
     run.add_argument("--project", default=None, metavar="PROJECT.mas2j",
                      help="the project file: its agents may send plans; initial beliefs/goals of NAME")
+    run.add_argument("--identity", default=None, metavar="KEY.pem",
+                     help="the agent's private key in the secure profile (a project whose agents have key= "
+                          "options; default: the .key file beside NAME's public key)")
     run.add_argument("--allow-code-from", action="append", default=[], metavar="AGENT",
                      help="also accept tellHow (plans) from AGENT (repeatable)")
     run.add_argument("--max-message-size", type=int, default=None, metavar="BYTES",
@@ -70,6 +73,7 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
 
     from agents.transport import ZenohOptions, ZenohTransport
     from agents.transport.envelope import DEFAULT_MAX_SIZE
+    from agents.transport.identity import IdentityError, project_identity
     from agents.transport.keys import check_name
     from agents.zenoh_arch import TransportBridge
     from agentspeak.errors import AslSyntaxError, SourceError
@@ -96,13 +100,18 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
                 if args.name in decl.instance_names():
                     beliefs = option_literals(decl.options.get("beliefs"), project.file)
                     goals = option_literals(decl.options.get("goals"), project.file)
+        identity = None
+        if args.project:
+            identity = project_identity(project, [args.name], args.identity)
+        elif args.identity:
+            raise IdentityError("--identity needs --project (the project lists the members' public keys)")
         program = parse_program(source, args.file, source_path=tuple(source_dirs))
         options = ZenohOptions(mode=args.mode, listen=tuple(args.listen) if args.listen else None,
                                connect=tuple(args.connect), config_file=args.config)
     except OSError as exc:
         print(f"{exc.filename}: cannot read: {exc.strerror or exc}", file=sys.stderr)
         return 2
-    except (AslSyntaxError, SourceError, ValueError) as exc:
+    except (AslSyntaxError, SourceError, ValueError) as exc:  # IdentityError too
         print(exc, file=sys.stderr)
         return 2
     from agents.environment import choose_bridge
@@ -113,7 +122,8 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
         return 2
     runtime = LocalRuntime()
     runtime.source_dirs = list(source_dirs)
-    transport = ZenohTransport(args.mas, options, max_message_size=args.max_message_size or DEFAULT_MAX_SIZE)
+    transport = ZenohTransport(args.mas, options, max_message_size=args.max_message_size or DEFAULT_MAX_SIZE,
+                               identity=identity)
     try:
         transport.open()
     except Exception as exc:  # zenoh.ZError: bad endpoint, port taken

@@ -11,6 +11,7 @@ SIGINT, SIGTERM and SIGKILL, each after a grace period.
 """
 from __future__ import annotations
 
+import hmac
 import logging
 import os
 import secrets
@@ -59,7 +60,13 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
     except (AslSyntaxError, SourceError, ValueError) as exc:
         print(exc, file=err)
         return 2
-    hub = ZenohTransport(project.name, ZenohOptions(listen=(loopback_endpoint(),))).open()
+    from agents.transport.identity import IdentityError, project_identity
+    try:  # the secure profile: the hub checks signatures too (an outsider's stop must not end the run)
+        identity = project_identity(project)
+    except IdentityError as exc:
+        print(exc, file=err)
+        return 2
+    hub = ZenohTransport(project.name, ZenohOptions(listen=(loopback_endpoint(),)), identity=identity).open()
     served, extra = None, bridge.agent_args() if bridge is not None else []
     if bridge is not None and bridge.name == "sim":
         from agents.environment import open_bridges
@@ -114,7 +121,17 @@ class Launcher:
         self._print_lock = threading.Lock()
         self._stopping = False
         hub.on_status(self._on_status)
-        hub.on_control(lambda message: self.stop_requested.set() if message.get("command") == "stop" else None)
+        hub.on_control(self._on_control)
+
+    def _on_control(self, message: dict) -> None:
+        """A ``stop`` ends the run when an agent of the MAS sent it (``.stopMAS``); a stranger's is
+        refused as the agents refuse it (in the secure profile ``by`` is proved by its signature)."""
+        if message.get("command") != "stop":
+            return
+        if message.get("by") in self.names or hmac.compare_digest(str(message.get("token", "")), self.token):
+            self.stop_requested.set()
+        else:
+            self.hub.report_control_refused(message, "not_a_member")
 
     def _on_status(self, status) -> None:
         self.statuses[status.agent] = status

@@ -11,6 +11,7 @@ import logging
 import sys
 
 from agents.agent_cli import add_agent_parser, option_literals
+from agents.keys_cli import add_keys_parser
 from agents.router import add_router_parser
 
 
@@ -38,6 +39,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     mas.set_defaults(func=lambda args: (mas.print_help(), 2)[1])
     add_agent_parser(sub)
     add_router_parser(sub)
+    add_keys_parser(sub)
 
 
 def setup_logging() -> None:
@@ -134,8 +136,15 @@ def _run_networked(runtime, project, args) -> int:
     from agents.transport import ZenohOptions, ZenohTransport
     from agents.zenoh_arch import TransportBridge
 
+    from agents.transport.identity import IdentityError, project_identity
+
     options = ZenohOptions(listen=tuple(args.listen) if args.listen else None, connect=tuple(args.connect))
-    with ZenohTransport(project.name, options) as transport:
+    try:
+        identity = project_identity(project, project.agent_names())
+    except IdentityError as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    with ZenohTransport(project.name, options, identity=identity) as transport:
         bridge = TransportBridge(runtime, transport, declared=project.agent_names(),
                                  members=project.agent_names()).attach()
         from agents.inspector.publisher import MindPublisher  # state on demand for `faultmas inspect`

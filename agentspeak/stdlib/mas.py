@@ -161,7 +161,7 @@ def _remaining_body(im) -> tuple:
 
 def im_term(im) -> Literal:
     """``im(Label, {Trigger}, {Body still to run}, [map(Var, Value), ...])`` (Jason's IntendedMeans
-    as a term); the body and trigger with the intended means' bindings applied."""
+    as a term); the trigger with the intended means' bindings applied, the body with fresh variables."""
     from agentspeak.terms import rename
     b = im.b
     fresh: dict = {}  # the term shares no variable with the running plan (Jason makes them anonymous)
@@ -172,7 +172,10 @@ def im_term(im) -> Literal:
     literal = im.event_literal if im.event_literal is not None else trig.literal
     trigger = PlanTerm(plan=Plan(Trigger(trig.op, trig.kind, copy(literal))))
     remaining = _remaining_body(im)
-    body = PlanTerm(body=tuple(instr.map_terms(copy) if hasattr(instr, "term") else instr for instr in remaining))
+    # the body as written, its variables made anonymous (Jason's IntendedMeans.getAsTerm: not the values;
+    # Jason's test manager counts each assert by this term, so two asserts of equal values stay two)
+    body = PlanTerm(body=tuple(instr.map_terms(lambda t: rename(t, fresh)) if hasattr(instr, "term") else instr
+                               for instr in remaining))
     # the bindings of the variables the rest of the plan still uses (Jason lists the whole unifier; the
     # values of variables the plan is done with can be large, e.g. a list of plans, and copying them
     # for every assert made Jason's test harness slow)

@@ -218,6 +218,18 @@ def test_intention_describes_the_stack_as_jason():
         out[0].startswith("running sub")
 
 
+def test_intention_body_keeps_variables_not_values():
+    """Jason's ``IntendedMeans.getAsTerm`` makes the body's variables anonymous instead of applying the
+    unifier, so the same formula run twice with equal values gives two different terms (Jason's test
+    manager counts each assert by this term)."""
+    out = run_asl(asl("""
+        !start.
+        +!start <- X = 1; !check(X); !check(X); .count(seen(_), N); .print(N).
+        +!check(_) : .intention(_, _, [im(_, _, { Cur; _ }, _)|_], current) <- +seen(Cur).
+    """))
+    assert out == ["2"]
+
+
 def test_type_reports_jason_types():
     out = run_asl(asl("""
         !g.
