@@ -412,11 +412,15 @@ class PlanTerm:
     ``body`` for a body term; ``rule`` for a rule term.
     """
 
-    __slots__ = ("plan", "body", "rule", "_vars")
+    __slots__ = ("plan", "body", "rule", "_vars", "bare")
 
-    def __init__(self, plan: Plan | None = None, body: tuple | None = None, rule: Rule | None = None) -> None:
+    def __init__(self, plan: Plan | None = None, body: tuple | None = None, rule: Rule | None = None,
+                 bare: bool = False) -> None:
         self.plan, self.body, self.rule = plan, body, rule
         self._vars = None  # its variables, worked out on the first resolve
+        # a body taken out of a plan or of a longer body (``{@L +!T : C <- B}``, ``{ F; Rest }``) prints
+        # without braces, as Jason's (its PlanBody is not "a term"): ``.substring(".send(", B, 0)``
+        self.bare = bare
 
     def _bound_in(self, b: Bindings) -> bool:
         """Is any variable of this term bound in ``b``? (A plan term handed around, e.g. by
@@ -455,7 +459,7 @@ class PlanTerm:
         if self.plan is not None:
             return PlanTerm(plan=self.plan.resolved(b))
         if self.body is not None:
-            return PlanTerm(body=map_body(self.body, lambda t: substitute(t, b)))
+            return PlanTerm(body=map_body(self.body, lambda t: substitute(t, b)), bare=self.bare)
         r = self.rule
         return PlanTerm(rule=Rule(substitute(r.head, b), substitute(r.body, b), r.source_file, r.line))
 
@@ -469,7 +473,7 @@ class PlanTerm:
                 q.goal_condition = rename(p.goal_condition, mapping)
             return PlanTerm(plan=q)
         if self.body is not None:
-            return PlanTerm(body=map_body(self.body, lambda t: rename(t, mapping)))
+            return PlanTerm(body=map_body(self.body, lambda t: rename(t, mapping)), bare=self.bare)
         r = self.rule
         return PlanTerm(rule=Rule(rename(r.head, mapping), rename(r.body, mapping), r.source_file, r.line))
 
@@ -534,7 +538,7 @@ class PlanTerm:
         if self.plan is not None:
             return "{ " + str(self.plan) + " }"
         if self.body is not None:
-            return "{ " + body_str(self.body) + " }"
+            return body_str(self.body) if self.bare else "{ " + body_str(self.body) + " }"
         return "{ " + str(self.rule) + " }"
 
     __repr__ = __str__
@@ -602,7 +606,7 @@ def unify_bodies(xs: tuple, ys: tuple, b: Bindings, trail: list) -> bool:
         if i == n - 1 and type(x) is ExecVar and type(x.term) is Var and (len(ys) != n or type(ys[i]) is not ExecVar):
             value = resolve(x.term, b)
             if type(value) is Var:
-                return unify(value, PlanTerm(body=ys[i:]), b, trail)  # the rest of the body
+                return unify(value, PlanTerm(body=ys[i:], bare=True), b, trail)  # the rest of the body
         if i >= len(ys):
             return False
         y = ys[i]

@@ -230,6 +230,18 @@ def test_intention_body_keeps_variables_not_values():
     assert out == ["2"]
 
 
+def test_a_body_taken_from_a_plan_prints_without_braces():
+    """Jason's PlanBody out of a plan is no term of its own: it prints without ``{ }``, so
+    ``.substring(".send(", B, 0)`` holds for ``B`` of ``{@L +!T : C <- B}`` (Jason's own send test)."""
+    out = run_asl(asl("""
+        !g.
+        +!go <- .send(bob, tell, x); .print(y).
+        +!g <- .relevant_plans({+!go}, [{@L +!T : C <- B}]); .print(B);
+               if (.substring(".send(", B, 0)) { .print(yes) }; X = { .print(a) }; .print(X).
+    """))
+    assert out == [".send(bob,tell,x); .print(y)", "yes", "{ .print(a) }"]
+
+
 def test_type_reports_jason_types():
     out = run_asl(asl("""
         !g.
@@ -316,7 +328,7 @@ def test_variable_plan_label_in_a_plan_term():
         @mine[test] +!g <- .relevant_plans({+!g}, [P]); P = {@L +!T : C <- B}; .print(L); .print(B).
     """))
     assert out[0].startswith("mine[")
-    assert out[1].startswith("{ .relevant_plans")
+    assert out[1].startswith(".relevant_plans")  # a body taken from a plan prints without braces (Jason)
 
 
 # -- messages ------------------------------------------------------------------------------------------
