@@ -528,18 +528,21 @@ class PlanTerm:
             return (None, trig, None, () if trig is not None else self.body)
         return None
 
-    def __eq__(self, other: object) -> bool:
-        return isinstance(other, PlanTerm) and str(self) == str(other)
+    def __eq__(self, other: object) -> bool:  # braces or not: the same term (Jason's equals)
+        return isinstance(other, PlanTerm) and self._text() == other._text()
 
     def __hash__(self) -> int:
-        return hash(str(self))
+        return hash(self._text())
+
+    def _text(self) -> str:
+        if self.plan is not None:
+            return str(self.plan)
+        if self.body is not None:
+            return body_str(self.body)
+        return str(self.rule)
 
     def __str__(self) -> str:
-        if self.plan is not None:
-            return "{ " + str(self.plan) + " }"
-        if self.body is not None:
-            return body_str(self.body) if self.bare else "{ " + body_str(self.body) + " }"
-        return "{ " + str(self.rule) + " }"
+        return self._text() if self.bare else "{ " + self._text() + " }"
 
     __repr__ = __str__
 
@@ -590,11 +593,10 @@ def substitute(t: Term, b: Bindings) -> Term:
 
 
 def _formula_term(instr) -> Term:
-    """What a variable unifies with when it stands for one formula of a body term: the formula's term
-    (``!g(1)`` gives ``g(1)``, as Jason's body terms do)."""
-    if isinstance(instr, _OneTerm):
-        return instr.term
-    return PlanTerm(body=(instr,))
+    """What a variable written as a formula (``{ H; R }``) unifies with: the whole formula, ``?b(X)``
+    or ``!g(1)``, as a one-formula body (Jason's Unifier: ``pb2.getHead()``), so executing ``H`` runs it
+    (demos/meta-programming). A typed variable (``{ !G; R }``) unifies with the term only."""
+    return PlanTerm(body=(instr,), bare=True)
 
 
 def unify_bodies(xs: tuple, ys: tuple, b: Bindings, trail: list) -> bool:
