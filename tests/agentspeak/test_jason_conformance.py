@@ -242,6 +242,24 @@ def test_a_body_taken_from_a_plan_prints_without_braces():
     assert out == [".send(bob,tell,x); .print(y)", "yes", "{ .print(a) }"]
 
 
+def test_univ_on_a_plan_and_running_its_body_formula_by_formula():
+    """``Plan =.. [L, T, C, B]`` (Jason's Plan.getAsListOfTerms) and ``{H; R}`` taking the whole first
+    formula, which runs when executed (Jason's demos/meta-programming, its output)."""
+    out = run_asl(asl("""
+        b(10).
+        !start.
+        @test +!g1 : b(10) <- ?b(X); .print(X); !g(X).
+        +!g(X) <- .print(ok, X).
+        +!start <- .relevant_plans({+!g1}, [Plan|_]); Plan =.. [L, T, C, B];
+                   if (C) { .print("run ", T); !show_run(B) }.
+        +!show_run({}) <- .print("end").
+        +!show_run({H; R}) <- .print("command ", H); H; !show_run(R).
+    """))
+    assert [line for line in out if not line.startswith("command ?b(")] == [
+        "run +!g1", "command .print(10)", "10", "command !g(10)", "ok10", "end"]
+    assert len(out) == 7 and out[1].startswith("command ?b(")
+
+
 def test_type_reports_jason_types():
     out = run_asl(asl("""
         !g.
