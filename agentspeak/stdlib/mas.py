@@ -34,6 +34,17 @@ def create_agent(ctx, name, source, options=None):
     return ctx.unify(name, created) if isinstance(name, Var) else True
 
 
+@internal_action(".clone", args=1)
+def clone(ctx, name):
+    """``.clone(Name)``: a new agent of this MAS with a copy of this agent's beliefs, rules and plans
+    (Jason's: no goals, events or intentions are copied)."""
+    make = getattr(ctx.agent.arch, "clone_agent", None)
+    if make is None:
+        raise IAError("ia_failed", f"the architecture of {ctx.agent.name} cannot clone agents")
+    make(ctx.agent, _text(name))
+    return True
+
+
 @internal_action(".kill_agent", args=1)
 def kill_agent(ctx, name):
     """``.kill_agent(Name)``: stop and remove an agent of this MAS (fails if there is none of that name)."""

@@ -397,3 +397,15 @@ def test_sets_queues_and_maps_as_jason():
                .map.get(M, zz, V, none); .print(V); .findall(K, .map.key(M, K), Ks); .print(Ks).
     """))
     assert out == ["{a,b,c}", "3", "z [y]", "[b,c,d]", "{a->1,b->2}", "none", "[a,b]"]
+
+
+def test_clone_copies_beliefs_and_plans_but_not_goals():
+    """Jason's ``.clone(Name)`` (demos/clone): the copy has the beliefs and plans of the moment it was
+    made, runs none of the goals, and answers messages."""
+    from tests.agentspeak.harness import run_mas
+    main = """test(1).
+        !start.
+        +!start <- +a(40); .clone("bob"); .send(bob, tell, p(10)); .print(started).
+        +p(X) : a(V) & test(T) <- .print(X, " : ", V + T).
+    """
+    assert run_mas({"main": main}) == ["[main] started", "[bob] 10 : 41"]
