@@ -11,6 +11,7 @@ SIGINT, SIGTERM and SIGKILL, each after a grace period.
 """
 from __future__ import annotations
 
+import hmac
 import logging
 import os
 import secrets
@@ -35,9 +36,13 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def run_processes(project, timeout: float | None = None, *, out: IO[str] | None = None,
-                  err: IO[str] | None = None) -> int:
+                  err: IO[str] | None = None, bridge=None, bridge_timeout: float = 30.0) -> int:
     """Run every agent of ``project`` (a ``MasProject``) in its own process; return the exit code
-    (0: ``.stopMAS`` or all idle, 124: ``--timeout``, 1: an agent process failed, 130: interrupted)."""
+    (0: ``.stopMAS`` or all idle, 124: ``--timeout``, 1: an agent process failed, 130: interrupted).
+
+    ``bridge`` (an ``agents.environment.BridgeChoice``): each agent drives its robot through it. The
+    simulator's world lives in this process, served on the hub (``robot_bridge.sim.server``), so that
+    the agents share it through their ``zenoh`` bridges; any other bridge is opened by each agent."""
     from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
     from agents.transport.keys import check_name
     from agentspeak.errors import AslSyntaxError, SourceError
@@ -55,8 +60,28 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
     except (AslSyntaxError, SourceError, ValueError) as exc:
         print(exc, file=err)
         return 2
-    hub = ZenohTransport(project.name, ZenohOptions(listen=(loopback_endpoint(),))).open()
-    launcher = Launcher(project, hub, out, err)
+    from agents.transport.identity import IdentityError, project_identity
+    try:  # the secure profile: the hub checks signatures too (an outsider's stop must not end the run)
+        identity = project_identity(project)
+    except IdentityError as exc:
+        print(exc, file=err)
+        return 2
+    hub = ZenohTransport(project.name, ZenohOptions(listen=(loopback_endpoint(),)), identity=identity).open()
+    served, extra = None, bridge.agent_args() if bridge is not None else []
+    if bridge is not None and bridge.name == "sim":
+        from agents.environment import open_bridges
+        from robot_bridge.sim.server import SimServer
+        try:
+            served = SimServer(hub.session, project.name,
+                               open_bridges(bridge, project.agent_names(), bridge_timeout)).start()
+        except Exception as exc:
+            hub.close()
+            print(f"faultmas mas run: {exc}", file=err)
+            return EXIT_CODES["failed"]
+        extra = ["--bridge", "zenoh", "--bridge-timeout", str(bridge_timeout)]
+    elif bridge is not None:
+        extra += ["--bridge-timeout", str(bridge_timeout)]
+    launcher = Launcher(project, hub, out, err, extra_args=extra)
     try:
         launcher.start()
         reason = launcher.wait(timeout)
@@ -64,6 +89,10 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
         reason = "interrupted"
     finally:
         launcher.stop_all()
+        if served is not None:
+            served.stop()
+            for robot in served.bridges.values():
+                robot.shutdown()
         hub.close()
     if reason == "failed" or (reason != "interrupted" and launcher.failures):
         for name, code in launcher.failures:
@@ -92,7 +121,17 @@ class Launcher:
         self._print_lock = threading.Lock()
         self._stopping = False
         hub.on_status(self._on_status)
-        hub.on_control(lambda message: self.stop_requested.set() if message.get("command") == "stop" else None)
+        hub.on_control(self._on_control)
+
+    def _on_control(self, message: dict) -> None:
+        """A ``stop`` ends the run when an agent of the MAS sent it (``.stopMAS``); a stranger's is
+        refused as the agents refuse it (in the secure profile ``by`` is proved by its signature)."""
+        if message.get("command") != "stop":
+            return
+        if message.get("by") in self.names or hmac.compare_digest(str(message.get("token", "")), self.token):
+            self.stop_requested.set()
+        else:
+            self.hub.report_control_refused(message, "not_a_member")
 
     def _on_status(self, status) -> None:
         self.statuses[status.agent] = status

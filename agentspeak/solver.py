@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import logging
 import operator
-from typing import TYPE_CHECKING, Iterator, Protocol
+from typing import Iterator, Protocol
 
 from agentspeak.terms import (
     _EXACT, INT_OPS, And, AnnotatedVar, Arith, ArithmeticError_, Cons, Func, Literal, Not, Or, Rel, Term, Var, compare, deref,
@@ -21,17 +21,25 @@ from agentspeak.terms import (
 from agentspeak.copier import rule_copier
 from agentspeak.unify import undo, unify, unify_annots_all
 
-if TYPE_CHECKING:
-    from agentspeak.beliefs import BeliefBase
-
 log = logging.getLogger("faultmas.agentspeak")
+
+
+class FactIndex(Protocol):
+    """What compiled formulas read of a belief base (``agentspeak.beliefs.BeliefBase``, which imports this
+    layer's neighbours, not the other way round): its indexes by ``(functor, arity)`` and their lookup."""
+
+    _facts: dict
+    _rules: dict
+
+    def candidates_by_key(self, key: tuple, lit: Literal, b: dict) -> list: ...
+    def literals(self) -> Iterator[Literal]: ...
 
 
 class KnowledgeBase(Protocol):
     """What the solver needs from an agent: facts, rules and internal actions usable in formulas
     (compiled formulas go to the belief base ``bb`` directly)."""
 
-    bb: "BeliefBase"
+    bb: FactIndex
 
     def candidates(self, lit: Literal, b: dict) -> list: ...
     def rules_for(self, lit: Literal) -> list: ...
