@@ -11,16 +11,21 @@ CHROMIUM := /usr/bin/chromium
 .PHONY: run test test-install bench install speedups browser clean jason-tests campaign soak
 
 # constraints.txt: the exact versions (pyproject.toml publishes ranges; issue 23). Installs go through it.
+# Each step says what it does in one line (the commands and pip's progress stay out of the way; errors still show).
 $(STAMP): pyproject.toml constraints.txt Makefile setup.py
-	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install -q --upgrade pip
-	# The ROS 2 wheels first: they bring lark-parser 0.12, which overwrites Lark 1.x ...
-	# (not compiled here: `speedups` compiles the interpreter in place, once)
-	$(PURE_PYTHON) $(PY) -m pip install -q -c constraints.txt -e '.[ros2,dev]'
-	# ... so Lark 1.x is reinstalled last (see ../shared/notes/ros2-and-zenoh.md, 1.4).
-	$(PY) -m pip install -q --force-reinstall --no-deps 'lark==1.3.1'
-	$(PY) -c 'import lark, sys; sys.exit(0 if lark.__version__.startswith("1.") else "lark-parser 0.12 shadows Lark 1.x")'
-	touch $(STAMP)
+	@echo "faultmas: creating the virtual environment $(VENV)"
+	@$(PYTHON) -m venv $(VENV)
+	@$(PY) -m pip install -q --upgrade pip
+	@echo "faultmas: installing faultmas and its dependencies at the versions of constraints.txt, with ROS 2 Jazzy wheels and the test tools (a few minutes the first time)"
+	@# The ROS 2 wheels first: they bring lark-parser 0.12, which overwrites Lark 1.x ...
+	@# (not compiled here: `speedups` compiles the interpreter in place, once)
+	@$(PURE_PYTHON) $(PY) -m pip install -q -c constraints.txt -e '.[ros2,dev]'
+	@echo "faultmas: putting Lark 1.x back over the lark-parser 0.12 the ROS 2 wheels bring"
+	@# ... so Lark 1.x is reinstalled last (see ../shared/notes/ros2-and-zenoh.md, 1.4).
+	@$(PY) -m pip install -q --force-reinstall --no-deps 'lark==1.3.1'
+	@$(PY) -c 'import lark, sys; sys.exit(0 if lark.__version__.startswith("1.") else "lark-parser 0.12 shadows Lark 1.x")'
+	@touch $(STAMP)
+	@echo "faultmas: installed into $(VENV)"
 
 install: $(STAMP)
 
@@ -28,7 +33,7 @@ install: $(STAMP)
 # rebuilt in place for sources edited since the last build; a no-op when nothing changed. Without it an edited
 # module runs from source (the camera draws with numpy), with a warning.
 speedups: $(STAMP)
-	$(PY) setup.py -q build_ext --inplace
+	@$(PY) setup.py -q build_ext --inplace
 
 run: speedups
 	$(VENV)/bin/faultmas run

@@ -45,10 +45,12 @@ def add_agent_parser(sub: argparse._SubParsersAction) -> None:
                      help="with --project: wait up to S seconds until every project agent is reachable")
     run.add_argument("--timeout", type=float, default=None, metavar="S", help="stop after S seconds")
     run.add_argument("--bridge", default=None, metavar="NAME",
-                     help="drive a robot through this bridge (entry point in faultmas.robot_bridges, e.g. "
-                          "zenoh for a simulator served over Zenoh, or ros2); the robot has the agent's name")
+                     help="drive a robot through this bridge (any installed one, see `faultmas sim bridges`: e.g. "
+                          "zenoh for a simulator served by `faultmas sim serve`, or ros2); the robot has the agent's "
+                          "name; default: the --project's environment, if it names a bridge")
     run.add_argument("--bridge-option", action="append", default=[], metavar="KEY=VALUE",
-                     help="an option for the bridge (repeatable; numbers are converted)")
+                     help="an option for the bridge (repeatable; numbers and true/false are converted; an option "
+                          "the bridge does not take is an error that lists the ones it does)")
     run.add_argument("--bridge-timeout", type=float, default=30.0, metavar="S",
                      help="seconds the robot gets to answer at start (default %(default)s)")
     run.add_argument("--allow-pause", action="store_true",
@@ -84,6 +86,7 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
         check_name(args.name)
         check_name(args.mas, "MAS name")
         source = read_source(args.file)
+        project = None
         declared: list[str] = [args.name]
         beliefs: list = []
         goals: list = []
@@ -111,8 +114,9 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
     except (AslSyntaxError, SourceError, ValueError) as exc:  # IdentityError too
         print(exc, file=sys.stderr)
         return 2
+    from agents.environment import choose_bridge
     try:
-        bridge_options = dict(_bridge_option(text) for text in args.bridge_option)
+        choice = choose_bridge(project, args.bridge, args.bridge_option)
     except ValueError as exc:
         print(f"faultmas agent run: {exc}", file=sys.stderr)
         return 2
@@ -126,12 +130,12 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
         print(f"faultmas agent run: cannot join the network: {exc}", file=sys.stderr)
         return 1
     robot = None
-    if args.bridge:
+    if choice is not None:
         try:
-            robot = _open_robot(args, transport, bridge_options)
-        except Exception as exc:  # unknown bridge, bad options, robot silent: say which, exit 1
+            robot = _open_robot(choice, args, transport)
+        except Exception as exc:  # robot silent, bad option value: say which, exit 1
             transport.close()
-            print(f"faultmas agent run: robot {args.name} via bridge {args.bridge!r}: {exc}", file=sys.stderr)
+            print(f"faultmas agent run: robot {args.name} via bridge {choice.name!r}: {exc}", file=sys.stderr)
             return 1
     from agents.robot_arch import RobotArch
     runtime.add_agent(args.name, source_file=args.file, program=program, extra_beliefs=beliefs,
@@ -165,29 +169,19 @@ def _report_drops(name: str, dropped: dict) -> None:
         log.warning("agent %s: dropped %d messages (%s)", name, sum(dropped.values()), reasons)
 
 
-def _bridge_option(text: str) -> tuple[str, object]:
-    """``KEY=VALUE`` from the command line; numbers become numbers, true/false booleans."""
-    key, sep, value = text.partition("=")
-    if not sep or not key.strip():
-        raise ValueError(f"--bridge-option expects KEY=VALUE, got {text!r}")
-    lowered = value.strip().lower()
-    if lowered in ("true", "false"):
-        return key.strip(), lowered == "true"
-    for convert in (int, float):
-        try:
-            return key.strip(), convert(value)
-        except ValueError:
-            pass
-    return key.strip(), value
-
-
-def _open_robot(args: argparse.Namespace, transport, options: dict):
-    """Create and set up the agent's robot bridge; a ``zenoh`` bridge shares the agent's session."""
+def _open_robot(choice, args: argparse.Namespace, transport):
+    """Create and set up the agent's robot bridge; a ``zenoh`` bridge shares the agent's session unless it
+    is told to ``connect`` elsewhere (e.g. to a ``faultmas sim serve`` of another MAS name)."""
     from robot_bridge.registry import create
 
-    if args.bridge == "zenoh":
+    options = dict(choice.options)
+    if choice.name == "zenoh":
         options.setdefault("mas", args.mas)
-        options.setdefault("session", transport.session)
-    bridge = create(args.bridge, args.name, **options)
+        if not options.get("connect"):
+            options.setdefault("session", transport.session)
+    elif choice.name == "sim":
+        log.warning("agent %s: bridge sim in a process of its own is a world with one robot; for a shared world "
+                    "run `faultmas sim serve` and give the agents --bridge zenoh", args.name)
+    bridge = create(choice.name, args.name, **options)
     bridge.setup(timeout=args.bridge_timeout)
     return bridge

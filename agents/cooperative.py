@@ -338,6 +338,18 @@ def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=No
                                on_mark=on_mark, serve=serve, hold=inspector.hold if inspector is not None else None)
 
 
+def write_project(scenario: Scenario, directory) -> "Path":
+    """The scenario's MAS as a ``.mas2j`` file in ``directory``: one agent per robot, its plans and
+    its launch beliefs (``_beliefs``)."""
+    from pathlib import Path
+
+    project_file = Path(directory) / f"{scenario.mas}.mas2j"
+    lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{", ".join(_beliefs(scenario, r))}"];'
+             for r in scenario.robots]
+    project_file.write_text(f"MAS {scenario.mas} {{\n  agents:\n" + "\n".join(lines) + "\n}\n")
+    return project_file
+
+
 def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: float, *, world=None,
                         clock: Callable[[], float] | None = None, out: TextIO | None = None,
                         err: TextIO | None = None, echo: Callable[[Mark], None] | None = None,
@@ -367,10 +379,7 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
     out = out if out is not None else discard
     err = err or sys.stderr
     with tempfile.TemporaryDirectory(prefix="faultmas-run-") as tmp, discard or contextlib.nullcontext():
-        project_file = Path(tmp) / f"{scenario.mas}.mas2j"
-        lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{", ".join(_beliefs(scenario, r))}"];'
-                 for r in scenario.robots]
-        project_file.write_text(f"MAS {scenario.mas} {{\n  agents:\n" + "\n".join(lines) + "\n}\n")
+        project_file = write_project(scenario, Path(tmp))
         hub = ZenohTransport(scenario.mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
         stop_serving = serve(hub) if serve is not None else None
         launcher = Launcher(load_mas2j(str(project_file)), hub, out, err, extra_args=extra_args)

@@ -36,9 +36,13 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def run_processes(project, timeout: float | None = None, *, out: IO[str] | None = None,
-                  err: IO[str] | None = None) -> int:
+                  err: IO[str] | None = None, bridge=None, bridge_timeout: float = 30.0) -> int:
     """Run every agent of ``project`` (a ``MasProject``) in its own process; return the exit code
-    (0: ``.stopMAS`` or all idle, 124: ``--timeout``, 1: an agent process failed, 130: interrupted)."""
+    (0: ``.stopMAS`` or all idle, 124: ``--timeout``, 1: an agent process failed, 130: interrupted).
+
+    ``bridge`` (an ``agents.environment.BridgeChoice``): each agent drives its robot through it. The
+    simulator's world lives in this process, served on the hub (``robot_bridge.sim.server``), so that
+    the agents share it through their ``zenoh`` bridges; any other bridge is opened by each agent."""
     from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
     from agents.transport.keys import check_name
     from agentspeak.errors import AslSyntaxError, SourceError
@@ -63,7 +67,21 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
         print(exc, file=err)
         return 2
     hub = ZenohTransport(project.name, ZenohOptions(listen=(loopback_endpoint(),)), identity=identity).open()
-    launcher = Launcher(project, hub, out, err)
+    served, extra = None, bridge.agent_args() if bridge is not None else []
+    if bridge is not None and bridge.name == "sim":
+        from agents.environment import open_bridges
+        from robot_bridge.sim.server import SimServer
+        try:
+            served = SimServer(hub.session, project.name,
+                               open_bridges(bridge, project.agent_names(), bridge_timeout)).start()
+        except Exception as exc:
+            hub.close()
+            print(f"faultmas mas run: {exc}", file=err)
+            return EXIT_CODES["failed"]
+        extra = ["--bridge", "zenoh", "--bridge-timeout", str(bridge_timeout)]
+    elif bridge is not None:
+        extra += ["--bridge-timeout", str(bridge_timeout)]
+    launcher = Launcher(project, hub, out, err, extra_args=extra)
     try:
         launcher.start()
         reason = launcher.wait(timeout)
@@ -71,6 +89,10 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
         reason = "interrupted"
     finally:
         launcher.stop_all()
+        if served is not None:
+            served.stop()
+            for robot in served.bridges.values():
+                robot.shutdown()
         hub.close()
     if reason == "failed" or (reason != "interrupted" and launcher.failures):
         for name, code in launcher.failures:
