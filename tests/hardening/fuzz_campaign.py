@@ -1,11 +1,13 @@
 """The long fuzz run of issue 22, by time rather than by count: every boundary of ``boundaries.BOUNDARIES`` in
 turn gets ``--chunk`` mutated inputs (the strategy of ``test_fuzz_boundaries``, a fresh random seed each
-round) until ``--minutes`` have passed. It prints a line per round and, at the end, the inputs and CPU
-seconds per boundary and every input that raised anything but the boundary's own errors (saved under
-``--found`` for the corpus). A crash of the interpreter ends the run (the last round line says where); a hang
-is bounded by ``--input-seconds`` per input (SIGALRM).
+round) until ``--minutes`` have passed. It prints a line per boundary and round with the totals so far
+and, at the end, the inputs and CPU seconds per boundary. Every input that raised anything but the
+boundary's own errors is saved under ``--found`` (for the corpus). The fuzzing runs in a worker process:
+one that crashes (the C stack) is replaced, and the input it died on is kept (``crash-N.<boundary>``). A
+hang is bounded by ``--input-seconds`` of CPU per input (SIGPROF: on a machine shared with other work,
+wall time would call slowness a hang).
 
-``python -m tests.hardening.fuzz_campaign --minutes 60`` (``make campaign`` runs the count-based profile)."""
+``python -m tests.hardening.fuzz_campaign --minutes 60`` (the first step of ``make campaign``)."""
 from __future__ import annotations
 
 import argparse
