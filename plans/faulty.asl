@@ -90,6 +90,15 @@ aspect_turn(A, AA, T) :- (AA < 65 | AA > 115) & A < 0 & T = -90 - A.
 +over_current(W) : not saw_over_current(W) <- +saw_over_current(W).
 
 // ---- fault detected: what do my own sensors say? ------------------------------------------------
+// a fault detected without a leg's start or an encoder reading (the agent frozen, or its robot silent) cannot
+// be examined (!ownObservations needs both): it ends undiagnosed, named, not at the run's timeout
++!faultDetected(Why) : not (leg_start(_, _) & encoders(_, _))
+   <- -on_mission;
+      +diagnosing;
+      +self_suspect;
+      .print("fault detected (", Why, ") but no leg start or encoder reading: I cannot examine it");
+      .progress(fault_detected, Why);
+      !undiagnosed([], Why).
 +!faultDetected(Why)
    <- -on_mission;
       +diagnosing;
@@ -240,10 +249,6 @@ where_i_am(unknown) :- not team_pose(_, _, _).    // no start_pose: the helper l
 
 // a helper that comes back (a frozen process thawed, a link restored) may be asked again
 +agent_alive(H) : tried(H) & not helper(H) <- -tried(H).
-
-// a fault that cannot be examined (no leg was started: the agent was frozen, or the robot silent, before it
-// moved) ends undiagnosed, named, instead of leaving the run to its timeout
--!faultDetected(Why) : diagnosing <- .print("I cannot examine the fault (", Why, ")"); !undiagnosed([], Why).
 
 +!undiagnosed(Ds, Why)
    <- .print("undiagnosed (", Why, "); candidates: ", Ds);
