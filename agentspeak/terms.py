@@ -823,7 +823,10 @@ def format_number(x: float | int) -> str:
     if type(x) is int:
         if abs(x) < 2 ** 63:
             return str(x)
-        x = float(x)
+        try:
+            x = float(x)
+        except OverflowError:  # beyond a double, as Java's would be (found by the fuzz campaign)
+            return "Infinity" if x > 0 else "-Infinity"
     if math.isnan(x):
         return "NaN"
     if math.isinf(x):
