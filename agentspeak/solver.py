@@ -291,6 +291,7 @@ def compare_equal(a: Term, c: Term) -> bool:
 
 
 DEFAULT_NS = Literal("default")
+_TRUE_ATOM = Literal("true")
 _NUMS = (int, float)
 _UNEVALUATED = (Arith, Func, Var)
 
@@ -307,6 +308,15 @@ def _univ(left: Term, right: Term, b: dict, trail: list) -> bool:
             if items is not None and len(items) == 3:
                 lst = make_list([functor, make_list(left.args), annots])
         return unify(lst, right, b, trail)
+    parts = left.as_plan_parts() if hasattr(left, "as_plan_parts") and left.plan is not None else None
+    if parts is not None:
+        # a plan term: [Label, Trigger, Context, Body] (Jason's Plan.getAsListOfTerms; demos/meta-programming)
+        plan, term = left.plan, type(left)
+        label = plan.label if plan.label is not None and plan.label.functor else plan.ensure_label()
+        trigger = term(plan=type(plan)(plan.trigger), bare=True)
+        body = term(body=plan.body, bare=True)
+        return unify(make_list([label, trigger, plan.context if plan.context is not None else _TRUE_ATOM, body]),
+                     right, b, trail)
     if type(left) is Var:
         items = _items(right)
         if items is None or len(items) not in (3, 4):
