@@ -37,7 +37,7 @@ from pathlib import Path
 # agent.pxd: compiled as a plain class, the reasoning cycle ran count 13% slower than from source (CPython
 # 3.11's specialised attribute access beats the generic lookups compiled code makes on plain objects).
 COMPILED_MODULES = (
-    "agentspeak.agent", "agentspeak.arch", "agentspeak.beliefs", "agentspeak.communication",
+    "agentspeak.agent", "agentspeak.arch", "agentspeak.beliefs", "agentspeak.body", "agentspeak.communication",
     "agentspeak.copier", "agentspeak.errors", "agentspeak.fork", "agentspeak.ground_terms",
     "agentspeak.intentions", "agentspeak.program", "agentspeak.runtime", "agentspeak.solver",
     "agentspeak.terms", "agentspeak.unify",
