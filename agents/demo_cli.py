@@ -36,7 +36,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                                      "--robots), one agent process each over Zenoh, on the embedded simulator, "
                                      "with a fault injected. Shows the steps as they happen, then the diagnosis "
                                      "and a table of step latencies in simulated and wall seconds. Exit status: 0 "
-                                     "correct, 1 a wrong diagnosis, 3 an agent process died (named), 124 the "
+                                     "correct, 1 a wrong diagnosis, 3 an agent or robot process died (named), 124 the "
                                      "run did not finish within --timeout.")
     run.add_argument("--fault", choices=FAULTS, default=None,
                      help="fault injected into the faulty robot(s) (default: encoders; with --robots: a random "
@@ -203,6 +203,7 @@ def _as_json(result) -> dict:
     fault (``fault``, ``diagnosis``: strings; steps in simulated and wall seconds)."""
     return {"correct": result.correct, "finished": result.finished, "outcome": result.outcome,
             "died": [{"agent": agent, "exit": status} for agent, status in result.died],
+            "frozen": [{"process": name, "seconds": seconds} for name, seconds in result.frozen],
             "seed": result.scenario.seed,
             "robots": [{"robot": r.name, "fault": r.fault, "expected": r.expected, "diagnosis": r.diagnosis,
                         "correct": r.correct, "steps": _seconds(r.steps_sim), "steps_wall": _seconds(r.steps_wall)}
@@ -223,9 +224,13 @@ def _summary(result) -> str:
         for step in STEP_NAMES:
             lines.append(f"| {r.name} | {step} | {_fmt(r.steps_sim[step])} | {_fmt(r.steps_wall[step])} |")
     for agent, status in result.died:
-        lines.append(f"\nthe run ended early: agent {died_text(agent, status)}")
+        what = "robot process" if "/" in agent else "agent"  # ROS 2 nodes are named robot/node
+        lines.append(f"\nthe run ended early: {what} {died_text(agent, status)}")
     if not result.finished and not result.died:
         lines.append("\nthe run did not finish in time")
+    if result.frozen:
+        lines.append("\nstopped (SIGSTOP) during the run: "
+                     + ", ".join(f"{name} for {seconds:.1f} s" for name, seconds in result.frozen))
     return "\n".join(lines)
 
 

@@ -164,11 +164,13 @@ class Launcher:
                 sink.flush()
 
     def wait(self, timeout: float | None, stop_when_idle: bool = True,
-             fatal: Callable[[str], bool] | None = None) -> str:
+             fatal: Callable[[str], bool] | None = None,
+             others: Callable[[], list[tuple[str, int]]] | None = None) -> str:
         """Block until the MAS ends; the reason ('stopped', 'idle', 'timeout' or 'failed').
         ``fatal(name)``: 'failed' as soon as a child for which it is true ends with a non-zero status or a
         signal (``failures`` names it), not only once all have ended (a run whose agent was killed must
-        not wait for its timeout)."""
+        not wait for its timeout). ``others()``: processes the agents depend on (robot nodes) that have
+        ended, as (name, exit status): 'failed' at once, each named in ``failures``."""
         from agents.transport.status import quiescent, totals
 
         deadline = None if timeout is None else time.monotonic() + timeout
@@ -180,6 +182,8 @@ class Launcher:
                 return "timeout"
             if self._check_children() or (fatal is not None and any(fatal(name) for name, _ in self.failures)):
                 return "failed"
+            if others is not None and self._record_others(others()):
+                return "failed"
             statuses = [self.statuses.get(name) for name in self.names]
             snapshot = None
             if stop_when_idle and all(statuses) and quiescent(statuses):
@@ -189,6 +193,13 @@ class Launcher:
             previous = snapshot
             wait = CHECK_INTERVAL if deadline is None else max(0.0, min(CHECK_INTERVAL, deadline - time.monotonic()))
             self.stop_requested.wait(wait)
+
+    def _record_others(self, ended: list[tuple[str, int]]) -> bool:
+        """Add the other processes that ended to ``failures``; True if there are any."""
+        for failure in ended:
+            if failure not in self.failures:
+                self.failures.append(failure)
+        return bool(ended)
 
     def _check_children(self) -> bool:
         """Record children that ended on their own; True when none is left running."""
@@ -217,3 +228,10 @@ class Launcher:
         stop_processes(running, GRACE, (None, *ESCALATION))
         for relay in self.relays:
             relay.join(5.0)
+        for child in self.children.values():  # not left to the garbage collector (a soak's descriptors grew)
+            for stream in (child.stdout, child.stderr):
+                if stream is not None:
+                    try:
+                        stream.close()
+                    except OSError:
+                        pass

@@ -13,9 +13,11 @@ import argparse
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("observe", help="watch a running system: observers, diagnosis and rules",
-                              description="Watch a running system: observers, diagnosis and rules together, live on the "
-                              "ROS 2 graph or over a recorded bag.",
-                              epilog="Configuration format: docs/observers.md.")
+                              description="Watch a running system: observers (and, with --learned, the learned "
+                              "resource observer of performance bugs), diagnosis and rules together, live on the "
+                              "ROS 2 graph, on Zenoh, or over a recorded bag.",
+                              epilog="Configuration format: docs/observers.md. Learned models: docs/perfbugs.md. "
+                              "Example: faultmas observe --learned models/ --domain-id 42")
     p.add_argument("config", metavar="CONFIG.yaml", nargs="?",
                    help="observer configuration (docs/observers.md); may be left out with --learned")
     p.add_argument("--learned", metavar="MODELS_DIR",

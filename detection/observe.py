@@ -162,16 +162,21 @@ def _start_learned(args: argparse.Namespace, models: dict, session: Session, env
     """The learned ``resource`` observer on the live system, emitting into ``session.pipeline``.
     Without ``--model`` the diagnoser's architecture is the one discovered (every watched component,
     its topics and keys, ``resource(C)`` declared), so a ``~resource(C)`` is still diagnosed."""
+    from detection.learned.model import ModelFileError
     from detection.learned.watch import LiveLearnedObserver
 
     feed = _LearnedFeed()
-    live = LiveLearnedObserver(models, _namespaces(models), feed.emit, domain_id=args.domain_id,
-                               skip_unfit=True, zenoh_connect=args.connect)
+    try:
+        live = LiveLearnedObserver(models, _namespaces(models), feed.emit, domain_id=args.domain_id,
+                                   skip_unfit=True, zenoh_connect=args.connect)
+    except ModelFileError:
+        raise
+    except ValueError as exc:       # e.g. two teams' nodes in one domain: say so, never watch the wrong one
+        raise ModelFileError(f"--learned {args.learned}: {exc}") from None
     for reason in live.unfit.values():
         print(f"faultmas observe: --learned {args.learned}: not watched: {reason}", file=sys.stderr)
     if not live.observer.models:
         live.close()
-        from detection.learned.model import ModelFileError
         raise ModelFileError(f"--learned {args.learned}: no model fits the live system (see above)")
     if args.model is None:
         session.use_model(_discovered_model(live), args.rules, environment)

@@ -71,7 +71,11 @@ def main(args: argparse.Namespace) -> int:
         if args.agents:
             from experiments.perfbugs_agents import CooperativeAgents
             agents = CooperativeAgents()
-        generate(directory, args.profile, out=sys.stderr, agents=agents)
+        try:
+            generate(directory, args.profile, out=sys.stderr, agents=agents)
+        except ValueError as exc:                    # e.g. runs with and without agents in one directory
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
     try:
         dataset = load(directory, progress)
         result = evaluate(dataset, args.target_fpr, progress=progress)

@@ -7,16 +7,15 @@ every component is a node with the topics it publishes and subscribes, and decla
 from __future__ import annotations
 
 import re
-from queue import SimpleQueue
 from typing import Callable, Iterable, Sequence
 
-from detection.learned.encoding import RosEncoder, vector_of
+from detection.learned.encoding import RosEncoder
 from detection.learned.features import feature_names
 from detection.learned.model import ComponentModel, ModelFileError
 from detection.learned.observer import LearnedResourceObserver, model_channels, model_columns, node_processes
 from detection.learned.ros_tap import Component, RawTap, discover
-from detection.learned.zenoh_events import (AGENT_NODE, ZenohEventTap, adopt_bridge_nodes, agent_component,
-                                            agent_processes, is_zenoh_channel)
+from detection.learned.zenoh_events import (AGENT_NODE, ZenohFeed, adopt_bridge_nodes, agent_component,
+                                            agent_processes, is_zenoh_channel, mas_of, wait_for_bridge_nodes)
 
 AGENT_SUFFIX = "_" + AGENT_NODE
 from detection.observation import Observation
@@ -54,9 +53,14 @@ class LiveLearnedObserver:
 
     def __init__(self, models: dict[str, ComponentModel], namespaces: list[str], emit: Callable[[list[Observation]], object],
                  domain_id: int | None = None, confirm: tuple[int, int] = (3, 5), settle_s: float = 2.0,
-                 skip_unfit: bool = False, zenoh_connect: Sequence[str] = ()) -> None:
+                 skip_unfit: bool = False, zenoh_connect: Sequence[str] = (), agents_timeout_s: float = 30.0,
+                 discovery_s: float = 20.0) -> None:
         """``skip_unfit``: watch only the components whose model fits the live system (the others are
-        listed in ``unfit``) instead of refusing with a ``ModelFileError``."""
+        listed in ``unfit``) instead of refusing with a ``ModelFileError``. ``agents_timeout_s``: how
+        long to wait for the ROS 2 bridge nodes of the agents the models watch (agents start slowly).
+        ``discovery_s``: how long discovery may take to show every model's component with all its
+        topics (DDS discovery of a busy graph takes seconds); a model still missing or unfit then is
+        refused (or, with ``skip_unfit``, left out)."""
         import time
 
         import rclpy
@@ -66,49 +70,50 @@ class LiveLearnedObserver:
         zenoh_columns = {c: {t: cols for t, cols in model_columns(m).items() if is_zenoh_channel(t)}
                          for c, m in models.items()}
         agents = [c[:-len(AGENT_SUFFIX)] for c, cols in zenoh_columns.items() if cols and c.endswith(AGENT_SUFFIX)]
-        self.zenoh_tap: ZenohEventTap | None = None
-        self._zenoh_events: SimpleQueue = SimpleQueue()
+        self.zenoh: ZenohFeed | None = None
         self.ros = RosContext(domain_id=domain_id).start()
         try:
             node = self.ros.add(rclpy.create_node("faultmas_learned_resource", context=self.ros.context))
             time.sleep(settle_s)                                     # discovery has no fixed delay
-            components, topic_types = discover(node, namespaces, ignore_nodes=[node.get_name()])
-            self.components = adopt_bridge_nodes(components, agents)
-            for agent in agents:                   # an agent whose bridge node is not (yet) in the graph
-                self.components.setdefault(agent_component(agent), Component(agent_component(agent), "", agent))
-            missing = sorted(set(models) - set(self.components))
+            wait_for_bridge_nodes(node, agents, agents_timeout_s)    # missing ones: their models are unfit
+            deadline = time.monotonic() + discovery_s
+            while True:            # until every model's component is seen with all its topics, or the deadline
+                components, topic_types = discover(node, namespaces, ignore_nodes=[node.get_name()])
+                self.components = adopt_bridge_nodes(components, agents)
+                for agent in agents:               # an agent whose bridge node is not (yet) in the graph
+                    self.components.setdefault(agent_component(agent), Component(agent_component(agent), "", agent))
+                missing = sorted(set(models) - set(self.components))
+                columns = {t: RosEncoder.for_type(ty).columns for t, ty in topic_types.items()}
+                self.unfit = {c: reason for c, m in models.items() if c in self.components
+                              and (reason := self._unfit(c, m, self.components[c], {**columns, **zenoh_columns[c]}))}
+                if (not missing and not self.unfit) or time.monotonic() > deadline:
+                    break
+                time.sleep(0.5)
             if missing:
                 raise ModelFileError(f"models for components not running here: {', '.join(missing)}")
-            columns = {t: RosEncoder.for_type(ty).columns for t, ty in topic_types.items()}
-            self.unfit = {c: reason for c, m in models.items()
-                          if (reason := self._unfit(c, m, self.components[c], {**columns, **zenoh_columns[c]}))}
             if self.unfit and not skip_unfit:
                 raise ModelFileError("; ".join(self.unfit.values()))
             models = {c: m for c, m in models.items() if c not in self.unfit}
             agent_names = {agent_component(a): a for a in agents}
             nodes = [self.components[c] for c in models if c not in agent_names]
             processes = node_processes(nodes, domain_id) if nodes else {}
-            processes.update(agent_processes([a for c, a in agent_names.items() if c in models]))
+            for c, agent in agent_names.items():   # by MAS too: another MAS on this host may have an agent of that name
+                if c in models:
+                    processes.update(agent_processes([agent], mas_of(zenoh_columns[c]), zenoh_connect))
             self.observer = LearnedResourceObserver(models, processes, emit, confirm)
             self.tap = RawTap(node, {t: ty for t, ty in topic_types.items()
                                      if t in self.observer.buffers}, self.observer.on_event)
-            keys = {t: {c: i for i, c in enumerate(cols)} for m in zenoh_columns.values() for t, cols in m.items()
-                    if t in self.observer.buffers}
+            keys = {t: cols for c in models for t, cols in zenoh_columns[c].items()}
             if keys:
-                self._zenoh_index = keys
-                self.zenoh_tap = ZenohEventTap(lambda t, key, size, flat: self._zenoh_events.put((t, key, size, flat)),
-                                               connect=zenoh_connect)
+                self.zenoh = ZenohFeed(keys, self.observer.on_event, connect=zenoh_connect)
             node.create_timer(1.0, self._tick)                       # the executor's thread: no race with the tap
         except BaseException:
             self.close()
             raise
 
     def _tick(self) -> None:
-        while not self._zenoh_events.empty():
-            t, key, size, flat = self._zenoh_events.get()
-            index = self._zenoh_index.get(key)
-            if index is not None:
-                self.observer.on_event(t, key, vector_of(size, flat, index))
+        if self.zenoh is not None:
+            self.zenoh.drain()
         self.observer.tick()
 
     @staticmethod
@@ -125,6 +130,6 @@ class LiveLearnedObserver:
                 f"gone: {sorted(trained - set(channels))[:3]}, or other message types); train it again")
 
     def close(self) -> None:
-        if self.zenoh_tap is not None:
-            self.zenoh_tap.close()
+        if self.zenoh is not None:
+            self.zenoh.close()
         self.ros.close()

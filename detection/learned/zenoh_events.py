@@ -10,8 +10,8 @@ on which agent A's values go out is an *output* of A, one on which values addres
 *input* of A; the channel is the key itself (``faultmas/coop/agent/helper/inbox``; ROS 2 topics
 start with ``/``, keys never do). Detection never imports ``agents/``: this reads the wire only.
 
-An agent's process is found by its command line (``... agents agent run FILE --name A ...``, as the
-launcher of ``faultmas mas run --processes`` and ``faultmas run`` starts it); its component is
+An agent's process is found by its command line (``... agent run FILE --name A ...``, as the launcher
+of ``faultmas mas run --processes`` and ``faultmas run`` starts it, or a user by hand); its component is
 ``A_agent``, beside the ROS nodes' ``robot_node``.
 """
 from __future__ import annotations
@@ -21,7 +21,7 @@ import threading
 import time
 from typing import Any, Callable, Iterable, Sequence
 
-from detection.learned.encoding import EncodingError, decode_json_lines, flatten_json
+from detection.learned.encoding import EncodingError, decode_json_lines, flatten_json, vector_of
 from detection.learned.ros_tap import Component
 from robot_bridge.ros2.perfbugs import component_name
 
@@ -40,6 +40,12 @@ def agent_component(agent: str) -> str:
 
 def is_zenoh_channel(channel: str) -> bool:
     return not channel.startswith("/")
+
+
+def mas_of(keys: Iterable[str]) -> str | None:
+    """The MAS of faultmas keys (``faultmas/<mas>/...``); None when they name none or several."""
+    names = {k.split("/")[1] for k in keys if k.startswith("faultmas/") and k.count("/") >= 2}
+    return names.pop() if len(names) == 1 else None
 
 
 def parties(value: Any) -> tuple[str | None, list[str]]:
@@ -117,6 +123,37 @@ class ZenohEventTap:
             self.keys.close()
 
 
+class ZenohFeed:
+    """The Zenoh keys a live observer watches: samples are queued on Zenoh's threads and handed to
+    ``on_event(t, key, vector)`` by ``drain()``, in the caller's thread (the observer's buffers are
+    then touched by one thread only), encoded with the columns each key had in training."""
+
+    def __init__(self, columns: dict[str, list[str]], on_event: Callable[[float, str, Any], None], *,
+                 connect: Sequence[str] = (), keys=None) -> None:
+        from queue import SimpleQueue
+
+        self._index = {key: {c: i for i, c in enumerate(cols)} for key, cols in columns.items()}
+        self._queue: SimpleQueue = SimpleQueue()
+        self._on_event = on_event
+        self.tap = ZenohEventTap(self._keep, connect=connect, keys=keys)
+
+    def _keep(self, t: float, key: str, size: int, flat: dict[str, float]) -> None:
+        if key in self._index:
+            self._queue.put((t, key, size, flat))
+
+    def drain(self) -> int:
+        """Hand every queued sample over; returns how many."""
+        n = 0
+        while not self._queue.empty():
+            t, key, size, flat = self._queue.get()
+            self._on_event(t, key, vector_of(size, flat, self._index[key]))
+            n += 1
+        return n
+
+    def close(self) -> None:
+        self.tap.close()
+
+
 def adopt_bridge_nodes(components: dict[str, Component], agents: Iterable[str]) -> dict[str, Component]:
     """``components`` (from the ROS graph) with each agent's ROS 2 bridge node (``faultmas_agent_A``,
     robot_bridge.ros2.bridge) renamed to the agent's component: one process, one component, with its
@@ -133,6 +170,28 @@ def adopt_bridge_nodes(components: dict[str, Component], agents: Iterable[str]) 
     return out
 
 
+def wait_for_bridge_nodes(probe, agents: Iterable[str], timeout: float) -> set[str]:
+    """Until every agent's ROS 2 bridge node is in the graph with its topics (a node appears before its
+    publishers and subscriptions do); returns the nodes still missing at ``timeout``."""
+    from robot_bridge.ros2.bridge import agent_node_name
+
+    def ready(node: str, namespace: str) -> bool:
+        try:
+            return bool(probe.get_publisher_names_and_types_by_node(node, namespace)) and \
+                bool(probe.get_subscriber_names_and_types_by_node(node, namespace))
+        except Exception:                   # the node went between the two queries
+            return False
+
+    deadline = time.monotonic() + timeout
+    wanted = {agent_node_name(a) for a in agents}
+    while (missing := wanted - {name for name, ns in probe.get_node_names_and_namespaces() if ready(name, ns)}):
+        if time.monotonic() > deadline:
+            return missing
+        time.sleep(0.2)
+    time.sleep(1.0)                         # the last of their topics
+    return set()
+
+
 def merge_zenoh(components: dict[str, Component], zenoh: dict[str, Component]) -> None:
     """Add the Zenoh channels of ``zenoh`` (``ZenohChannels.components``) to ``components``, in place."""
     for name, z in zenoh.items():
@@ -141,10 +200,11 @@ def merge_zenoh(components: dict[str, Component], zenoh: dict[str, Component]) -
         c.outputs += [k for k in z.outputs if k not in c.outputs]
 
 
-def agent_processes(agents: Iterable[str], mas: str | None = None) -> dict[str, object]:
+def agent_processes(agents: Iterable[str], mas: str | None = None, connect: Sequence[str] = ()) -> dict[str, object]:
     """The process of each agent (component name → ``psutil.Process``), found by its command line
-    ``agents agent run ... --name A`` (and ``--mas M`` when ``mas`` is given). Raises ``ValueError``
-    when an agent matches several processes (two MAS with the same agent names: give ``mas``)."""
+    ``... agent run ... --name A`` (and ``--mas M`` when ``mas`` is given). When several match, those
+    connected (``--connect``) to one of ``connect`` (the endpoints we watch the agents through) are
+    taken. Raises ``ValueError`` when an agent still matches several processes."""
     import psutil
 
     def option(cmdline: list[str], name: str) -> str | None:
@@ -154,11 +214,14 @@ def agent_processes(agents: Iterable[str], mas: str | None = None) -> dict[str, 
     found: dict[str, list] = {}
     for process in psutil.process_iter(["cmdline"]):
         cmdline = process.info.get("cmdline") or []
-        if "agents" not in cmdline or "agent" not in cmdline or "run" not in cmdline:
-            continue
+        if not any(cmdline[i:i + 2] == ["agent", "run"] for i in range(len(cmdline))):
+            continue                    # 'python -m agents agent run ...' or 'faultmas agent run ...'
         name = option(cmdline, "--name")
         if name in wanted and (mas is None or option(cmdline, "--mas") == mas):
             found.setdefault(agent_component(name), []).append(process)
+    for name, ps in found.items():
+        if len(ps) > 1 and connect:
+            found[name] = [p for p in ps if option(p.info.get("cmdline") or [], "--connect") in connect] or ps
     ambiguous = {name: [p.pid for p in ps] for name, ps in found.items() if len(ps) > 1}
     if ambiguous:
         raise ValueError(f"several processes look like the same agent (pids {ambiguous}); name the MAS")

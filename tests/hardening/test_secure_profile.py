@@ -136,3 +136,24 @@ def test_replay_memory_stays_bounded_and_refuses_what_it_forgot(tmp_path):
     identity.check_fresh("alice", "carol", seqs[0])  # the same message to another receiver is its own
     with pytest.raises(BadMessage, match="stale"):  # a message from before the receiver's memory began
         identity.check_fresh("alice", "dave", seqs[0] - 60_000_000)
+
+
+def test_mas_run_processes_in_the_secure_profile_talks_and_a_missing_private_key_is_named(tmp_path):
+    """The user's way: keys made by ``faultmas keys generate``, listed in the project, ``mas run --processes``."""
+    from tests.agents.distributed_fixtures import mas_run, write_files
+
+    write_files(tmp_path, {
+        "alice.asl": '!start.\n+!start <- .send(bob, askOne, secret(X), A); .print("answer ", A); .stopMAS.\n',
+        "bob.asl": "secret(42).\n",
+        "team.mas2j": 'MAS secure { agents: alice alice.asl [key="keys"]; bob bob.asl [key="keys"]; }\n'})
+    generate = subprocess.run([sys.executable, "-m", "agents", "keys", "generate", "keys", "alice", "bob"],
+                              cwd=tmp_path, env=_child_env(), capture_output=True, text=True, timeout=60)
+    assert generate.returncode == 0, generate.stderr
+    run = mas_run(tmp_path / "team.mas2j", "--processes", "--timeout", "120", cwd=tmp_path)
+    assert run.finish(timeout=150) == 0, run.err[-20:]
+    assert "[alice] answer secret(42)[source(bob)]" in run.out
+    assert not any("dropped" in line for line in run.err), run.err  # nothing refused between members
+    (tmp_path / "keys" / "bob.key").unlink()  # bob's process refuses to start; alice is ended by the timeout
+    run = mas_run(tmp_path / "team.mas2j", "--processes", "--timeout", "20", cwd=tmp_path)
+    assert run.finish(timeout=150) != 0
+    assert any("bob.key: cannot read the key" in line for line in run.err), run.err[-20:]

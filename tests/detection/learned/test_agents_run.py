@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import time
 
 import numpy as np
 import pytest
@@ -72,3 +73,60 @@ def test_the_run_loads_as_a_data_set_with_agent_features(agents_run):
     assert any(name.startswith("faultmas/coop/") for name in samples.features)
     assert any(name.startswith("/helper/") for name in samples.features)
     assert samples.X.shape == (len(samples.Y), len(samples.features)) and len(samples.Y) >= 15
+
+
+@pytest.mark.timeout(240)
+def test_a_model_of_an_agent_watches_it_live_over_ros2_and_zenoh(agents_run):
+    """The online path for an agent: its model's channels (bridge topics and Zenoh keys) fit the live
+    agent, its process is found by its command line, its keys' samples reach the buffers, and it is
+    scored. The model is the recorded run's feature layout with a neutral fit (no training needed to
+    test the plumbing; detection quality is the data set's evaluation's job)."""
+    import rclpy
+
+    from detection.learned.counters import TARGET_NAMES
+    from detection.learned.dataset import load
+    from detection.learned.model import ComponentModel
+    from detection.learned.scenario import ROBOTS, Workload
+    from detection.learned.watch import LiveLearnedObserver
+    from experiments.perfbugs_agents import CooperativeAgents
+    from robot_bridge.ros2.launch import Supervisor, plan
+    from robot_bridge.ros2.runtime import RosContext
+
+    out, _ = agents_run
+    features = load(out).components["faulty_agent"].features
+    d, k = len(features), len(TARGET_NAMES)
+    model = ComponentModel("faulty_agent", features, list(TARGET_NAMES), np.zeros(d), np.ones(d), np.zeros(k),
+                           np.ones(k), np.zeros((k, d)), np.zeros(k), np.zeros(k), np.eye(k), threshold=1e12,
+                           target_fpr=0.005)
+    domain = 1 + (os.getpid() + 41) % 100
+    agents = CooperativeAgents()
+    supervisor = Supervisor(plan(list(ROBOTS), fault=agents.robot_fault(3), camera=False, seed=3), domain)
+    supervisor.start()
+    team = live = None
+    emitted: list = []
+    try:
+        assert supervisor.wait_ready(90) == set()
+        team = agents.start(domain, 3)
+        with RosContext(domain_id=domain) as work:
+            Workload(work.add(rclpy.create_node("perfbugs_workload", context=work.context)), ROBOTS, seed=3)
+            time.sleep(3.0)
+            live = LiveLearnedObserver({"faulty_agent": model}, [f"/{r}" for r in ROBOTS], emitted.extend, domain,
+                                       zenoh_connect=[team.endpoint])
+            assert live.observer.processes["faulty_agent"].pid == team.pids["faulty"]
+            keys = [t for t in live.observer.buffers if not t.startswith("/")]
+            assert "faultmas/coop/agent/faulty/inbox" in keys
+            drained = []
+            drain = live.zenoh.drain
+            live.zenoh.drain = lambda: drained.append(drain()) or drained[-1]
+            deadline = time.monotonic() + 60
+            while (not emitted or sum(drained) == 0) and time.monotonic() < deadline:
+                time.sleep(0.5)
+    finally:
+        if live is not None:
+            live.close()
+        if team is not None:
+            team.stop()
+        supervisor.stop()
+    assert sum(drained) > 0, "no Zenoh sample of the agents reached the observer"
+    assert [o.literal for o in emitted][:1] == ["resource(faulty_agent)"]
+    assert emitted[0].source == "learned" and np.isfinite(emitted[0].measured)

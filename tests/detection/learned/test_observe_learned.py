@@ -86,3 +86,19 @@ def test_observe_learned_names_the_leaking_node_live(smoke_evaluation, tmp_path)
     assert "learned resource observer watching" in err and LEAKING in err
     leak = next(c for line in lines for c in json.loads(line)["changed"] if c["literal"] == f"~resource({LEAKING})")
     assert leak["source"] == "learned" and leak["measured"] > smoke_evaluation.models[LEAKING].threshold
+
+
+def test_the_status_table_shows_the_learned_verdicts_beside_the_observers():
+    import io
+
+    from detection.observation import Observation
+    from detection.session import open_session
+    from detection.status import StatusTable
+
+    session = open_session(None)                               # --learned alone: no configured observer
+    table = StatusTable(session.observers, io.StringIO())
+    session.pipeline.add_listener(table.record)
+    session.pipeline.observe([Observation(f"resource({LEAKING})", False, 1.0, measured=812.5, source="learned")])
+    row = table.render().splitlines()[1].split()
+    assert row == [f"resource({LEAKING})", "learned", "812.5", "FAULT"]
+    session.close()
