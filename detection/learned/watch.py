@@ -52,6 +52,7 @@ class LiveLearnedObserver:
 
         from robot_bridge.ros2.runtime import RosContext
 
+        self.tap = None
         self.ros = RosContext(domain_id=domain_id).start()
         try:
             node = self.ros.add(rclpy.create_node("faultmas_learned_resource", context=self.ros.context))
@@ -67,9 +68,8 @@ class LiveLearnedObserver:
             models = {c: m for c, m in models.items() if c not in self.unfit}
             processes = node_processes([self.components[c] for c in models], domain_id)
             self.observer = LearnedResourceObserver(models, processes, emit, confirm)
-            self.tap = RawTap(node, {t: ty for t, ty in topic_types.items()
-                                     if t in self.observer.buffers}, self.observer.on_event)
-            node.create_timer(1.0, lambda: self.observer.tick())     # the executor's thread: no race with the tap
+            self.tap = RawTap(node, {t: ty for t, ty in topic_types.items() if t in self.observer.buffers},
+                              self.observer.on_event, on_tick=self.observer.tick)   # one thread: no race
         except BaseException:
             self.ros.close()
             raise
@@ -86,4 +86,6 @@ class LiveLearnedObserver:
                 f"gone: {sorted(trained - set(component.channels))[:3]}, or other message types); train it again")
 
     def close(self) -> None:
+        if self.tap is not None:
+            self.tap.close()
         self.ros.close()
