@@ -66,6 +66,10 @@ def discover(node, namespaces: Iterable[str], ignore_nodes: Iterable[str] = ()) 
     return components, {t: ty for t, ty in types.items() if t in used}
 
 
+BATCH_S = 0.1
+"""Messages are taken ten times a second (at most 10 of a 100-deep queue: a 1 kHz topic loses none)."""
+
+
 class RawTap:
     """Every message on ``topics`` encoded and handed to ``on_event(t, topic, vector)``, read by the
     one ROS 2 reader (``detection.taps.ros2_reader.TopicReader``) on a node of its own in ``node``'s
@@ -83,7 +87,7 @@ class RawTap:
         self.dropped: dict[str, int] = {}
         self.received = 0
         self._on_event = on_event                               # before the first message can arrive
-        self.reader = TopicReader(node.context, self._on_batch, on_tick=on_tick, tick_s=tick_s,
+        self.reader = TopicReader(node.context, self._on_batch, on_tick=on_tick, tick_s=tick_s, batch_s=BATCH_S,
                                   name=f"{node.get_name()}_tap")
         for topic, encoder in self.encoders.items():
             self.reader.subscribe(topic, encoder.msg_class)

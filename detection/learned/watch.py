@@ -42,10 +42,11 @@ class LiveLearnedObserver:
     """Runs a ``LearnedResourceObserver`` on a ROS 2 domain until ``close()``."""
 
     def __init__(self, models: dict[str, ComponentModel], namespaces: list[str], emit: Callable[[list[Observation]], object],
-                 domain_id: int | None = None, confirm: tuple[int, int] = (3, 5), settle_s: float = 2.0,
+                 domain_id: int | None = None, confirm: tuple[int, int] = (3, 5), settle_s: float = 10.0,
                  skip_unfit: bool = False) -> None:
-        """``skip_unfit``: watch only the components whose model fits the live system (the others are
-        listed in ``unfit``) instead of refusing with a ``ModelFileError``."""
+        """``settle_s``: how long discovery may take at most. ``skip_unfit``: watch only the components
+        whose model fits the live system (the others are listed in ``unfit``) instead of refusing with a
+        ``ModelFileError``."""
         import time
 
         import rclpy
@@ -56,13 +57,19 @@ class LiveLearnedObserver:
         self.ros = RosContext(domain_id=domain_id).start()
         try:
             node = self.ros.add(rclpy.create_node("faultmas_learned_resource", context=self.ros.context))
-            time.sleep(settle_s)                                     # discovery has no fixed delay
-            self.components, topic_types = discover(node, namespaces, ignore_nodes=[node.get_name()])
-            missing = sorted(set(models) - set(self.components))
+            deadline = time.monotonic() + settle_s          # discovery has no fixed delay (slower on a busy host):
+            while True:                                     # look again until every model's component fits
+                time.sleep(0.5)
+                self.components, topic_types = discover(node, namespaces, ignore_nodes=[node.get_name()])
+                missing = sorted(set(models) - set(self.components))
+                if not missing:
+                    columns = {t: RosEncoder.for_type(ty).columns for t, ty in topic_types.items()}
+                    self.unfit = {c: reason for c, m in models.items()
+                                  if (reason := self._unfit(c, m, self.components[c], columns))}
+                if time.monotonic() >= deadline or not (missing or self.unfit):
+                    break
             if missing:
                 raise ModelFileError(f"models for components not running here: {', '.join(missing)}")
-            columns = {t: RosEncoder.for_type(ty).columns for t, ty in topic_types.items()}
-            self.unfit = {c: reason for c, m in models.items() if (reason := self._unfit(c, m, self.components[c], columns))}
             if self.unfit and not skip_unfit:
                 raise ModelFileError("; ".join(self.unfit.values()))
             models = {c: m for c, m in models.items() if c not in self.unfit}
