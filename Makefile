@@ -8,19 +8,24 @@ PURE_PYTHON := FAULTMAS_PURE_PYTHON=1
 
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: run test test-install bench install speedups browser clean jason-tests campaign
+.PHONY: run test test-install bench install speedups browser clean jason-tests campaign soak
 
 # constraints.txt: the exact versions (pyproject.toml publishes ranges; issue 23). Installs go through it.
+# Each step says what it does in one line (the commands and pip's progress stay out of the way; errors still show).
 $(STAMP): pyproject.toml constraints.txt Makefile setup.py
-	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install -q --upgrade pip
-	# The ROS 2 wheels first: they bring lark-parser 0.12, which overwrites Lark 1.x ...
-	# (not compiled here: `speedups` compiles the interpreter in place, once)
-	$(PURE_PYTHON) $(PY) -m pip install -q -c constraints.txt -e '.[ros2,dev]'
-	# ... so Lark 1.x is reinstalled last (see ../shared/notes/ros2-and-zenoh.md, 1.4).
-	$(PY) -m pip install -q --force-reinstall --no-deps 'lark==1.3.1'
-	$(PY) -c 'import lark, sys; sys.exit(0 if lark.__version__.startswith("1.") else "lark-parser 0.12 shadows Lark 1.x")'
-	touch $(STAMP)
+	@echo "faultmas: creating the virtual environment $(VENV)"
+	@$(PYTHON) -m venv $(VENV)
+	@$(PY) -m pip install -q --upgrade pip
+	@echo "faultmas: installing faultmas and its dependencies at the versions of constraints.txt, with ROS 2 Jazzy wheels and the test tools (a few minutes the first time)"
+	@# The ROS 2 wheels first: they bring lark-parser 0.12, which overwrites Lark 1.x ...
+	@# (not compiled here: `speedups` compiles the interpreter in place, once)
+	@$(PURE_PYTHON) $(PY) -m pip install -q -c constraints.txt -e '.[ros2,dev]'
+	@echo "faultmas: putting Lark 1.x back over the lark-parser 0.12 the ROS 2 wheels bring"
+	@# ... so Lark 1.x is reinstalled last (see ../shared/notes/ros2-and-zenoh.md, 1.4).
+	@$(PY) -m pip install -q --force-reinstall --no-deps 'lark==1.3.1'
+	@$(PY) -c 'import lark, sys; sys.exit(0 if lark.__version__.startswith("1.") else "lark-parser 0.12 shadows Lark 1.x")'
+	@touch $(STAMP)
+	@echo "faultmas: installed into $(VENV)"
 
 install: $(STAMP)
 
@@ -28,7 +33,7 @@ install: $(STAMP)
 # rebuilt in place for sources edited since the last build; a no-op when nothing changed. Without it an edited
 # module runs from source (the camera draws with numpy), with a warning.
 speedups: $(STAMP)
-	$(PY) setup.py -q build_ext --inplace
+	@$(PY) setup.py -q build_ext --inplace
 
 run: speedups
 	$(VENV)/bin/faultmas run
@@ -45,11 +50,26 @@ test: speedups browser
 	# the language suite again on the interpreter run from source (what runs without a C compiler)
 	$(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider tests/agentspeak
 
-# The reliability campaign (docs/reliability.md): every input boundary fuzzed with FAULTMAS_FUZZ_EXAMPLES
-# inputs each (default 20,000; `make test` runs 40), compiled and from source. Hours at the default.
+# The reliability campaign (docs/reliability.md): every input boundary fuzzed for FUZZ_MINUTES (compiled,
+# tests/hardening/fuzz_campaign.py), then with FAULTMAS_FUZZ_EXAMPLES inputs each (default 20,000; `make test`
+# runs 40), compiled and from source. Hours at the default.
+# Then the chaos matrix (tests/hardening/test_chaos_campaign.py: SIGKILL/SIGSTOP of agents and ROS 2 nodes in
+# `faultmas run`, the pair, a team of 6 and --bridge ros2; ~30 min), each case's outcome printed (CHAOS | ...),
+# and the multi-host run in three network namespaces with a cut link (tests/hardening/test_multihost_netns.py, root).
+FUZZ_MINUTES ?= 60
 campaign: speedups
+	$(PY) -m tests.hardening.fuzz_campaign --minutes $(FUZZ_MINUTES) --found fuzz-found
 	FAULTMAS_FUZZ_PROFILE=campaign $(PY) -m pytest -q -p no:cacheprovider tests/hardening/test_fuzz_boundaries.py
 	FAULTMAS_FUZZ_PROFILE=campaign $(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider tests/hardening/test_fuzz_boundaries.py
+	FAULTMAS_CHAOS=campaign $(PY) -m pytest -q -s -p no:cacheprovider tests/hardening/test_chaos_campaign.py \
+		tests/hardening/test_multihost_netns.py
+
+# The soak (tests/hardening/soak.py): team-of-6 runs back to back until SOAK_SIM_SECONDS of simulated time
+# (default 1 h) or SOAK_WALL_SECONDS of wall time; RSS slope, threads, descriptors, intentions left per run.
+SOAK_SIM_SECONDS ?= 3600
+SOAK_WALL_SECONDS ?= 36000
+soak: speedups
+	$(PY) -m tests.hardening.soak --sim-seconds $(SOAK_SIM_SECONDS) --wall-seconds $(SOAK_WALL_SECONDS) --out soak.jsonl
 
 # Jason 3.3.2's own AgentSpeak unit tests, run unchanged from ../shared (see tests/jason_suite): fails
 # unless every executed test passes, and prints executed/passed

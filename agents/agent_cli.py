@@ -34,6 +34,9 @@ def add_agent_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--config", default=None, metavar="FILE", help="Zenoh JSON5 file (TLS, access control)")
     run.add_argument("--project", default=None, metavar="PROJECT.mas2j",
                      help="the project file: its agents may send plans; initial beliefs/goals of NAME")
+    run.add_argument("--identity", default=None, metavar="KEY.pem",
+                     help="the agent's private key in the secure profile (a project whose agents have key= "
+                          "options; default: the .key file beside NAME's public key)")
     run.add_argument("--allow-code-from", action="append", default=[], metavar="AGENT",
                      help="also accept tellHow (plans) from AGENT (repeatable)")
     run.add_argument("--max-message-size", type=int, default=None, metavar="BYTES",
@@ -42,10 +45,12 @@ def add_agent_parser(sub: argparse._SubParsersAction) -> None:
                      help="with --project: wait up to S seconds until every project agent is reachable")
     run.add_argument("--timeout", type=float, default=None, metavar="S", help="stop after S seconds")
     run.add_argument("--bridge", default=None, metavar="NAME",
-                     help="drive a robot through this bridge (entry point in faultmas.robot_bridges, e.g. "
-                          "zenoh for a simulator served over Zenoh, or ros2); the robot has the agent's name")
+                     help="drive a robot through this bridge (any installed one, see `faultmas sim bridges`: e.g. "
+                          "zenoh for a simulator served by `faultmas sim serve`, or ros2); the robot has the agent's "
+                          "name; default: the --project's environment, if it names a bridge")
     run.add_argument("--bridge-option", action="append", default=[], metavar="KEY=VALUE",
-                     help="an option for the bridge (repeatable; numbers are converted)")
+                     help="an option for the bridge (repeatable; numbers and true/false are converted; an option "
+                          "the bridge does not take is an error that lists the ones it does)")
     run.add_argument("--bridge-timeout", type=float, default=30.0, metavar="S",
                      help="seconds the robot gets to answer at start (default %(default)s)")
     run.add_argument("--allow-pause", action="store_true",
@@ -68,6 +73,7 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
 
     from agents.transport import ZenohOptions, ZenohTransport
     from agents.transport.envelope import DEFAULT_MAX_SIZE
+    from agents.transport.identity import IdentityError, project_identity
     from agents.transport.keys import check_name
     from agents.zenoh_arch import TransportBridge
     from agentspeak.errors import AslSyntaxError, SourceError
@@ -80,6 +86,7 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
         check_name(args.name)
         check_name(args.mas, "MAS name")
         source = read_source(args.file)
+        project = None
         declared: list[str] = [args.name]
         beliefs: list = []
         goals: list = []
@@ -93,35 +100,42 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
                 if args.name in decl.instance_names():
                     beliefs = option_literals(decl.options.get("beliefs"), project.file)
                     goals = option_literals(decl.options.get("goals"), project.file)
+        identity = None
+        if args.project:
+            identity = project_identity(project, [args.name], args.identity)
+        elif args.identity:
+            raise IdentityError("--identity needs --project (the project lists the members' public keys)")
         program = parse_program(source, args.file, source_path=tuple(source_dirs))
         options = ZenohOptions(mode=args.mode, listen=tuple(args.listen) if args.listen else None,
                                connect=tuple(args.connect), config_file=args.config)
     except OSError as exc:
         print(f"{exc.filename}: cannot read: {exc.strerror or exc}", file=sys.stderr)
         return 2
-    except (AslSyntaxError, SourceError, ValueError) as exc:
+    except (AslSyntaxError, SourceError, ValueError) as exc:  # IdentityError too
         print(exc, file=sys.stderr)
         return 2
+    from agents.environment import choose_bridge
     try:
-        bridge_options = dict(_bridge_option(text) for text in args.bridge_option)
+        choice = choose_bridge(project, args.bridge, args.bridge_option)
     except ValueError as exc:
         print(f"faultmas agent run: {exc}", file=sys.stderr)
         return 2
     runtime = LocalRuntime()
     runtime.source_dirs = list(source_dirs)
-    transport = ZenohTransport(args.mas, options, max_message_size=args.max_message_size or DEFAULT_MAX_SIZE)
+    transport = ZenohTransport(args.mas, options, max_message_size=args.max_message_size or DEFAULT_MAX_SIZE,
+                               identity=identity)
     try:
         transport.open()
     except Exception as exc:  # zenoh.ZError: bad endpoint, port taken
         print(f"faultmas agent run: cannot join the network: {exc}", file=sys.stderr)
         return 1
     robot = None
-    if args.bridge:
+    if choice is not None:
         try:
-            robot = _open_robot(args, transport, bridge_options)
-        except Exception as exc:  # unknown bridge, bad options, robot silent: say which, exit 1
+            robot = _open_robot(choice, args, transport)
+        except Exception as exc:  # robot silent, bad option value: say which, exit 1
             transport.close()
-            print(f"faultmas agent run: robot {args.name} via bridge {args.bridge!r}: {exc}", file=sys.stderr)
+            print(f"faultmas agent run: robot {args.name} via bridge {choice.name!r}: {exc}", file=sys.stderr)
             return 1
     from agents.robot_arch import RobotArch
     runtime.add_agent(args.name, source_file=args.file, program=program, extra_beliefs=beliefs,
@@ -155,29 +169,19 @@ def _report_drops(name: str, dropped: dict) -> None:
         log.warning("agent %s: dropped %d messages (%s)", name, sum(dropped.values()), reasons)
 
 
-def _bridge_option(text: str) -> tuple[str, object]:
-    """``KEY=VALUE`` from the command line; numbers become numbers, true/false booleans."""
-    key, sep, value = text.partition("=")
-    if not sep or not key.strip():
-        raise ValueError(f"--bridge-option expects KEY=VALUE, got {text!r}")
-    lowered = value.strip().lower()
-    if lowered in ("true", "false"):
-        return key.strip(), lowered == "true"
-    for convert in (int, float):
-        try:
-            return key.strip(), convert(value)
-        except ValueError:
-            pass
-    return key.strip(), value
-
-
-def _open_robot(args: argparse.Namespace, transport, options: dict):
-    """Create and set up the agent's robot bridge; a ``zenoh`` bridge shares the agent's session."""
+def _open_robot(choice, args: argparse.Namespace, transport):
+    """Create and set up the agent's robot bridge; a ``zenoh`` bridge shares the agent's session unless it
+    is told to ``connect`` elsewhere (e.g. to a ``faultmas sim serve`` of another MAS name)."""
     from robot_bridge.registry import create
 
-    if args.bridge == "zenoh":
+    options = dict(choice.options)
+    if choice.name == "zenoh":
         options.setdefault("mas", args.mas)
-        options.setdefault("session", transport.session)
-    bridge = create(args.bridge, args.name, **options)
+        if not options.get("connect"):
+            options.setdefault("session", transport.session)
+    elif choice.name == "sim":
+        log.warning("agent %s: bridge sim in a process of its own is a world with one robot; for a shared world "
+                    "run `faultmas sim serve` and give the agents --bridge zenoh", args.name)
+    bridge = create(choice.name, args.name, **options)
     bridge.setup(timeout=args.bridge_timeout)
     return bridge

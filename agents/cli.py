@@ -21,6 +21,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "mas": ("agents.mas_cli", "run a multi-agent system from a Jason project file"),
     "agent": ("agents.mas_cli", "run one agent that joins a MAS over Zenoh"),
     "router": ("agents.mas_cli", "run a Zenoh router for multi-host MAS"),
+    "keys": ("agents.mas_cli", "make Ed25519 key pairs for the secure profile"),
     "diagnose": ("diagnosis.cli", "all minimal diagnoses of a model given observations"),
     "perceive": ("perception.cli", "find a robot by its two coloured cylinders in one RGB-D frame"),
     "ros": ("robot_bridge.cli", "run the ROS 2 Jazzy nodes (extra 'ros2')"),

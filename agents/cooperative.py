@@ -153,7 +153,11 @@ class RunResult:
     world: object = None
     died: list[tuple[str, int]] = field(default_factory=list)
     """Agent processes that ended on their own with a non-zero status (negative: killed by that signal),
-    in the order seen: the run ends at once and names them (issue 22)."""
+    in the order seen: the run ends at once and names them (issue 22). Robot processes (ROS 2 nodes) are
+    named ``robot/node``."""
+    frozen: list[tuple[str, float]] = field(default_factory=list)
+    """(process, seconds) of the processes seen stopped (SIGSTOP) during the run, continued since or not:
+    named in its summary (a freeze explains a timeout)."""
 
     @property
     def outcome(self) -> str:
@@ -185,6 +189,7 @@ class ProgressLog:
         self._final: set[str] = set()
         self.done = threading.Event()
         self.died: list[tuple[str, int]] = []  # (agent, exit status) of processes that died (processes only)
+        self.frozen: list[tuple[str, float]] = []  # (process, seconds) seen stopped (SIGSTOP) during the run
 
     def record(self, report) -> None:
         """Takes an ``agents.progress.ProgressReport`` (from any thread)."""
@@ -286,7 +291,7 @@ def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float =
         for bridge in bridges.values():
             bridge.shutdown()
     log = finished
-    return RunResult(scenario, log.results(), log.marks, log.done.is_set(), world, list(log.died))
+    return RunResult(scenario, log.results(), log.marks, log.done.is_set(), world, list(log.died), list(log.frozen))
 
 
 def _beliefs(scenario: Scenario, robot: RobotSetup) -> list[str]:
@@ -333,16 +338,33 @@ def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=No
                                on_mark=on_mark, serve=serve, hold=inspector.hold if inspector is not None else None)
 
 
+def write_project(scenario: Scenario, directory) -> "Path":
+    """The scenario's MAS as a ``.mas2j`` file in ``directory``: one agent per robot, its plans and
+    its launch beliefs (``_beliefs``)."""
+    from pathlib import Path
+
+    project_file = Path(directory) / f"{scenario.mas}.mas2j"
+    lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{", ".join(_beliefs(scenario, r))}"];'
+             for r in scenario.robots]
+    project_file.write_text(f"MAS {scenario.mas} {{\n  agents:\n" + "\n".join(lines) + "\n}\n")
+    return project_file
+
+
 def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: float, *, world=None,
                         clock: Callable[[], float] | None = None, out: TextIO | None = None,
                         err: TextIO | None = None, echo: Callable[[Mark], None] | None = None,
                         on_mark: Callable[[Mark, Callable[[str], None]], bool | None] | None = None,
                         serve: Callable[[object], Callable[[], None]] | None = None,
-                        hold: Callable[[], None] | None = None) -> ProgressLog:
+                        hold: Callable[[], None] | None = None,
+                        others: Callable[[], list[tuple[str, int]]] | None = None,
+                        other_processes: Callable[[], dict] | None = None) -> ProgressLog:
     """One ``faultmas agent run ... EXTRA_ARGS`` process per robot of ``scenario`` over a Zenoh hub on
     loopback; ``serve(hub)`` starts what the robots need on the hub (returns its stop). The progress
     reports the agents publish are recorded until every robot is done, ``on_mark`` says stop, or ``timeout``;
-    then ``hold()`` runs (the agents still alive) before they are stopped."""
+    then ``hold()`` runs (the agents still alive) before they are stopped. ``others()``: the robot processes
+    (e.g. ROS 2 nodes) that ended, as (name, status): one ends the run as an agent's death does, named;
+    ``other_processes()``: {name: Popen} of them, watched with the agents for freezes (``ProgressLog.frozen``)."""
+    import contextlib
     import os
     import sys
     import tempfile
@@ -353,20 +375,19 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
     from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
     from agentspeak.mas2j import load_mas2j
 
-    out = out if out is not None else open(os.devnull, "w")     # None: the agents' lines are not shown
+    discard = open(os.devnull, "w") if out is None else None    # None: the agents' lines are not shown
+    out = out if out is not None else discard
     err = err or sys.stderr
-    with tempfile.TemporaryDirectory(prefix="faultmas-run-") as tmp:
-        project_file = Path(tmp) / f"{scenario.mas}.mas2j"
-        lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{", ".join(_beliefs(scenario, r))}"];'
-                 for r in scenario.robots]
-        project_file.write_text(f"MAS {scenario.mas} {{\n  agents:\n" + "\n".join(lines) + "\n}\n")
+    with tempfile.TemporaryDirectory(prefix="faultmas-run-") as tmp, discard or contextlib.nullcontext():
+        project_file = write_project(scenario, Path(tmp))
         hub = ZenohTransport(scenario.mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
         stop_serving = serve(hub) if serve is not None else None
         launcher = Launcher(load_mas2j(str(project_file)), hub, out, err, extra_args=extra_args)
 
         def kill(name: str, signum: int = signal.SIGKILL) -> None:
-            """SIGKILL ``name``'s process, or send it ``signum`` (SIGSTOP, SIGCONT: a freeze, for chaos tests)."""
-            child = launcher.children.get(name)
+            """SIGKILL ``name``'s process (an agent, or a robot process of ``other_processes``), or send it
+            ``signum`` (SIGSTOP, SIGCONT: a freeze, for chaos tests)."""
+            child = launcher.children.get(name) or (other_processes() if other_processes else {}).get(name)
             if child is not None and child.poll() is None:
                 child.send_signal(signum)
 
@@ -382,16 +403,21 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
             if report is not None:
                 log.record(report)
         hub.on_control(on_control)
+        from robot_bridge.processes import FreezeWatch
+        watch = FreezeWatch(lambda: {**launcher.children, **(other_processes() if other_processes else {})})
         try:
             launcher.start()
             started = time.monotonic()
-            if launcher.wait(timeout, stop_when_idle=False, fatal=log.needed) == "failed":
+            with watch:
+                ended = launcher.wait(timeout, stop_when_idle=False, fatal=log.needed, others=others)
+            if ended == "failed":
                 # a robot the run waits for died: the others get a lease or two to notice and react
                 # (a helper releases it), then the run ends and names it, long before its timeout
                 left = timeout - (time.monotonic() - started)
                 launcher.stop_requested.wait(max(0.0, min(DEATH_GRACE, left)))
             launcher._check_children()
             log.died.extend(launcher.failures)
+            log.frozen.extend(watch.report())  # named whatever the outcome: a freeze explains a timeout
             if hold is not None and not log.died:
                 hold()
         finally:

@@ -36,7 +36,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                                      "--robots), one agent process each over Zenoh, on the embedded simulator, "
                                      "with a fault injected. Shows the steps as they happen, then the diagnosis "
                                      "and a table of step latencies in simulated and wall seconds. Exit status: 0 "
-                                     "correct, 1 a wrong diagnosis, 3 an agent process died (named), 124 the "
+                                     "correct, 1 a wrong diagnosis, 3 an agent or robot process died (named), 124 the "
                                      "run did not finish within --timeout.")
     run.add_argument("--fault", choices=FAULTS, default=None,
                      help="fault injected into the faulty robot(s) (default: encoders; with --robots: a random "
@@ -46,7 +46,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      help="a team of N robots (2-12) at random places over the whole arena, instead of the pair")
     run.add_argument("--faulty", type=int, default=None, metavar="K",
                      help="with --robots: K of them faulty (default 1)")
-    run.add_argument("--bridge", choices=("sim", "ros2"), default="sim", help="robots: embedded simulator or ROS 2 nodes")
+    run.add_argument("--bridge", default="sim", metavar="NAME",
+                     help="the robots: sim (the embedded simulator, default), ros2 (ROS 2 nodes started for the "
+                          "run), or any other installed bridge (`faultmas sim bridges`), e.g. zenoh for a "
+                          "`faultmas sim serve` of MAS coop, whose robots have the fault --fault names")
+    run.add_argument("--bridge-option", action="append", default=[], metavar="KEY=VALUE",
+                     help="with a bridge other than sim and ros2: an option for it (repeatable; an option it "
+                          "does not take is an error that lists the ones it does)")
     run.add_argument("--in-process", action="store_true", help="all agents in this process (no Zenoh)")
     run.add_argument("--json", action="store_true", help="print one JSON object (agents' lines go to stderr)")
     run.add_argument("--plot", metavar="PNG", help="draw ground-truth and believed trajectories to this file")
@@ -100,6 +106,23 @@ def cmd_run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         print(f"faultmas run: {exc}", file=sys.stderr)
         return 2
+    choice = None
+    if args.bridge in ("sim", "ros2"):
+        if args.bridge_option:
+            print(f"faultmas run: --bridge {args.bridge} takes no --bridge-option here (the run sets its robots "
+                  f"up from --seed and --fault)", file=sys.stderr)
+            return 2
+    else:
+        from agents.environment import choose_bridge
+        try:
+            choice = choose_bridge(None, args.bridge, args.bridge_option)
+        except ValueError as exc:
+            print(f"faultmas run: {exc}", file=sys.stderr)
+            return 2
+        if args.robots or args.in_process or args.inspect:
+            print(f"faultmas run: --bridge {args.bridge} runs the pair in agent processes (not --robots, "
+                  f"--in-process or --inspect)", file=sys.stderr)
+            return 2
     show = sys.stderr if args.json else sys.stdout
     inspector = None
     if args.inspect:
@@ -126,6 +149,11 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.bridge == "ros2":
         from agents.ros2_run import run_on_ros2
         result = run_on_ros2(scenario, timeout=args.timeout, out=agent_lines, echo=lambda m: _echo(m, show))
+    elif choice is not None:
+        from agents.bridge_run import run_on_bridge
+        print(f"faultmas: faulty and helper through bridge {choice.name}; their fault is what the robots have "
+              f"(scored against --fault {scenario.robots[0].fault})", file=show)
+        result = run_on_bridge(scenario, choice, timeout=args.timeout, out=agent_lines, echo=lambda m: _echo(m, show))
     else:
         result = run_scenario(scenario, processes=not args.in_process, timeout=args.timeout,
                               out=agent_lines, err=sys.stderr, echo=lambda m: _echo(m, show), inspector=inspector)
@@ -175,6 +203,7 @@ def _as_json(result) -> dict:
     fault (``fault``, ``diagnosis``: strings; steps in simulated and wall seconds)."""
     return {"correct": result.correct, "finished": result.finished, "outcome": result.outcome,
             "died": [{"agent": agent, "exit": status} for agent, status in result.died],
+            "frozen": [{"process": name, "seconds": seconds} for name, seconds in result.frozen],
             "seed": result.scenario.seed,
             "robots": [{"robot": r.name, "fault": r.fault, "expected": r.expected, "diagnosis": r.diagnosis,
                         "correct": r.correct, "steps": _seconds(r.steps_sim), "steps_wall": _seconds(r.steps_wall)}
@@ -195,9 +224,13 @@ def _summary(result) -> str:
         for step in STEP_NAMES:
             lines.append(f"| {r.name} | {step} | {_fmt(r.steps_sim[step])} | {_fmt(r.steps_wall[step])} |")
     for agent, status in result.died:
-        lines.append(f"\nthe run ended early: agent {died_text(agent, status)}")
+        what = "robot process" if "/" in agent else "agent"  # ROS 2 nodes are named robot/node
+        lines.append(f"\nthe run ended early: {what} {died_text(agent, status)}")
     if not result.finished and not result.died:
         lines.append("\nthe run did not finish in time")
+    if result.frozen:
+        lines.append("\nstopped (SIGSTOP) during the run: "
+                     + ", ".join(f"{name} for {seconds:.1f} s" for name, seconds in result.frozen))
     return "\n".join(lines)
 
 

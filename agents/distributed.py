@@ -11,6 +11,7 @@ SIGINT, SIGTERM and SIGKILL, each after a grace period.
 """
 from __future__ import annotations
 
+import hmac
 import logging
 import os
 import secrets
@@ -35,9 +36,13 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def run_processes(project, timeout: float | None = None, *, out: IO[str] | None = None,
-                  err: IO[str] | None = None) -> int:
+                  err: IO[str] | None = None, bridge=None, bridge_timeout: float = 30.0) -> int:
     """Run every agent of ``project`` (a ``MasProject``) in its own process; return the exit code
-    (0: ``.stopMAS`` or all idle, 124: ``--timeout``, 1: an agent process failed, 130: interrupted)."""
+    (0: ``.stopMAS`` or all idle, 124: ``--timeout``, 1: an agent process failed, 130: interrupted).
+
+    ``bridge`` (an ``agents.environment.BridgeChoice``): each agent drives its robot through it. The
+    simulator's world lives in this process, served on the hub (``robot_bridge.sim.server``), so that
+    the agents share it through their ``zenoh`` bridges; any other bridge is opened by each agent."""
     from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
     from agents.transport.keys import check_name
     from agentspeak.errors import AslSyntaxError, SourceError
@@ -55,8 +60,28 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
     except (AslSyntaxError, SourceError, ValueError) as exc:
         print(exc, file=err)
         return 2
-    hub = ZenohTransport(project.name, ZenohOptions(listen=(loopback_endpoint(),))).open()
-    launcher = Launcher(project, hub, out, err)
+    from agents.transport.identity import IdentityError, project_identity
+    try:  # the secure profile: the hub checks signatures too (an outsider's stop must not end the run)
+        identity = project_identity(project)
+    except IdentityError as exc:
+        print(exc, file=err)
+        return 2
+    hub = ZenohTransport(project.name, ZenohOptions(listen=(loopback_endpoint(),)), identity=identity).open()
+    served, extra = None, bridge.agent_args() if bridge is not None else []
+    if bridge is not None and bridge.name == "sim":
+        from agents.environment import open_bridges
+        from robot_bridge.sim.server import SimServer
+        try:
+            served = SimServer(hub.session, project.name,
+                               open_bridges(bridge, project.agent_names(), bridge_timeout)).start()
+        except Exception as exc:
+            hub.close()
+            print(f"faultmas mas run: {exc}", file=err)
+            return EXIT_CODES["failed"]
+        extra = ["--bridge", "zenoh", "--bridge-timeout", str(bridge_timeout)]
+    elif bridge is not None:
+        extra += ["--bridge-timeout", str(bridge_timeout)]
+    launcher = Launcher(project, hub, out, err, extra_args=extra)
     try:
         launcher.start()
         reason = launcher.wait(timeout)
@@ -64,6 +89,10 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
         reason = "interrupted"
     finally:
         launcher.stop_all()
+        if served is not None:
+            served.stop()
+            for robot in served.bridges.values():
+                robot.shutdown()
         hub.close()
     if reason == "failed" or (reason != "interrupted" and launcher.failures):
         for name, code in launcher.failures:
@@ -92,7 +121,17 @@ class Launcher:
         self._print_lock = threading.Lock()
         self._stopping = False
         hub.on_status(self._on_status)
-        hub.on_control(lambda message: self.stop_requested.set() if message.get("command") == "stop" else None)
+        hub.on_control(self._on_control)
+
+    def _on_control(self, message: dict) -> None:
+        """A ``stop`` ends the run when an agent of the MAS sent it (``.stopMAS``); a stranger's is
+        refused as the agents refuse it (in the secure profile ``by`` is proved by its signature)."""
+        if message.get("command") != "stop":
+            return
+        if message.get("by") in self.names or hmac.compare_digest(str(message.get("token", "")), self.token):
+            self.stop_requested.set()
+        else:
+            self.hub.report_control_refused(message, "not_a_member")
 
     def _on_status(self, status) -> None:
         self.statuses[status.agent] = status
@@ -125,11 +164,13 @@ class Launcher:
                 sink.flush()
 
     def wait(self, timeout: float | None, stop_when_idle: bool = True,
-             fatal: Callable[[str], bool] | None = None) -> str:
+             fatal: Callable[[str], bool] | None = None,
+             others: Callable[[], list[tuple[str, int]]] | None = None) -> str:
         """Block until the MAS ends; the reason ('stopped', 'idle', 'timeout' or 'failed').
         ``fatal(name)``: 'failed' as soon as a child for which it is true ends with a non-zero status or a
         signal (``failures`` names it), not only once all have ended (a run whose agent was killed must
-        not wait for its timeout)."""
+        not wait for its timeout). ``others()``: processes the agents depend on (robot nodes) that have
+        ended, as (name, exit status): 'failed' at once, each named in ``failures``."""
         from agents.transport.status import quiescent, totals
 
         deadline = None if timeout is None else time.monotonic() + timeout
@@ -141,6 +182,8 @@ class Launcher:
                 return "timeout"
             if self._check_children() or (fatal is not None and any(fatal(name) for name, _ in self.failures)):
                 return "failed"
+            if others is not None and self._record_others(others()):
+                return "failed"
             statuses = [self.statuses.get(name) for name in self.names]
             snapshot = None
             if stop_when_idle and all(statuses) and quiescent(statuses):
@@ -150,6 +193,13 @@ class Launcher:
             previous = snapshot
             wait = CHECK_INTERVAL if deadline is None else max(0.0, min(CHECK_INTERVAL, deadline - time.monotonic()))
             self.stop_requested.wait(wait)
+
+    def _record_others(self, ended: list[tuple[str, int]]) -> bool:
+        """Add the other processes that ended to ``failures``; True if there are any."""
+        for failure in ended:
+            if failure not in self.failures:
+                self.failures.append(failure)
+        return bool(ended)
 
     def _check_children(self) -> bool:
         """Record children that ended on their own; True when none is left running."""
@@ -178,3 +228,10 @@ class Launcher:
         stop_processes(running, GRACE, (None, *ESCALATION))
         for relay in self.relays:
             relay.join(5.0)
+        for child in self.children.values():  # not left to the garbage collector (a soak's descriptors grew)
+            for stream in (child.stdout, child.stderr):
+                if stream is not None:
+                    try:
+                        stream.close()
+                    except OSError:
+                        pass

@@ -11,6 +11,7 @@ import logging
 import sys
 
 from agents.agent_cli import add_agent_parser, option_literals
+from agents.keys_cli import add_keys_parser
 from agents.router import add_router_parser
 
 
@@ -25,18 +26,29 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      help="in one process: also be reachable over Zenoh here (agents elsewhere may join)")
     run.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
                      help="in one process: also talk over Zenoh to agents reached through ENDPOINT")
+    run.add_argument("--bridge", default=None, metavar="NAME",
+                     help="give every agent a robot through this bridge (any installed one, see `faultmas sim "
+                          "bridges`; default: the project's `environment:` if it names one); each agent drives the "
+                          "robot of its own name, and sim puts them all into one world")
+    run.add_argument("--bridge-option", action="append", default=[], metavar="KEY=VALUE",
+                     help="an option for the bridge (repeatable; added to the project's environment arguments; "
+                          "an option the bridge does not take is an error that lists the ones it does)")
+    run.add_argument("--bridge-timeout", type=float, default=30.0, metavar="S",
+                     help="seconds the robots get to answer at start (default %(default)s)")
     run.set_defaults(func=cmd_mas_run)
     mas.set_defaults(func=lambda args: (mas.print_help(), 2)[1])
     add_agent_parser(sub)
     add_router_parser(sub)
+    add_keys_parser(sub)
 
 
 def setup_logging() -> None:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr)
 
 
-def build_local_mas(project, printer=None):
-    """A LocalRuntime holding every agent of ``project`` (parse errors raise AslSyntaxError)."""
+def build_local_mas(project, printer=None, bridges: dict | None = None):
+    """A LocalRuntime holding every agent of ``project`` (parse errors raise AslSyntaxError); an agent named in
+    ``bridges`` (agent -> set-up ``RobotBridge``) drives that robot (``agents.robot_arch.RobotArch``)."""
     from pathlib import Path
 
     from agentspeak.parser import parse_program
@@ -62,8 +74,12 @@ def build_local_mas(project, printer=None):
             # each instance gets its own parse: plans hold per-agent labels and state
             program = parse_program(programs[decl.source], decl.source,
                                     source_path=tuple(project.source_dirs))
+            arch = None
+            if bridges and name in bridges:
+                from agents.robot_arch import RobotArch
+                arch = RobotArch(runtime, bridges[name])
             runtime.add_agent(name, source_file=decl.source, program=program,
-                              extra_beliefs=beliefs, extra_goals=goals)
+                              extra_beliefs=beliefs, extra_goals=goals, arch=arch)
     return runtime
 
 
@@ -79,17 +95,36 @@ def cmd_mas_run(args) -> int:
     except AslSyntaxError as exc:
         print(exc, file=sys.stderr)
         return 2
+    from agents.environment import choose_bridge, open_bridges
+    try:
+        choice = choose_bridge(project, args.bridge, args.bridge_option)
+    except ValueError as exc:
+        print(f"faultmas mas run: {exc}", file=sys.stderr)
+        return 2
     if args.processes:
         from agents.distributed import run_processes
-        return run_processes(project, timeout=args.timeout)
+        return run_processes(project, timeout=args.timeout, bridge=choice, bridge_timeout=args.bridge_timeout)
+    bridges: dict = {}
     try:
-        runtime = build_local_mas(project)
-    except (AslSyntaxError, SourceError) as exc:
-        print(exc, file=sys.stderr)
-        return 2
-    if args.listen or args.connect:
-        return _run_networked(runtime, project, args)
-    why = runtime.run(timeout=args.timeout)
+        if choice is not None:
+            bridges = open_bridges(choice, project.agent_names(), args.bridge_timeout)
+        try:
+            runtime = build_local_mas(project, bridges=bridges)
+        except (AslSyntaxError, SourceError) as exc:
+            print(exc, file=sys.stderr)
+            return 2
+        if args.listen or args.connect:
+            return _run_networked(runtime, project, args)
+        # with robots the agents wait for motions and percepts: idle is not the end, --timeout or .stopMAS is
+        why = runtime.run(timeout=args.timeout, stop_when_idle=not bridges)
+    except Exception as exc:  # a robot that does not answer, a bad option value
+        if choice is None or not isinstance(exc, (RuntimeError, TimeoutError, ValueError, OSError)):
+            raise
+        print(f"faultmas mas run: {exc}", file=sys.stderr)
+        return 1
+    finally:
+        for bridge in bridges.values():
+            bridge.shutdown()
     # The same exit codes as --processes (agents.distributed.EXIT_CODES): a run cut by --timeout
     # did not finish, and scripts must be able to tell.
     return 124 if why == "timeout" else 0
@@ -101,8 +136,15 @@ def _run_networked(runtime, project, args) -> int:
     from agents.transport import ZenohOptions, ZenohTransport
     from agents.zenoh_arch import TransportBridge
 
+    from agents.transport.identity import IdentityError, project_identity
+
     options = ZenohOptions(listen=tuple(args.listen) if args.listen else None, connect=tuple(args.connect))
-    with ZenohTransport(project.name, options) as transport:
+    try:
+        identity = project_identity(project, project.agent_names())
+    except IdentityError as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    with ZenohTransport(project.name, options, identity=identity) as transport:
         bridge = TransportBridge(runtime, transport, declared=project.agent_names(),
                                  members=project.agent_names()).attach()
         from agents.inspector.publisher import MindPublisher  # state on demand for `faultmas inspect`

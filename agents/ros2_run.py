@@ -23,7 +23,10 @@ def free_domain_id() -> int:
 
 
 def run_on_ros2(scenario: Scenario, timeout: float = 180.0, out: TextIO | None = None,
-                echo: Callable[[Mark], None] | None = None, domain_id: int | None = None) -> RunResult:
+                echo: Callable[[Mark], None] | None = None, domain_id: int | None = None,
+                on_mark: Callable | None = None) -> RunResult:
+    """The run; a robot node that dies ends it, named ``robot/node`` in ``died`` (outcome 'died').
+    ``on_mark(mark, kill)``: as ``run_agent_processes``'s, ``kill`` also takes ``robot/node`` names."""
     from robot_bridge.ros2.launch import Supervisor, plan
     from robot_bridge.ros2.runtime import loopback_env
 
@@ -40,10 +43,17 @@ def run_on_ros2(scenario: Scenario, timeout: float = 180.0, out: TextIO | None =
             raise RuntimeError(f"ROS 2 nodes did not come up: missing {sorted(missing)}, "
                                f"dead {[(s.node, c) for s, c in supervisor.dead()]}")
         log = run_agent_processes(scenario, ["--bridge", "ros2", "--bridge-option", f"domain_id={domain}"],
-                                  timeout, clock=log_clock(), out=out, echo=echo)
+                                  timeout, clock=log_clock(), out=out, echo=echo, on_mark=on_mark,
+                                  others=lambda: [(f"{spec.robot}/{spec.node}", code) for spec, code in supervisor.dead()],
+                                  other_processes=lambda: node_processes(supervisor))
     finally:
         supervisor.stop()
-    return RunResult(scenario, log.results(), log.marks, log.done.is_set(), None)
+    return RunResult(scenario, log.results(), log.marks, log.done.is_set(), None, list(log.died), list(log.frozen))
+
+
+def node_processes(supervisor) -> dict:
+    """{``robot/node``: its process} of a launch (for chaos tests and the freeze check)."""
+    return {f"{spec.robot}/{spec.node}": proc for spec, proc in zip(supervisor.specs, supervisor.processes)}
 
 
 def log_clock() -> Callable[[], float]:

@@ -137,7 +137,8 @@ class TransportBridge:
     or learn plans (``MEMBERS_ONLY``) nor stop the MAS; anyone may still tell and ask. Envelope senders
     are only what the sender claims (see ``trust``): this keeps out strangers that do not know the
     project, and a message claiming to come from one of this process's own agents (they never arrive
-    over the network) is refused as forged.
+    over the network) is refused as forged. In the secure profile (``transport.identity``) the transport
+    has already refused every message not signed by a member's key, so ``sender`` is proved.
     """
 
     def __init__(self, runtime: LocalRuntime, transport: Transport, *, declared: Iterable[str] = (),
@@ -147,6 +148,9 @@ class TransportBridge:
         self.mas = transport.mas
         self.policy = TrustPolicy(transport.mas, frozenset(declared), frozenset(allowed_code_senders))
         self.members = None if members is None else frozenset(members) | self.policy.allowed_code_senders
+        identity = getattr(transport, "identity", None)
+        if identity is not None:  # the secure profile: the members are those whose keys the project lists
+            self.members = (self.members or frozenset()) | identity.members
         self.published_idle: bool | None = None
         self.dead: set[str] = set()  # agents whose process the launcher saw die (control 'died')
         self.on_message = None

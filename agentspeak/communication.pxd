@@ -7,4 +7,4 @@ from agentspeak.intentions cimport Event
 from agentspeak.program cimport Trigger
 
 @cython.locals(trigger=Trigger, ev=Event)
-cpdef receive_message(agent, Message msg)
+cpdef receive_message(agent, Message msg, bint by_default=*)

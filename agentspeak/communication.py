@@ -2,7 +2,8 @@
 
 A ``Message`` carries a performative and content (a term). ``receive_message`` is what the
 receiving agent does with it, one message per reasoning cycle, as Jason's default ``kqmlPlans.asl``
-(written here in Python, which is Jason's own "fast path"). A program can override the semantics
+(written here in Python). As in Jason, tell, achieve and signal take effect when the message is read
+and every other performative when its event ``+!kqml_received(...)`` is selected. A program can override the semantics
 of any performative, or add new ones, with plans for ``+!kqml_received(Sender, Performative,
 Content, MsgId)``: when such a plan is relevant, the message becomes that goal instead.
 """
@@ -153,8 +154,9 @@ def _source_annots(name: str) -> tuple:
     return found
 
 
-def receive_message(agent: Any, msg: Message) -> None:
-    """Apply the semantics of one received message."""
+def receive_message(agent: Any, msg: Message, by_default: bool = False) -> None:
+    """Apply the semantics of one received message (``by_default``: the default semantics, even if
+    ``+!kqml_received`` plans are relevant)."""
     perf = msg.performative
     name = msg.sender
     # replies to a pending ask resume the asking intention
@@ -164,7 +166,11 @@ def receive_message(agent: Any, msg: Message) -> None:
     plans = agent.plans  # has +!kqml_received(S, P, C, M) a relevant plan? Known per plan index
     if plans._index is None:
         plans._build()
-    if plans.kqml_override:
+    # Jason turns a message into the event +!kqml_received(S, P, C, M), handled when the event is
+    # selected (by the user's plans, else by kqmlPlans.asl); only tell, achieve and signal take a fast
+    # path at once, and only while no user plan for +!kqml_received exists (TransitionSystem.applyProcMsg).
+    # An ask is therefore answered after the goals and intentions that came before it had their turn.
+    if not by_default and (plans.kqml_override or perf not in _FAST_PATH):
         sender = _atom_of(name) if name != agent.name else SELF
         goal = Literal("kqml_received", (sender, Literal(perf), msg.content, msg.msg_id), (SOURCE_SELF,))
         # kept until a plan handles it: when none of the user's +!kqml_received plans applies, the
@@ -214,15 +220,7 @@ def receive_message(agent: Any, msg: Message) -> None:
 def receive_by_default(agent: Any, msg: Message) -> None:
     """The default semantics of a message, also when the agent has ``+!kqml_received`` plans (for a
     message none of them applies to)."""
-    plans = agent.plans
-    if plans._index is None:
-        plans._build()
-    saved = plans.kqml_override
-    plans.kqml_override = False
-    try:
-        receive_message(agent, msg)
-    finally:
-        plans.kqml_override = saved
+    receive_message(agent, msg, True)
 
 
 def _tell(agent, msg: Message, sender: Term) -> None:
@@ -355,6 +353,8 @@ def _ask_how(agent, msg: Message, sender: Term) -> None:
                 plans.append(PlanTerm(plan=p))
     _answer(agent, msg, "tellHow", make_list(plans))
 
+
+_FAST_PATH = frozenset(("tell", "achieve", "signal"))
 
 _HANDLERS = {
     "tell": _tell, "untell": _untell, "achieve": _achieve, "unachieve": _unachieve,

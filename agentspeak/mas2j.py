@@ -2,7 +2,9 @@
 
 ``b b.asl #3;`` declares agents ``b1 b2 b3`` as Jason does; ``[beliefs="next(x)", goals="g"]`` adds
 initial beliefs and goals. Infrastructure, environment and classes are recorded (Java classes cannot
-run here; the environment name selects a faultmas environment or robot bridge where one exists).
+run here). ``environment: sim`` (any robot bridge's name, with ``"KEY=VALUE"`` arguments as its options)
+gives every agent a robot through that bridge: ``agents.environment`` reads ``environment`` and
+``environment_args``.
 """
 from __future__ import annotations
 
@@ -44,6 +46,9 @@ class MasProject:
     name: str
     agents: list[AgentDecl]
     environment: str | None = None
+    environment_args: list[str] = field(default_factory=list)
+    """The environment's arguments as written (strings unquoted): ``environment: sim("seed=3")``."""
+    environment_line: int | None = None
     infrastructure: str | None = None
     source_paths: list[str] = field(default_factory=list)
     file: str = ""
@@ -102,6 +107,8 @@ def parse_mas2j(text: str, file: str = "<mas2j>") -> MasProject:
                 project.agents.append(_agent(decl, file, text))
         elif section.data == "environment":
             project.environment = _class_text(section.children[0])
+            project.environment_args = _class_args(section.children[0])
+            project.environment_line = getattr(section.children[0].children[0], "line", None)
         elif section.data == "infrastructure":
             project.infrastructure = _class_text(section.children[0])
         elif section.data == "source_path":
@@ -195,6 +202,12 @@ def _unescape(text: str) -> str:
 
 def _class_text(tree: Tree) -> str:
     return str(tree.children[0])
+
+
+def _class_args(tree: Tree) -> list[str]:
+    """A class definition's arguments as text (a string's quotes and escapes removed)."""
+    return [_unescape(str(arg)[1:-1]) if isinstance(arg, Token) and arg.type == "STRING" else str(arg)
+            for arg in tree.children[1:] if arg is not None]
 
 
 def _find_source(source: str, paths: list[str]) -> str:

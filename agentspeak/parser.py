@@ -23,7 +23,7 @@ from agentspeak.nesting import MAX_NESTING, first_too_deep_bracket, nesting_dept
 from agentspeak.program import (
     ACHIEVE, ADD, BEL, DEL, META, TEST, Achieve, AchieveNew, Action, AddBel, AddBelEnd, AddBelNew,
     AddPlan, Constraint, DelBel, DelBelNew, ExecVar, Fork, If, InternalAction, Plan, PlanTerm,
-    Program, RemovePlan, Rule, Test, Trigger, TriggerInstr, UpdBel, While, For,
+    Instr, Program, RemovePlan, Rule, Test, Trigger, TriggerInstr, UpdBel, While, For,
 )
 from agentspeak.stdlib.functions import FUNCTIONS, check_function_name, rule_function
 from agentspeak.stdlib.registry import set_program_reader
@@ -176,6 +176,9 @@ class _ToProgram(Transformer):
         for instr in c:
             if instr is None:
                 continue
+            if type(instr) is tuple:  # a body in parentheses: its formulas in place
+                out.extend(instr)
+                continue
             if isinstance(instr, Trigger):
                 instr = TriggerInstr(instr, self.line)
             out.append(instr)
@@ -184,7 +187,41 @@ class _ToProgram(Transformer):
     def _branch(self, x):
         if isinstance(x, Trigger):
             x = TriggerInstr(x, self.line)
+        if isinstance(x, tuple):  # a body in parentheses
+            return x
         return (x,) if x is not None else ()
+
+    def op_and(self, c):
+        return "|&|"
+
+    def op_or(self, c):
+        return "|||"
+
+    def op_seq(self, c):
+        return ";"
+
+    def paren_body(self, c):
+        """``( F1 op F2 op ... )`` with op ``;`` < ``|||`` < ``|&|`` (Jason's precedence): a body."""
+        units = [u if isinstance(u, Instr) else self.formula([u]) for u in c[0::2]]
+        ops = c[1::2]
+
+        def split(lo: int, hi: int, op: str) -> list:
+            cut = [i for i in range(lo, hi - 1) if ops[i] == op]
+            bounds = [lo] + [i + 1 for i in cut] + [hi]
+            return [(bounds[k], bounds[k + 1]) for k in range(len(bounds) - 1)]
+
+        def build(lo: int, hi: int, level: int) -> tuple:
+            if hi - lo == 1:
+                return self._branch(units[lo])
+            op = (";", "|||", "|&|")[level]
+            parts = split(lo, hi, op)
+            if len(parts) == 1:
+                return build(lo, hi, level + 1)
+            bodies = tuple(build(a, b, level + 1) for a, b in parts)
+            if op == ";":
+                return tuple(instr for body in bodies for instr in body)
+            return (Fork("or" if op == "|||" else "and", bodies, self.line),)
+        return _ParenBody(build(0, len(units), 0))
 
     def fork_or(self, c):
         return Fork("or", tuple(self._as_body(x) for x in c), self.line)
@@ -221,6 +258,8 @@ class _ToProgram(Transformer):
 
     def formula(self, c):
         t = c[0]
+        if type(t) is _ParenBody:
+            return tuple(t)
         if type(t) is Func:  # `math.max(1,2)` alone is not a formula: an internal action (that fails)
             t = _not_function(t)
         if isinstance(t, Literal):
@@ -452,6 +491,10 @@ def _binary(op: str, left: Term, right: Term) -> Term:
 
 
 _MAX_INT_DIGITS = 4300  # CPython's limit on int(str) (sys.get_int_max_str_digits)
+
+
+class _ParenBody(tuple):
+    """The formulas of a body written in parentheses (``(!a ||| !b)``) where a formula stands."""
 
 
 class _BadInput(Exception):

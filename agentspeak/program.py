@@ -412,11 +412,15 @@ class PlanTerm:
     ``body`` for a body term; ``rule`` for a rule term.
     """
 
-    __slots__ = ("plan", "body", "rule", "_vars")
+    __slots__ = ("plan", "body", "rule", "_vars", "bare")
 
-    def __init__(self, plan: Plan | None = None, body: tuple | None = None, rule: Rule | None = None) -> None:
+    def __init__(self, plan: Plan | None = None, body: tuple | None = None, rule: Rule | None = None,
+                 bare: bool = False) -> None:
         self.plan, self.body, self.rule = plan, body, rule
         self._vars = None  # its variables, worked out on the first resolve
+        # a body taken out of a plan or of a longer body (``{@L +!T : C <- B}``, ``{ F; Rest }``) prints
+        # without braces, as Jason's (its PlanBody is not "a term"): ``.substring(".send(", B, 0)``
+        self.bare = bare
 
     def _bound_in(self, b: Bindings) -> bool:
         """Is any variable of this term bound in ``b``? (A plan term handed around, e.g. by
@@ -455,7 +459,7 @@ class PlanTerm:
         if self.plan is not None:
             return PlanTerm(plan=self.plan.resolved(b))
         if self.body is not None:
-            return PlanTerm(body=map_body(self.body, lambda t: substitute(t, b)))
+            return PlanTerm(body=map_body(self.body, lambda t: substitute(t, b)), bare=self.bare)
         r = self.rule
         return PlanTerm(rule=Rule(substitute(r.head, b), substitute(r.body, b), r.source_file, r.line))
 
@@ -469,7 +473,7 @@ class PlanTerm:
                 q.goal_condition = rename(p.goal_condition, mapping)
             return PlanTerm(plan=q)
         if self.body is not None:
-            return PlanTerm(body=map_body(self.body, lambda t: rename(t, mapping)))
+            return PlanTerm(body=map_body(self.body, lambda t: rename(t, mapping)), bare=self.bare)
         r = self.rule
         return PlanTerm(rule=Rule(rename(r.head, mapping), rename(r.body, mapping), r.source_file, r.line))
 
@@ -524,18 +528,21 @@ class PlanTerm:
             return (None, trig, None, () if trig is not None else self.body)
         return None
 
-    def __eq__(self, other: object) -> bool:
-        return isinstance(other, PlanTerm) and str(self) == str(other)
+    def __eq__(self, other: object) -> bool:  # braces or not: the same term (Jason's equals)
+        return isinstance(other, PlanTerm) and self._text() == other._text()
 
     def __hash__(self) -> int:
-        return hash(str(self))
+        return hash(self._text())
+
+    def _text(self) -> str:
+        if self.plan is not None:
+            return str(self.plan)
+        if self.body is not None:
+            return body_str(self.body)
+        return str(self.rule)
 
     def __str__(self) -> str:
-        if self.plan is not None:
-            return "{ " + str(self.plan) + " }"
-        if self.body is not None:
-            return "{ " + body_str(self.body) + " }"
-        return "{ " + str(self.rule) + " }"
+        return self._text() if self.bare else "{ " + self._text() + " }"
 
     __repr__ = __str__
 
@@ -586,11 +593,10 @@ def substitute(t: Term, b: Bindings) -> Term:
 
 
 def _formula_term(instr) -> Term:
-    """What a variable unifies with when it stands for one formula of a body term: the formula's term
-    (``!g(1)`` gives ``g(1)``, as Jason's body terms do)."""
-    if isinstance(instr, _OneTerm):
-        return instr.term
-    return PlanTerm(body=(instr,))
+    """What a variable written as a formula (``{ H; R }``) unifies with: the whole formula, ``?b(X)``
+    or ``!g(1)``, as a one-formula body (Jason's Unifier: ``pb2.getHead()``), so executing ``H`` runs it
+    (demos/meta-programming). A typed variable (``{ !G; R }``) unifies with the term only."""
+    return PlanTerm(body=(instr,), bare=True)
 
 
 def unify_bodies(xs: tuple, ys: tuple, b: Bindings, trail: list) -> bool:
@@ -602,7 +608,7 @@ def unify_bodies(xs: tuple, ys: tuple, b: Bindings, trail: list) -> bool:
         if i == n - 1 and type(x) is ExecVar and type(x.term) is Var and (len(ys) != n or type(ys[i]) is not ExecVar):
             value = resolve(x.term, b)
             if type(value) is Var:
-                return unify(value, PlanTerm(body=ys[i:]), b, trail)  # the rest of the body
+                return unify(value, PlanTerm(body=ys[i:], bare=True), b, trail)  # the rest of the body
         if i >= len(ys):
             return False
         y = ys[i]

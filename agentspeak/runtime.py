@@ -63,6 +63,9 @@ class LocalArch(AgentArch):
     def kill_agent(self, agent: Agent, name: str) -> bool:
         return self.runtime.kill_agent(name)
 
+    def clone_agent(self, agent: Agent, name: str) -> str:
+        return self.runtime.clone_agent(agent, name)
+
     def act(self, agent: Agent, action: Literal):
         env = self.runtime.environment
         return env(agent, action) if env is not None else None
@@ -143,6 +146,27 @@ class LocalRuntime:
         # (Jason starts it on a thread of its own at once; a creator that loops must not starve it)
         self._yield_turn = True
         self._yield_to = self.agents[unique]
+        return unique
+
+    def clone_agent(self, original: Agent, name: str) -> str:
+        """A new agent with a copy of ``original``'s beliefs, rules and plans (Jason's ``.clone``): no
+        events, goals or intentions, so it waits for messages. A name in use gets a number appended."""
+        import copy
+        unique, n = name, 1
+        while unique in self.agents:
+            n += 1
+            unique = f"{name}_{n}"
+        clone = Agent(unique, arch=LocalArch(self), source_file=original.source_file)
+        for plan in original.plans.plans:
+            clone.plans.add(copy.copy(plan))  # a plan is not changed once in a library: a shallow copy
+        for rule in original.bb.rules():
+            clone.bb.add_rule(rule)
+        for lit in original.bb.literals():
+            clone.bb.add(lit, at_end=True)  # as they are, in order; no +b events (Jason clones the BB)
+        if self.trusted_senders is not None:
+            self.trusted_senders.add(unique)
+        self.agents[unique] = clone
+        self.wake(clone)
         return unique
 
     def _run_next(self, first: Agent, then: Agent) -> None:

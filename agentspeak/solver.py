@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import logging
 import operator
-from typing import TYPE_CHECKING, Iterator, Protocol
+from typing import Iterator, Protocol
 
 from agentspeak.terms import (
     _EXACT, INT_OPS, And, AnnotatedVar, Arith, ArithmeticError_, Cons, Func, Literal, Not, Or, Rel, Term, Var, compare, deref,
@@ -21,17 +21,25 @@ from agentspeak.terms import (
 from agentspeak.copier import rule_copier
 from agentspeak.unify import undo, unify, unify_annots_all
 
-if TYPE_CHECKING:
-    from agentspeak.beliefs import BeliefBase
-
 log = logging.getLogger("faultmas.agentspeak")
+
+
+class FactIndex(Protocol):
+    """What compiled formulas read of a belief base (``agentspeak.beliefs.BeliefBase``, which imports this
+    layer's neighbours, not the other way round): its indexes by ``(functor, arity)`` and their lookup."""
+
+    _facts: dict
+    _rules: dict
+
+    def candidates_by_key(self, key: tuple, lit: Literal, b: dict) -> list: ...
+    def literals(self) -> Iterator[Literal]: ...
 
 
 class KnowledgeBase(Protocol):
     """What the solver needs from an agent: facts, rules and internal actions usable in formulas
     (compiled formulas go to the belief base ``bb`` directly)."""
 
-    bb: "BeliefBase"
+    bb: FactIndex
 
     def candidates(self, lit: Literal, b: dict) -> list: ...
     def rules_for(self, lit: Literal) -> list: ...
@@ -283,6 +291,7 @@ def compare_equal(a: Term, c: Term) -> bool:
 
 
 DEFAULT_NS = Literal("default")
+_TRUE_ATOM = Literal("true")
 _NUMS = (int, float)
 _UNEVALUATED = (Arith, Func, Var)
 
@@ -299,6 +308,15 @@ def _univ(left: Term, right: Term, b: dict, trail: list) -> bool:
             if items is not None and len(items) == 3:
                 lst = make_list([functor, make_list(left.args), annots])
         return unify(lst, right, b, trail)
+    parts = left.as_plan_parts() if hasattr(left, "as_plan_parts") and left.plan is not None else None
+    if parts is not None:
+        # a plan term: [Label, Trigger, Context, Body] (Jason's Plan.getAsListOfTerms; demos/meta-programming)
+        plan, term = left.plan, type(left)
+        label = plan.label if plan.label is not None and plan.label.functor else plan.ensure_label()
+        trigger = term(plan=type(plan)(plan.trigger), bare=True)
+        body = term(body=plan.body, bare=True)
+        return unify(make_list([label, trigger, plan.context if plan.context is not None else _TRUE_ATOM, body]),
+                     right, b, trail)
     if type(left) is Var:
         items = _items(right)
         if items is None or len(items) not in (3, 4):

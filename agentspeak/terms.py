@@ -380,9 +380,18 @@ class Func:
 
     def resolve(self, b: Bindings) -> Term:
         args = tuple([resolve(a, b) for a in self.args])
-        if self.spec.unground_ok or all(is_ground(a) for a in args):
+        if all(is_ground(a) for a in args):
             value = self.spec.evaluate(args)
             if value is not None:  # None: not now (it needs an agent and none is running)
+                return value
+        elif self.spec.unground_ok:
+            # tried now, and left for later if it cannot be computed yet (Jason's capply: a function of
+            # unbound arguments stays as it is, e.g. a rule function in a .findall query not yet run)
+            try:
+                value = self.spec.evaluate(args)
+            except Exception:  # noqa: BLE001 - any failure here only means "not yet"
+                value = None
+            if value is not None:
                 return value
         return Func(self.name, args, self.spec)
 

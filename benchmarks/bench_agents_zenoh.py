@@ -58,6 +58,7 @@ def run(quick: bool = False) -> str:
     raw_rates, raw_rtt = _raw(count, trips)
     agent_rates, agent_rtt, cpu = _agents(count, trips)
     stages = _stages(count, SIZES[0])
+    secure = _stages(max(500, count // 10), SIZES[0], secure=True)
     lines = [f"{'measure (2 processes, loopback)':36} {'raw Zenoh':>14} {'agents':>14} {'ratio':>7}"]
     for size in SIZES:
         raw_rate, agent_rate = raw_rates[size], agent_rates[size]
@@ -75,6 +76,10 @@ def run(quick: bool = False) -> str:
                  f"{stages['sender']:.1f} µs; sink {stages['sink']:.1f} µs = envelope decoding and checks "
                  f"{stages['decode']:.1f} + content reading {stages['content']:.1f} + reasoning "
                  f"{stages['reasoning']:.1f}; the 30% target allows {allowed:.1f} µs per tell on each side")
+    lines.append(f"secure profile (Ed25519-signed envelopes, replay check), the same {SIZES[0]} B tell: sending agent "
+                 f"{secure['sender']:.1f} µs (+{secure['sender'] - stages['sender']:.1f}); envelope decoding and "
+                 f"checks {secure['decode']:.1f} µs (+{secure['decode'] - stages['decode']:.1f}); sink "
+                 f"{secure['sink']:.1f} µs")
     lines.append("raw round trip: 200 B ping/pong; ratio: agents / raw for rates, raw / agents for latencies")
     lines.append("targets: tell >= 30% of raw; askOne median < 1,000 µs")
     return "\n".join(lines)
@@ -194,8 +199,8 @@ class _CapturingTransport(LocalTransport):
     """A transport whose network is a list: what its agents send to other processes, as the bytes the
     network would carry (batched as on Zenoh while the sender's thread batches)."""
 
-    def __init__(self, mas: str, bus: LocalBus) -> None:
-        super().__init__(mas, bus)
+    def __init__(self, mas: str, bus: LocalBus, identity=None) -> None:
+        super().__init__(mas, bus, identity=identity)
         self.payloads: list[bytes] = []
 
     def _put(self, receiver: str, envelope: Envelope, encoded: Callable[[], bytes]) -> bool:
@@ -203,23 +208,25 @@ class _CapturingTransport(LocalTransport):
         return True
 
 
-def _stages(count: int, size: int = 64, repeats: int = 3) -> dict[str, float]:
+def _stages(count: int, size: int = 64, repeats: int = 3, secure: bool = False) -> dict[str, float]:
     """µs of CPU per tell by stage (best of ``repeats``), the programs of ``_agents``, both in this process:
     the sending agent's run (its payloads captured); the sink transport's ``receive_bytes`` of those
     payloads with a callback that only keeps the envelopes (decoding and checks); the content reader on
     their contents; the sink agent's whole handling (``receive_bytes`` and a run after each payload),
-    whose remainder is the reasoning."""
+    whose remainder is the reasoning. ``secure``: in the secure profile (the sender signs, the sink checks
+    signatures and replays; each side has its own keys' view, as two processes would)."""
     payload = '"' + "x" * (size - 5) + '"'
     best: dict[str, float] = {}
+    keys = _bench_keys() if secure else None
     for _ in range(repeats):
         mas = f"stages{uuid.uuid4().hex[:6]}"
         bus = LocalBus()
-        sink_side = LocalTransport(mas, bus).open()
+        sink_side = LocalTransport(mas, bus, identity=keys("sink") if keys else None).open()
         envelopes: list[Envelope] = []
         sink_side.register("sink", envelopes.append)
         runtime = LocalRuntime(printer=lambda name, text: None)
         agent = runtime.add_agent("bench", BENCH)
-        sender_side = _CapturingTransport(mas, bus).open()
+        sender_side = _CapturingTransport(mas, bus, identity=keys("bench") if keys else None).open()
         TransportBridge(runtime, sender_side, declared=("bench", "sink")).attach()
         agent.post_external(Trigger(ADD, ACHIEVE, parse_term(f"blast({count}, {payload})")), force=True)
         started = time.process_time()
@@ -239,6 +246,8 @@ def _stages(count: int, size: int = 64, repeats: int = 3) -> dict[str, float]:
         sink_side.unregister("sink")
         sender_side.close()
 
+        if keys:  # the same payloads again: a fresh receiver, or they would all be replays
+            sink_side.identity = keys("sink")
         runtime = LocalRuntime(printer=lambda name, text: None)
         runtime.add_agent("sink", SINK)
         TransportBridge(runtime, sink_side, declared=("bench", "sink")).attach()
@@ -259,6 +268,16 @@ def _stages(count: int, size: int = 64, repeats: int = 3) -> dict[str, float]:
             best[name] = min(best.get(name, float("inf")), seconds / count * 1e6)
     best["reasoning"] = best["sink"] - best["decode"] - best["content"]
     return best
+
+
+def _bench_keys() -> Callable[[str], object]:
+    """``keys(agent)``: a fresh ``Identity`` of the process running ``agent`` (both key pairs made once)."""
+    from agents.transport.identity import Identity, generate_keys
+
+    folder = Path(tempfile.mkdtemp(prefix="bench_keys_"))
+    generate_keys(folder, ["bench", "sink"])
+    public = {name: folder / f"{name}.pub" for name in ("bench", "sink")}
+    return lambda agent: Identity.from_files(public, {agent: folder / f"{agent}.key"})
 
 
 if __name__ == "__main__":

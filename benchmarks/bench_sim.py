@@ -77,7 +77,7 @@ def measure(robots: int, cameras: bool, sim_seconds: float, mode: str = "paralle
 def run(quick: bool) -> str:
     import cv2
 
-    from robot_bridge.sim import camera
+    from robot_bridge.sim.camera import objects as camera
 
     sizes = (2, 10) if quick else (2, 10, 50)
     duration = {2: 4.0, 10: 2.0, 50: 1.0} if quick else {2: 20.0, 10: 5.0, 50: 2.0}

@@ -31,15 +31,36 @@ def _report_errors(session: Session) -> None:
 
 
 def observe(args: argparse.Namespace) -> int:
+    from detection.learned.model import ModelFileError
+
+    problem = _bad_combination(args)
+    if problem:
+        print(f"faultmas observe: {problem}", file=sys.stderr)
+        return 2
     try:
         if args.bag:
             return _replay(args)
         if args.zenoh:
             return _zenoh(args)
         return _live(args)
-    except SourceError as exc:
+    except (SourceError, ModelFileError) as exc:
         print(f"faultmas observe: {exc}", file=sys.stderr)
         return 2
+
+
+def _bad_combination(args: argparse.Namespace) -> str:
+    """What is wrong with the options together ('' when nothing)."""
+    learned = getattr(args, "learned", None)
+    if args.config is None and learned is None:
+        return "nothing to observe: give CONFIG.yaml, --learned MODELS_DIR, or both"
+    if learned is not None and (args.bag or args.zenoh):
+        return ("--learned watches the live ROS 2 graph (and the agents' Zenoh keys through --connect); "
+                "it cannot be used with " + ("--bag" if args.bag else "--zenoh"))
+    if args.config is None and (args.bag or args.zenoh):
+        return "CONFIG.yaml is needed with " + ("--bag" if args.bag else "--zenoh")
+    if args.connect and not (args.zenoh or learned is not None):
+        return "--connect goes with --zenoh or --learned"
+    return ""
 
 
 def _replay(args: argparse.Namespace) -> int:
@@ -69,10 +90,13 @@ def _live(args: argparse.Namespace) -> int:
     from detection.taps.ros2_parameters import Ros2Parameters
 
     environment = ActionEnvironment()
-    session = open_session(args.config, args.model, args.rules, environment)   # bad input: before any network
-    tap = None
+    models = _learned_models(args)                      # bad input: before any network
+    session = open_session(args.config, args.model, args.rules, environment)
+    tap = learned = None
     try:
         show, table = _printer(args, session)
+        if models:                                      # first: without --model it sets the diagnoser's model
+            learned = _start_learned(args, models, session, environment)
         tap = Ros2Tap(session.config, session.observers, session.pipeline.observe, domain_id=args.domain_id)
         if args.record:
             tap.recorder = BagRecorder(args.record)
@@ -80,11 +104,15 @@ def _live(args: argparse.Namespace) -> int:
         session.pipeline.add_listener(info_publisher(tap))
         session.pipeline.add_listener(show)
         tap.start()
+        if learned is not None:
+            learned.open_into(session.pipeline.observe)
         _run_until_stopped(args, table)
     except TapError as exc:
         print(f"faultmas observe: {args.config}: {exc}", file=sys.stderr)
         return 2
     finally:
+        if learned is not None:
+            learned.close()
         if tap is not None:
             tap.close()
         if environment.parameters is not None:
@@ -92,6 +120,86 @@ def _live(args: argparse.Namespace) -> int:
         session.close()
     _report_errors(session)
     return 0
+
+
+class _LearnedFeed:
+    """The learned observer's observations, held until the pipeline (with its listeners) is ready:
+    its first tick may come while the rest of ``faultmas observe`` is still starting."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._pending: list = []
+        self._target = None
+        self.live = None
+
+    def emit(self, observations) -> None:
+        with self._lock:
+            if self._target is None:
+                self._pending.extend(observations)
+                return
+        self._target(observations)
+
+    def open_into(self, target) -> None:
+        with self._lock:
+            self._target, pending, self._pending = target, self._pending, []
+        if pending:
+            target(pending)
+
+    def close(self) -> None:
+        if self.live is not None:
+            self.live.close()
+
+
+def _learned_models(args: argparse.Namespace) -> dict:
+    """The models of ``--learned`` (none without it); ``ModelFileError`` on a bad directory or file."""
+    if getattr(args, "learned", None) is None:
+        return {}
+    from detection.learned.observer import load_models
+    return load_models(args.learned)
+
+
+def _start_learned(args: argparse.Namespace, models: dict, session: Session, environment) -> _LearnedFeed:
+    """The learned ``resource`` observer on the live system, emitting into ``session.pipeline``.
+    Without ``--model`` the diagnoser's architecture is the one discovered (every watched component,
+    its topics and keys, ``resource(C)`` declared), so a ``~resource(C)`` is still diagnosed."""
+    from detection.learned.model import ModelFileError
+    from detection.learned.watch import LiveLearnedObserver
+
+    feed = _LearnedFeed()
+    try:
+        live = LiveLearnedObserver(models, _namespaces(models), feed.emit, domain_id=args.domain_id,
+                                   skip_unfit=True, zenoh_connect=args.connect)
+    except ModelFileError:
+        raise
+    except ValueError as exc:       # e.g. two teams' nodes in one domain: say so, never watch the wrong one
+        raise ModelFileError(f"--learned {args.learned}: {exc}") from None
+    for reason in live.unfit.values():
+        print(f"faultmas observe: --learned {args.learned}: not watched: {reason}", file=sys.stderr)
+    if not live.observer.models:
+        live.close()
+        raise ModelFileError(f"--learned {args.learned}: no model fits the live system (see above)")
+    if args.model is None:
+        session.use_model(_discovered_model(live), args.rules, environment)
+    feed.live = live
+    watched = ", ".join(sorted(live.observer.models))
+    print(f"faultmas observe: learned resource observer watching {watched}", file=sys.stderr)
+    return feed
+
+
+def _namespaces(models: dict) -> list[str]:
+    """The ROS namespaces the models' topics live in (``/faulty/odom`` -> ``/faulty``)."""
+    from detection.learned.observer import model_columns
+    return sorted({"/" + t.split("/")[1] for m in models.values() for t in model_columns(m)
+                   if t.startswith("/") and t.count("/") >= 2})
+
+
+def _discovered_model(live):
+    from detection.learned.watch import architecture_yaml
+    from diagnosis.architecture_yaml import load_architecture
+    from diagnosis.yaml_source import YamlSource
+
+    watched = [live.components[c] for c in live.observer.models]
+    return load_architecture(YamlSource("<discovered by --learned>", architecture_yaml("observed", watched)))
 
 
 def _run_until_stopped(args: argparse.Namespace, table) -> None:

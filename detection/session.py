@@ -19,17 +19,27 @@ class Session:
     observers: ObserverSet
     pipeline: Pipeline
 
+    def use_model(self, model, rules_path: str | Path | None = None,
+                  environment: ActionEnvironment | None = None) -> None:
+        """Diagnose with ``model`` from now on (an architecture discovered live, ``faultmas observe
+        --learned`` without ``--model``); ``rules_path`` is checked against it. Before any listener."""
+        from diagnosis.rules import load_rules
+        rules = load_rules(rules_path, model) if rules_path is not None else []
+        self.pipeline.close()
+        self.pipeline = Pipeline(model, rules, environment)
+
     def close(self) -> None:
         self.pipeline.close()
 
 
-def open_session(config_path: str | Path, model_path: str | Path | None = None,
+def open_session(config_path: str | Path | None, model_path: str | Path | None = None,
                  rules_path: str | Path | None = None, environment: ActionEnvironment | None = None) -> Session:
     """Load everything (``SourceError`` on bad input). Without ``rules_path`` the model's neighbour
-    ``NAME.rules.yaml`` is used when it exists."""
+    ``NAME.rules.yaml`` is used when it exists. Without ``config_path`` there are no observers (another
+    detector, e.g. the learned one, feeds the pipeline)."""
     from diagnosis.rules import load_rules, rules_path_for
 
-    config = load_observers(config_path)
+    config = load_observers(config_path) if config_path is not None else ObserverConfig("<no observers>", [])
     model = None
     if model_path is not None:
         from diagnosis.loader import load_model

@@ -72,6 +72,11 @@ class StatusTable:
                 state, text = verdict.state or "-", "ok" if verdict.holds else "FAULT"
             rows.append(f"{obs.name:34} {state:12} {value:>12}  {text}"
                         + (f"  ({errors} unreadable)" if errors else ""))
+        names = {obs.name for obs in self.observers.observers}
+        for o in sorted((self.last.observations.values() if self.last else ()), key=lambda o: o.name):
+            if o.name not in names:          # another detector's (the learned resource observer's)
+                value = "" if o.measured is None else f"{o.measured:.4g}"
+                rows.append(f"{o.name:34} {o.source or '-':12} {value:>12}  {'ok' if o.holds else 'FAULT'}")
         rows.append("")
         rows.append("diagnoses: " + (_diagnoses(self.last) if self.last else "-"))
         rows.append("rules fired: " + ("; ".join(self.fired) if self.fired else "none"))

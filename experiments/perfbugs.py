@@ -9,6 +9,7 @@ the missing runs of the profile first (real ROS 2 nodes; smoke: ~23 min, paper: 
     faultmas experiment perfbugs --profile smoke
     faultmas experiment perfbugs --profile paper --generate       # makes the paper's data set once
     faultmas experiment perfbugs --json --plot roc.png --save-models models/
+    faultmas experiment perfbugs --profile smoke --generate --agents --data runs-with-agents/
 """
 from __future__ import annotations
 
@@ -36,6 +37,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "experiments/data/perfbugs/PROFILE)")
     parser.add_argument("--generate", action="store_true",
                         help="record the profile's missing runs into the data directory first (real processes)")
+    parser.add_argument("--agents", action="store_true",
+                        help="with --generate: also run the team's AgentSpeak agents (faulty, helper) over Zenoh, "
+                        "as 'faultmas run --bridge ros2' does, and record them as components (their processes, "
+                        "ROS 2 topics and Zenoh keys); use another --data directory than the profile's")
     parser.add_argument("--target-fpr", type=float, default=0.005, help="target false-positive rate (default 0.005)")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
     parser.add_argument("--plot", metavar="OUT.png", help="draw the ROC curves into this file")
@@ -57,9 +62,20 @@ def main(args: argparse.Namespace) -> int:
     if not 0.0 < args.target_fpr < 0.5:
         print(f"error: --target-fpr must be between 0 and 0.5, got {args.target_fpr}", file=sys.stderr)
         return 2
+    if args.agents and not args.generate:
+        print("error: --agents goes with --generate (it says what to record)", file=sys.stderr)
+        return 2
     if args.generate:
         from detection.learned.scenario import generate
-        generate(directory, args.profile, out=sys.stderr)
+        agents = None
+        if args.agents:
+            from experiments.perfbugs_agents import CooperativeAgents
+            agents = CooperativeAgents()
+        try:
+            generate(directory, args.profile, out=sys.stderr, agents=agents)
+        except ValueError as exc:                    # e.g. runs with and without agents in one directory
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
     try:
         dataset = load(directory, progress)
         result = evaluate(dataset, args.target_fpr, progress=progress)

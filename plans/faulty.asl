@@ -241,6 +241,10 @@ where_i_am(unknown) :- not team_pose(_, _, _).    // no start_pose: the helper l
 // a helper that comes back (a frozen process thawed, a link restored) may be asked again
 +agent_alive(H) : tried(H) & not helper(H) <- -tried(H).
 
+// a fault that cannot be examined (no leg was started: the agent was frozen, or the robot silent, before it
+// moved) ends undiagnosed, named, instead of leaving the run to its timeout
+-!faultDetected(Why) : diagnosing <- .print("I cannot examine the fault (", Why, ")"); !undiagnosed([], Why).
+
 +!undiagnosed(Ds, Why)
    <- .print("undiagnosed (", Why, "); candidates: ", Ds);
       -diagnosing;

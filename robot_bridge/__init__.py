@@ -5,7 +5,8 @@
 ``logging_bridge`` (the smallest example bridge). See ``robot_bridge/README.md``.
 """
 from robot_bridge.protocol import Action, Completion, Percept, RobotBridge, completed
-from robot_bridge.registry import UnknownBridgeError, available, create, load
+from robot_bridge.registry import (UnknownBridgeError, UnknownBridgeOptionError, available, create, create_team,
+                                   load)
 
-__all__ = ["Action", "Completion", "Percept", "RobotBridge", "completed",
-           "UnknownBridgeError", "available", "create", "load"]
+__all__ = ["Action", "Completion", "Percept", "RobotBridge", "completed", "UnknownBridgeError",
+           "UnknownBridgeOptionError", "available", "create", "create_team", "load"]

@@ -80,6 +80,97 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     bridges = sim_sub.add_parser("bridges", help="list the robot bridges installed (entry-point group)")
     bridges.set_defaults(func=list_bridges)
 
+    serve = sim_sub.add_parser(
+        "serve", help="serve a simulated world over Zenoh to agents started by hand with --bridge zenoh",
+        description="Serve the robots of one simulated world over Zenoh (robot_bridge.sim.server), side by side "
+                    "1.5 m apart, all facing +x, each with a camera, until Ctrl-C or --timeout. Agents started by "
+                    "hand drive them: `faultmas agent run PLAN.asl --name ROBOT --mas MAS --connect ENDPOINT "
+                    "--bridge zenoh` (docs/bridges.md).")
+    serve.add_argument("--mas", required=True, help="the MAS the agents join (the robots' key prefix)")
+    serve.add_argument("--robots", default="faulty,helper",
+                       help="comma-separated robot names, one per agent (default: %(default)s)")
+    serve.add_argument("--fault", action="append", default=[], metavar="ROBOT=KIND",
+                       help="inject fault KIND (e.g. encoders, left_actuator:0.5) into ROBOT (repeatable)")
+    serve.add_argument("--listen", action="append", default=None, metavar="ENDPOINT",
+                       help="endpoint the agents connect to (repeatable; default tcp/127.0.0.1:7447)")
+    serve.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
+                       help="also connect to this peer or router (repeatable)")
+    serve.add_argument("--seed", type=int, default=0, help="seed of the simulator's noise (default %(default)s)")
+    serve.add_argument("--speed", type=float, default=0.0,
+                       help="simulated seconds per wall second; 0: as fast as possible while anything moves "
+                            "(default %(default)s)")
+    serve.add_argument("--timeout", type=float, default=None, metavar="S",
+                       help="stop after S seconds (default: run until interrupted)")
+    serve.set_defaults(func=serve_world)
+
+
+DEFAULT_SERVE_LISTEN = "tcp/127.0.0.1:7447"
+
+
+def serve_world(args: argparse.Namespace) -> int:
+    """``faultmas sim serve``: one world, its robots served over Zenoh until SIGINT/SIGTERM or ``--timeout``."""
+    import signal
+    import threading
+
+    from robot_bridge.sim.faults import Fault
+
+    names = [n.strip() for n in args.robots.split(",") if n.strip()]
+    faults: dict[str, str] = {}
+    try:
+        if not names or len(set(names)) != len(names):
+            raise ValueError(f"--robots needs distinct names, got {args.robots!r}")
+        for text in args.fault:
+            robot, sep, kind = text.partition("=")
+            if not sep or robot.strip() not in names:
+                raise ValueError(f"--fault expects ROBOT=KIND with ROBOT among {', '.join(names)}, got {text!r}")
+            Fault.parse(kind.strip())
+            faults[robot.strip()] = kind.strip()
+        if args.speed < 0:
+            raise ValueError(f"--speed must be >= 0, got {args.speed:g}")
+    except ValueError as exc:
+        print(f"faultmas sim serve: {exc}", file=sys.stderr)
+        return 2
+    import zenoh
+
+    from agents.router import start_failure
+    from agents.transport.config import ZenohOptions, build_config, listen_endpoints
+    from robot_bridge.sim.bridge import SimBridge
+    from robot_bridge.sim.server import SimServer
+
+    config = build_config(ZenohOptions(listen=tuple(args.listen or (DEFAULT_SERVE_LISTEN,)),
+                                       connect=tuple(args.connect)))
+    try:
+        session = zenoh.open(config)
+    except zenoh.ZError as exc:
+        print(f"faultmas sim serve: {start_failure(listen_endpoints(config), str(exc))}", file=sys.stderr)
+        return 1
+    bridges = SimBridge.for_team(names, seed=args.seed, speed=args.speed, camera=True)
+    world = next(iter(bridges.values())).world
+    for name, bridge in bridges.items():
+        bridge.setup()
+        world.set_fault(name, faults.get(name, "none"))
+    server = SimServer(session, args.mas, bridges).start()
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
+    endpoint = listen_endpoints(config)[0]
+    robots = ", ".join(f"{name} (fault {faults.get(name, 'none')})" for name in names)
+    print(f"faultmas sim serve: robots {robots} of MAS {args.mas} on {endpoint}; drive one with: faultmas agent "
+          f"run PLAN.asl --name ROBOT --mas {args.mas} --connect {endpoint} --bridge zenoh", flush=True)
+    try:
+        stop.wait(args.timeout)
+    finally:
+        server.stop()
+        for bridge in bridges.values():
+            bridge.shutdown()
+        session.close()
+    for name in names:   # where each robot ended, and what it believes: the run's outcome at a glance
+        x, y, yaw = world.pose(name)
+        odom = world.odometry(name)
+        print(f"{name}: truth ({x:.3f}, {y:.3f}, {yaw:.1f} deg)  odometry ({odom.x:.3f}, {odom.y:.3f})")
+    print(f"faultmas sim serve: {server.requests} action requests served")
+    return 0
+
 
 def list_bridges(args: argparse.Namespace) -> int:
     from robot_bridge.registry import GROUP, available

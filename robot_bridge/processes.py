@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import signal
 import subprocess
+import threading
 import time
-from typing import Iterable, Sequence
+from typing import Callable, Iterable, Sequence
 
 ESCALATION: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM, signal.SIGKILL)
 
@@ -32,3 +33,48 @@ def stop_processes(processes: Iterable[subprocess.Popen], grace: float,
                 proc.wait(max(0.0, deadline - time.monotonic()))
             except subprocess.TimeoutExpired:
                 pass
+
+
+def frozen(processes: dict[str, subprocess.Popen]) -> list[str]:
+    """The names of the processes stopped now (SIGSTOP, a debugger): alive, yet doing nothing."""
+    import psutil
+
+    names = []
+    for name, proc in processes.items():
+        try:
+            if proc.poll() is None and psutil.Process(proc.pid).status() in (psutil.STATUS_STOPPED,
+                                                                            psutil.STATUS_TRACING_STOP):
+                names.append(name)
+        except psutil.Error:  # ended meanwhile
+            pass
+    return names
+
+
+class FreezeWatch:
+    """Samples ``processes()`` every ``interval`` seconds in a thread of its own and adds up how long each was
+    stopped (SIGSTOP): a run that goes wrong or times out names the processes that froze, even if they were
+    continued since (a freeze explains a timeout that slowness would not)."""
+
+    def __init__(self, processes: Callable[[], dict[str, subprocess.Popen]], interval: float = 0.5) -> None:
+        self.processes = processes
+        self.interval = interval
+        self.stopped_seconds: dict[str, float] = {}
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._watch, daemon=True, name="faultmas-freeze-watch")
+
+    def __enter__(self) -> "FreezeWatch":
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._done.set()
+        self._thread.join(5.0)
+
+    def _watch(self) -> None:
+        while not self._done.wait(self.interval):
+            for name in frozen(self.processes()):
+                self.stopped_seconds[name] = self.stopped_seconds.get(name, 0.0) + self.interval
+
+    def report(self) -> list[tuple[str, float]]:
+        """(name, seconds seen stopped) of every process that froze, frozen now or not."""
+        return sorted(self.stopped_seconds.items())

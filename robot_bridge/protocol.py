@@ -73,10 +73,19 @@ class RobotBridge(abc.ABC):
     """
 
     name: ClassVar[str] = "abstract"
+    known_options: ClassVar[dict[str, str] | None] = None
+    """Option name -> meaning, for a bridge that reads ``**options`` itself; None: its ``__init__``'s keyword
+    parameters are its options (``robot_bridge.registry.known_options``). Other keys are refused by name."""
 
     def __init__(self, robot: str, **options: object) -> None:
         self.robot = robot
         self.options = options
+
+    @classmethod
+    def for_team(cls, robots: list[str], **options: object) -> "dict[str, RobotBridge]":
+        """One bridge per robot of a team, not yet set up. Each robot is its own by default; a bridge whose
+        robots must share something (the simulator: one world) overrides this."""
+        return {robot: cls(robot, **options) for robot in robots}
 
     @abc.abstractmethod
     def setup(self, timeout: float = 5.0) -> None:

@@ -28,3 +28,20 @@ def test_every_plug_in_internal_action_is_in_the_reference() -> None:
              if getattr(spec.function, "__module__", "") in plug_in_modules]
     assert added and not before
     assert [name for name in added if f"`{name}(" not in DOC] == []
+
+
+def test_no_doc_points_outside_the_repository() -> None:
+    """A user has the repository (or the installed package) only: a relative path that leaves it is a dead end."""
+    import re
+
+    repo = Path(__file__).resolve().parents[1]
+    leaving = []
+    for doc in [repo / "README.md", *sorted((repo / "docs").glob("*.md")), *sorted(repo.glob("*/README.md"))]:
+        text = doc.read_text(encoding="utf-8")
+        for match in re.finditer(r"(?<![\w/.])(?:\.\./)+[\w.-]+", text):
+            # a Markdown link is relative to its file; a path in the text, to the repository (as `tests/`)
+            base = doc.parent if text[:match.start()].endswith("](") else repo
+            target = (base / match.group(0)).resolve()
+            if repo not in target.parents:
+                leaving.append(f"{doc.relative_to(repo)}: {match.group(0)}")
+    assert leaving == []

@@ -14,7 +14,7 @@ from abc import ABC, abstractmethod
 from collections import Counter
 from contextlib import contextmanager
 from threading import get_ident
-from typing import Any, Callable, Iterable, Iterator
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator
 
 from agents.transport.envelope import (BATCH_BYTES, BATCH_SEPARATOR, DEFAULT_MAX_SIZE, QUESTIONS, BadMessage,
                                        Envelope, decode, split_batch)
@@ -22,6 +22,9 @@ from agents.transport.drop_log import DropLog
 from agents.transport.keys import check_name
 from agents.transport.outbox import Outbox
 from agents.transport.status import AgentStatus
+
+if TYPE_CHECKING:
+    from agents.transport.identity import Identity
 
 log = logging.getLogger("faultmas.transport")
 
@@ -123,17 +126,21 @@ class Presence:
 
 
 class _Encoded:
-    """The wire bytes of one envelope, computed on first use (a broadcast encodes once)."""
+    """The wire bytes of one envelope, computed on first use (a broadcast encodes once); signed by its
+    sender in the secure profile (``identity``)."""
 
-    __slots__ = ("envelope", "payload")
+    __slots__ = ("envelope", "payload", "identity")
 
-    def __init__(self, envelope: Envelope) -> None:
+    def __init__(self, envelope: Envelope, identity: "Identity | None" = None) -> None:
         self.envelope = envelope
         self.payload: bytes | None = None
+        self.identity = identity
 
     def __call__(self) -> bytes:
         if self.payload is None:
             self.payload = self.envelope.encode()
+            if self.identity is not None:
+                self.payload = self.identity.seal(self.envelope.sender, self.payload)
         return self.payload
 
 
@@ -151,9 +158,13 @@ class Transport(ABC):
     ``dropped`` counts refused messages by reason (see ``envelope.DROP_REASONS``).
     """
 
-    def __init__(self, mas: str, *, max_message_size: int = DEFAULT_MAX_SIZE) -> None:
+    def __init__(self, mas: str, *, max_message_size: int = DEFAULT_MAX_SIZE,
+                 identity: "Identity | None" = None) -> None:
         self.mas = check_name(mas, "MAS name")
         self.max_message_size = max_message_size
+        self.identity = identity
+        """The secure profile (``identity.Identity``): what goes out is signed, what comes in must be
+        signed by a member's key and fresh. None: the default profile (names are claims)."""
         self.dropped: Counter[str] = Counter()
         self._drop_log = DropLog(log)
         self.sent: Counter[str] = Counter()       # by sender
@@ -221,7 +232,7 @@ class Transport(ABC):
         if envelope.mas != self.mas:
             raise ValueError(f"envelope for MAS {envelope.mas!r} sent on the transport of MAS {self.mas!r}")
         unreachable = []
-        encoded = _Encoded(envelope)
+        encoded = _Encoded(envelope, self.identity)
         local = self._agents
         for receiver in envelope.receivers:
             if receiver in local:  # served without the network (FIFO per pair holds: always this path)
@@ -291,7 +302,10 @@ class Transport(ABC):
     def _receive(self, agent: str, payload: bytes, where: str) -> bool:
         """Decode and check one message and hand it to ``agent``'s callback; False if refused."""
         try:
-            envelope = decode(payload, self.max_message_size)
+            if self.identity is None:
+                envelope = decode(payload, self.max_message_size)
+            else:
+                envelope = self._open_signed(agent, payload)
         except BadMessage as bad:
             self._drop(bad.reason, where or agent, bad.sender, bad.detail)
             return False
@@ -302,6 +316,22 @@ class Transport(ABC):
         else:
             return self._hand_over(agent, envelope)
         return False
+
+    def _open_signed(self, agent: str, payload: bytes) -> Envelope:
+        """The secure profile's check: signed by the key of the sender it names, never seen before."""
+        if len(payload) > self.max_message_size:
+            raise BadMessage("too_large", f"{len(payload)} bytes > limit {self.max_message_size}")
+        decoded: list[Envelope] = []
+
+        def sender_of(document: bytes) -> str:
+            decoded.append(decode(document, self.max_message_size))
+            return decoded[-1].sender
+
+        _, seq = self.identity.open(payload, sender_of)
+        envelope = decoded[-1]
+        if envelope.mas == self.mas and agent in envelope.receivers:  # else dropped as before, not remembered
+            self.identity.check_fresh(envelope.sender, agent, seq)
+        return envelope
 
     def _deliver(self, agent: str, envelope: Envelope) -> bool:
         """Deliver one envelope to a local agent (a group of one)."""

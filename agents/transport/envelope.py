@@ -99,7 +99,8 @@ def is_valid_name(name: object) -> bool:
 
 
 class BadMessage(FaultmasError, ValueError):
-    """A received message that is dropped; ``reason`` is one of ``DROP_REASONS``."""
+    """A received message that is dropped; ``reason`` is one of ``DROP_REASONS`` (or, in the secure profile,
+    of ``identity.IDENTITY_DROP_REASONS``)."""
 
     def __init__(self, reason: str, detail: str = "", sender: str | None = None) -> None:
         self.reason = reason

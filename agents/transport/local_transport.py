@@ -39,8 +39,8 @@ class LocalTransport(Transport):
     """A ``Transport`` whose network is a ``LocalBus`` (a private one by default)."""
 
     def __init__(self, mas: str, bus: LocalBus | None = None, *, wire: bool = False,
-                 max_message_size: int = DEFAULT_MAX_SIZE) -> None:
-        super().__init__(mas, max_message_size=max_message_size)
+                 max_message_size: int = DEFAULT_MAX_SIZE, identity: Any = None) -> None:
+        super().__init__(mas, max_message_size=max_message_size, identity=identity)
         self.bus = bus or LocalBus()
         self.wire = wire
         self._statuses: dict[str, AgentStatus] = {}

@@ -17,7 +17,7 @@ from typing import Any, Callable
 from agents.transport import keys
 from agents.transport.base import Transport, log
 from agents.transport.config import ZenohOptions, build_config, listen_endpoints
-from agents.transport.envelope import DEFAULT_MAX_SIZE, Envelope
+from agents.transport.envelope import DEFAULT_MAX_SIZE, BadMessage, Envelope
 from agents.transport.status import AgentStatus
 
 
@@ -29,8 +29,8 @@ class ZenohTransport(Transport):
     """A ``Transport`` over a Zenoh session (its own, or one the process already has)."""
 
     def __init__(self, mas: str, options: ZenohOptions | None = None, *, session: Any = None,
-                 max_message_size: int = DEFAULT_MAX_SIZE) -> None:
-        super().__init__(mas, max_message_size=max_message_size)
+                 max_message_size: int = DEFAULT_MAX_SIZE, identity: Any = None) -> None:
+        super().__init__(mas, max_message_size=max_message_size, identity=identity)
         self.options = options or ZenohOptions()
         self.session = session
         self._owns_session = session is None
@@ -146,14 +146,29 @@ class ZenohTransport(Transport):
         self._presence.update(agent, sample.kind == zenoh.SampleKind.PUT)
 
     def _on_control(self, sample: Any) -> None:
+        payload = sample.payload.to_bytes()
         try:
-            message = json.loads(sample.payload.to_bytes())
+            message = self._open_control(payload)
             if not isinstance(message, dict) or not isinstance(message.get("command"), str):
                 raise ValueError("expected an object with a string 'command'")
-        except ValueError as exc:
+        except BadMessage as bad:
+            self._drop(bad.reason, str(sample.key_expr), bad.sender, bad.detail)
+            return
+        except (ValueError, RecursionError) as exc:
             self._drop("bad_control", str(sample.key_expr), None, str(exc)[:80])
             return
         self._control_received(message)
+
+    def _open_control(self, payload: bytes) -> Any:
+        """The control message in ``payload``. In the secure profile a signed one has its ``by`` proved
+        (or is refused); an unsigned one loses its ``by``, a mere claim (a launcher proves itself with
+        its token instead, see ``agents.zenoh_arch``)."""
+        if self.identity is None or b',"sig":"' not in payload:
+            message = json.loads(payload)
+            if self.identity is not None and isinstance(message, dict):
+                message.pop("by", None)
+            return message
+        return self.identity.open_control(payload)
 
     def _on_status(self, sample: Any) -> None:
         try:
@@ -175,7 +190,10 @@ class ZenohTransport(Transport):
 
     # -- control and status ----------------------------------------------------------------------
     def _publish_control(self, message: dict[str, Any]) -> None:
-        self._control_publisher.put(json.dumps(message, separators=(",", ":")))
+        if self.identity is not None and self.identity.can_sign(str(message.get("by"))):
+            self._control_publisher.put(self.identity.seal_control(message))
+        else:
+            self._control_publisher.put(json.dumps(message, separators=(",", ":")))
 
     def _publish_status(self, status: AgentStatus) -> None:
         self._statuses[status.agent] = status

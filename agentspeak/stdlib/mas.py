@@ -2,6 +2,7 @@
 intention. Each follows Jason 3.3's class of the same name in ``jason/stdlib``."""
 from __future__ import annotations
 
+import itertools
 import os
 import re
 
@@ -31,6 +32,17 @@ def create_agent(ctx, name, source, options=None):
         raise wrong_arguments(".create_agent: the source is a string (a file name)")
     created = create(agent, wanted, source)
     return ctx.unify(name, created) if isinstance(name, Var) else True
+
+
+@internal_action(".clone", args=1)
+def clone(ctx, name):
+    """``.clone(Name)``: a new agent of this MAS with a copy of this agent's beliefs, rules and plans
+    (Jason's: no goals, events or intentions are copied)."""
+    make = getattr(ctx.agent.arch, "clone_agent", None)
+    if make is None:
+        raise IAError("ia_failed", f"the architecture of {ctx.agent.name} cannot clone agents")
+    make(ctx.agent, _text(name))
+    return True
 
 
 @internal_action(".kill_agent", args=1)
@@ -152,6 +164,9 @@ def _label_term(plan: Plan) -> Literal:
     return lit
 
 
+_anonymous_ids = itertools.count(1)
+
+
 def _remaining_body(im) -> tuple:
     out: list = []
     for frame in reversed(im.frames):
@@ -161,7 +176,7 @@ def _remaining_body(im) -> tuple:
 
 def im_term(im) -> Literal:
     """``im(Label, {Trigger}, {Body still to run}, [map(Var, Value), ...])`` (Jason's IntendedMeans
-    as a term); the body and trigger with the intended means' bindings applied."""
+    as a term); the trigger with the intended means' bindings applied, the body with fresh variables."""
     from agentspeak.terms import rename
     b = im.b
     fresh: dict = {}  # the term shares no variable with the running plan (Jason makes them anonymous)
@@ -172,7 +187,13 @@ def im_term(im) -> Literal:
     literal = im.event_literal if im.event_literal is not None else trig.literal
     trigger = PlanTerm(plan=Plan(Trigger(trig.op, trig.kind, copy(literal))))
     remaining = _remaining_body(im)
-    body = PlanTerm(body=tuple(instr.map_terms(copy) if hasattr(instr, "term") else instr for instr in remaining))
+    # the body as written, its variables made anonymous (Jason's IntendedMeans.getAsTerm: not the values;
+    # Jason's test manager counts each assert by this term, so two asserts of equal values stay two)
+    for v in body_variables(remaining):
+        if v not in fresh:  # Jason's UnnamedVar: `_<id><name>`, a name of its own (terms compare by text)
+            fresh[v] = Var(f"_{next(_anonymous_ids)}{'' if v.name.startswith('_') else v.name}")
+    body = PlanTerm(body=tuple(instr.map_terms(lambda t: rename(t, fresh)) if hasattr(instr, "map_terms") else instr
+                               for instr in remaining))
     # the bindings of the variables the rest of the plan still uses (Jason lists the whole unifier; the
     # values of variables the plan is done with can be large, e.g. a list of plans, and copying them
     # for every assert made Jason's test harness slow)

@@ -60,23 +60,37 @@ class Dataset:
 
 
 def component_channels(manifest: dict, component: str) -> list[tuple[str, list[str]]]:
-    """The channels of ``component`` (union over runs, sorted) with their event columns."""
+    """The channels of ``component`` (union over runs, sorted) with their event columns: a ROS 2
+    channel's are the same in every run; a JSON channel's (Zenoh) are the union over the runs, in
+    the order first seen (a path that appears only in some runs is 0 in the others)."""
     channels: dict[str, list[str]] = {}
     for run in manifest["runs"]:
         spec = run["components"].get(component)
         if spec is None:
             continue
         for topic in set(spec["inputs"]) | set(spec["outputs"]):
-            channels.setdefault(topic, run["channels"][topic]["columns"])
+            columns = channels.setdefault(topic, list(run["channels"][topic]["columns"]))
+            columns += [c for c in run["channels"][topic]["columns"] if c not in columns]
     return sorted(channels.items())
 
 
-def features_for_run(arrays, channels: list[tuple[str, list[str]]], ticks: np.ndarray) -> np.ndarray:
+def features_for_run(arrays, channels: list[tuple[str, list[str]]], ticks: np.ndarray,
+                     run_columns: dict[str, list[str]] | None = None) -> np.ndarray:
+    """``channels``' features at ``ticks``; ``run_columns`` (channel → the columns this run recorded)
+    aligns a run whose JSON channel saw other paths than the union in ``channels``."""
     parts = []
     for topic, columns in channels:
         times = event_times(arrays, topic)
         if times is not None:
             values = arrays[f"events/{topic}/x"].astype(np.float64)
+            recorded = (run_columns or {}).get(topic, columns)
+            if recorded != columns:
+                aligned = np.zeros((len(values), len(columns)))
+                where = {c: i for i, c in enumerate(recorded)}
+                for j, c in enumerate(columns):
+                    if c in where:
+                        aligned[:, j] = values[:, where[c]]
+                values = aligned
         else:                                         # silent in this run
             times, values = np.empty(0), np.empty((0, len(columns)))
         parts.append(window_features(times, values, ticks))
@@ -114,7 +128,8 @@ def load(path: str | Path, progress=None) -> Dataset:
             if f"counters/{c}" not in arrays:
                 continue
             Y = targets_from_counters(arrays[f"counters/{c}"])
-            X = features_for_run(arrays, channels[c], ticks[1:])
+            X = features_for_run(arrays, channels[c], ticks[1:],
+                                 {t: spec["columns"] for t, spec in run["channels"].items()})
             label = np.zeros(len(Y), dtype=bool)
             kind = np.full(len(Y), "", dtype=object)
             for fault in run["faults"]:

@@ -325,6 +325,29 @@ def flatten_json(value: Any, prefix: str = "") -> dict[str, float]:
     return out
 
 
+def decode_json_lines(payload: bytes) -> list[tuple[int, Any]]:
+    """The JSON values of a payload with their sizes in bytes: one per line (a batch of envelopes is
+    JSON Lines; a single message is one line). Raises ``EncodingError`` when a line is not JSON."""
+    return [(len(line), _load(line)) for line in payload.splitlines() if line.strip()]
+
+
+def vector_of(size: int, flat: dict[str, float], index: dict[str, int]) -> np.ndarray:
+    """A flattened JSON value as the vector of the columns in ``index`` (column → position, ``size``
+    at 0); paths not in ``index`` are left out, columns not in ``flat`` are 0."""
+    vector = np.zeros(len(index))
+    vector[0] = size
+    for key, number in flat.items():
+        i = index.get(key)
+        if i is not None:
+            vector[i] = number
+    return vector
+
+
+def json_columns(paths) -> list[str]:
+    """The columns of a JSON channel from the flattened paths seen on it: the size first, then sorted."""
+    return [SIZE_COLUMN] + sorted(set(paths) - {SIZE_COLUMN})
+
+
 class JsonEncoder:
     """The numbers of a JSON message (the Zenoh envelope); columns fixed from sample messages."""
 
@@ -336,24 +359,13 @@ class JsonEncoder:
     def from_samples(cls, payloads: Sequence[bytes]) -> "JsonEncoder":
         seen: dict[str, None] = {}
         for payload in payloads:
-            for line in payload.splitlines():           # a batch: one envelope per line
-                if line.strip():
-                    seen.update(dict.fromkeys(flatten_json(_load(line))))
-        return cls(sorted(seen))
+            for _, value in decode_json_lines(payload):
+                seen.update(dict.fromkeys(flatten_json(value)))
+        return cls(json_columns(seen))
 
     def encode(self, payload: bytes) -> list[np.ndarray]:
         """One vector per envelope in ``payload`` (a batch has several); unknown paths are ignored."""
-        vectors = []
-        lines = [line for line in payload.splitlines() if line.strip()]
-        for line in lines:
-            vector = np.zeros(len(self.columns))
-            vector[0] = len(line)
-            for key, number in flatten_json(_load(line)).items():
-                i = self._index.get(key)
-                if i is not None:
-                    vector[i] = number
-            vectors.append(vector)
-        return vectors
+        return [vector_of(size, flatten_json(value), self._index) for size, value in decode_json_lines(payload)]
 
 
 def _load(line: bytes) -> Any:

@@ -44,6 +44,18 @@ def model_channels(model: ComponentModel) -> list[tuple[str, int]]:
     return list(order.items())
 
 
+def model_columns(model: ComponentModel) -> dict[str, list[str]]:
+    """The event columns of each channel a model reads (from its ``channel|last|column`` features)."""
+    columns: dict[str, list[str]] = {}
+    for name in model.features:
+        topic, window, *column = name.split("|")
+        if window == "last":
+            columns.setdefault(topic, []).append(column[0])
+        else:
+            columns.setdefault(topic, [])
+    return columns
+
+
 class LearnedResourceObserver:
     """Scores every watched component at each tick; hands the observations that changed to ``emit``
     (e.g. ``Pipeline.observe``)."""

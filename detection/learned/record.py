@@ -4,7 +4,9 @@ counters of every component process, written to one compressed ``.npz`` per run.
 Layout of ``run-NNN.npz``: ``ticks`` (epoch s), per component ``counters/<component>`` (ticks ×
 ``COUNTER_NAMES``), per channel ``events/<topic>/us`` (int64 µs since ``ticks[0]`` − 10 s: small
 integers, which compress) and ``events/<topic>/x`` (float32, columns in the data set's manifest).
-Raw payloads are not kept: the encoded numbers are all the detector uses. To keep the paper data set
+Raw payloads are not kept: the encoded numbers are all the detector uses. A JSON channel (a Zenoh key,
+``on_json``) gets its columns when the run is saved: the size, then every path seen on it, sorted
+(``json_columns``; the manifest lists them per run, ``dataset`` aligns runs that saw different paths). To keep the paper data set
 under 30 MB the numbers keep 12 significant bits (``quantise``: relative error < 2^-11 ≈ 4.9e-4, far below
 the simulated sensors' noise, and a window mean of them is as good) and the zip members are LZMA
 (numpy reads them as any ``.npz``): a minute of the team is ~210 kB instead of ~390 kB.
@@ -19,6 +21,7 @@ from typing import Callable
 import numpy as np
 
 from detection.learned.counters import COUNTER_NAMES, read_counters
+from detection.learned.encoding import json_columns, vector_of
 
 TIME_ORIGIN_BEFORE_S = 10.0
 """Event times are stored relative to this long before the first tick (events precede it)."""
@@ -59,6 +62,9 @@ class RunRecorder:
         self.processes = {name: psutil.Process(pid) for name, pid in pids.items()}
         self.clock = clock
         self.events: dict[str, list[tuple[float, np.ndarray]]] = {}
+        self.json_events: dict[str, list[tuple[float, int, dict[str, float]]]] = {}
+        self.columns: dict[str, list[str]] = {}
+        """The columns of each JSON channel, known once the run is saved."""
         self.ticks: list[float] = []
         self.counters: dict[str, list[np.ndarray]] = {name: [] for name in pids}
         self.lost: list[str] = []
@@ -69,6 +75,11 @@ class RunRecorder:
     def on_event(self, t: float, topic: str, vector: np.ndarray) -> None:
         with self._lock:
             self.events.setdefault(topic, []).append((t, vector))
+
+    def on_json(self, t: float, channel: str, size: int, flat: dict[str, float]) -> None:
+        """A JSON value (``encoding.flatten_json``) of ``size`` bytes on ``channel``."""
+        with self._lock:
+            self.json_events.setdefault(channel, []).append((t, size, flat))
 
     def start(self) -> "RunRecorder":
         self._thread.start()
@@ -101,6 +112,12 @@ class RunRecorder:
         arrays: dict[str, np.ndarray] = {"ticks": np.array(self.ticks)}
         origin = (self.ticks[0] if self.ticks else 0.0) - TIME_ORIGIN_BEFORE_S
         with self._lock:
+            for channel, items in self.json_events.items():
+                columns = json_columns({key for _, _, flat in items for key in flat})
+                index = {c: i for i, c in enumerate(columns)}
+                self.columns[channel] = columns
+                self.events[channel] = [(t, vector_of(size, flat, index)) for t, size, flat in items]
+            self.json_events = {}
             for name, rows in self.counters.items():
                 arrays[f"counters/{name}"] = np.array(rows).reshape(len(rows), len(COUNTER_NAMES))
             counts = {}

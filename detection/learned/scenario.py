@@ -7,6 +7,12 @@ workload node sends patrols of ``move``/``turn``/``rotate``/``stop`` actions on 
 in phases of changing intensity; the recorder taps every topic of the team and samples every node's
 process. Profiles (``PROFILES``) say how many runs of which length; ``generate`` writes a data set
 directory: ``manifest.json`` (runs, faults, components, channels and their columns) and ``run-NNN.npz``.
+
+With an ``AgentTeam`` (``faultmas experiment perfbugs --agents``) the team's AgentSpeak agents run too,
+one process each over Zenoh, driving their robots through the ROS 2 bridge beside the workload: the
+recorder then also taps every faultmas Zenoh key (``zenoh_events``) and samples the agents'
+processes, so the agents are components (``faulty_agent``...) with their keys as channels. Detection
+never imports ``agents/``: the experiments layer hands the team in (``experiments.perfbugs_agents``).
 """
 from __future__ import annotations
 
@@ -18,7 +24,7 @@ import threading
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Callable, TextIO
+from typing import Callable, Protocol, TextIO
 
 from robot_bridge.ros2.perfbugs import ENV_VAR, KINDS, PerfBug, component_name, write_schedule
 
@@ -122,24 +128,52 @@ class Workload:
             publisher.publish(self._string(data=ActionRequest(robot, name, tuple(params), self.id).to_json()))
 
 
+class RunningAgents(Protocol):
+    endpoint: str
+    """A Zenoh endpoint (loopback) of the agents' hub, for the recorder's tap to connect to."""
+    pids: dict[str, int]
+    """Agent name → process id."""
+    fault: str
+    """The robot fault the agents' scenario injects (``fault_injector``); ``none`` for none."""
+
+    def stop(self) -> None: ...
+
+
+class AgentTeam(Protocol):
+    """Starts a team's agents over Zenoh for one run, once the ROS 2 nodes are up."""
+
+    def robot_fault(self, seed: int) -> str:
+        """The fault of the first robot's ``fault_injector`` in the run with ``seed`` (the agents' scenario)."""
+
+    def start(self, domain_id: int, seed: int) -> RunningAgents: ...
+
+
 def _domain_id(seed: int) -> int:
     return 101 + (seed + int(time.time())) % 100        # 101..200: clear of the tests' and run's ids
 
 
-def record_run(run: dict, profile: Profile, out_dir: Path, progress: Callable[[str], None]) -> dict:
-    """Launch the team, run the workload for ``profile.duration_s`` and record; returns the run's manifest entry."""
+def record_run(run: dict, profile: Profile, out_dir: Path, progress: Callable[[str], None],
+               agents: AgentTeam | None = None, domain_id: int | None = None) -> dict:
+    """Launch the team, run the workload for ``profile.duration_s`` and record; returns the run's manifest
+    entry. With ``agents`` the team's agents run over Zenoh as well and are recorded as components.
+    ``domain_id``: the ROS domain (default: one of 101..200 from the seed and the clock)."""
     from detection.learned.record import RunRecorder
     from detection.learned.ros_tap import RawTap, discover
+    from detection.learned.zenoh_events import (CHANNEL_TYPE, ZenohEventTap, adopt_bridge_nodes, agent_component,
+                                                merge_zenoh)
     from robot_bridge.ros2.launch import Supervisor, plan
     from robot_bridge.ros2.runtime import RosContext
 
     rng = random.Random(run["seed"])
-    domain = _domain_id(run["seed"])
+    domain = domain_id if domain_id is not None else _domain_id(run["seed"])
+    robot_fault = agents.robot_fault(run["seed"]) if agents is not None else "none"
+    team: RunningAgents | None = None
+    zenoh_tap: ZenohEventTap | None = None
     with tempfile.TemporaryDirectory(prefix="faultmas-perfbugs-") as tmp:
         schedule = Path(tmp) / "schedule.json"
         write_schedule(schedule, [])               # filled once the start time is known (nodes read it at start)
-        supervisor = Supervisor(plan(list(ROBOTS), camera=profile.camera, seed=run["seed"]), domain,
-                                extra_env={ENV_VAR: str(schedule)})
+        supervisor = Supervisor(plan(list(ROBOTS), fault=robot_fault, camera=profile.camera, seed=run["seed"]),
+                                domain, extra_env={ENV_VAR: str(schedule)})
         bugs: list[PerfBug] = []
         supervisor.start()
         try:
@@ -147,13 +181,23 @@ def record_run(run: dict, profile: Profile, out_dir: Path, progress: Callable[[s
             if missing or supervisor.dead():
                 raise RuntimeError(f"run {run['id']}: nodes did not come up (missing {sorted(missing)})")
             pids = {component_name(s.robot, s.node): p.pid for s, p in zip(supervisor.specs, supervisor.processes)}
+            if agents is not None:
+                team = agents.start(domain, run["seed"])
             with RosContext(domain_id=domain) as ros:
                 import rclpy
                 probe = ros.add(rclpy.create_node("faultmas_perfbugs_recorder", context=ros.context))
                 time.sleep(2.0)                                     # the graph settles
+                if team is not None:
+                    _wait_for_bridge_nodes(probe, team, run["id"])
                 components, topic_types = discover(probe, [f"/{r}" for r in ROBOTS])
-                recorder = RunRecorder({name: pids[name] for name in components})
+                if team is not None:
+                    components = adopt_bridge_nodes(components, team.pids)
+                agent_pids = {agent_component(a): pid for a, pid in team.pids.items()} if team else {}
+                pids.update(agent_pids)
+                recorder = RunRecorder({name: pids[name] for name in {*components, *agent_pids}})
                 tap = RawTap(probe, topic_types, recorder.on_event)
+                if team is not None:
+                    zenoh_tap = ZenohEventTap(recorder.on_json, connect=[team.endpoint])
                 Workload(probe, ROBOTS, run["seed"])
                 time.sleep(WARMUP_S)
                 recorder.start()
@@ -169,21 +213,44 @@ def record_run(run: dict, profile: Profile, out_dir: Path, progress: Callable[[s
                         raise RuntimeError(f"run {run['id']}: a node died: {supervisor.dead()}")
                     time.sleep(min(5.0, max(0.0, end - time.time())))
                     progress(f"run {run['id']}: {time.time() - began:4.0f}/{profile.duration_s:.0f} s, "
-                             f"{tap.received} messages")
+                             f"{tap.received} messages" + (f", {zenoh_tap.received} on Zenoh" if zenoh_tap else ""))
                 recorder.stop()
         finally:
+            if zenoh_tap is not None:
+                zenoh_tap.close()
+            if team is not None:
+                team.stop()
             supervisor.stop()
     counts = recorder.save(out_dir / f"run-{run['id']:03d}.npz")
-    return {"id": run["id"], "seed": run["seed"], "file": f"run-{run['id']:03d}.npz", "start": began,
-            "duration_s": profile.duration_s, "faults": [b.to_dict() for b in bugs],
-            "components": {n: c.to_dict() for n, c in components.items()},
-            "channels": {t: {"type": topic_types[t], "columns": tap.encoders[t].columns, "events": counts.get(t, 0)}
-                         for t in topic_types}, "dropped": tap.dropped, "lost_processes": recorder.lost}
+    channels = {t: {"type": topic_types[t], "columns": tap.encoders[t].columns, "events": counts.get(t, 0)}
+                for t in topic_types}
+    entry = {"id": run["id"], "seed": run["seed"], "file": f"run-{run['id']:03d}.npz", "start": began,
+             "duration_s": profile.duration_s, "faults": [b.to_dict() for b in bugs],
+             "components": {n: c.to_dict() for n, c in components.items()},
+             "channels": channels, "dropped": tap.dropped, "lost_processes": recorder.lost}
+    if team is not None:                 # only then: runs without agents keep their layout
+        agent_components = zenoh_tap.channels.components(team.pids)
+        merge_zenoh(components, agent_components)
+        entry["components"] = {n: c.to_dict() for n, c in components.items()}
+        channels.update({k: {"type": CHANNEL_TYPE, "columns": recorder.columns[k], "events": counts.get(k, 0)}
+                         for k in recorder.columns})
+        entry["agents"] = {"agents": sorted(team.pids), "robot_fault": team.fault,
+                           "silent": sorted(set(map(agent_component, team.pids)) - set(agent_components)),
+                           "dropped": zenoh_tap.dropped}
+    return entry
+
+
+def _wait_for_bridge_nodes(probe, team: RunningAgents, run_id: int, timeout: float = 90.0) -> None:
+    from detection.learned.zenoh_events import wait_for_bridge_nodes
+
+    if wait_for_bridge_nodes(probe, team.pids, timeout):
+        raise RuntimeError(f"run {run_id}: the agents' ROS 2 nodes did not come up within {timeout:.0f} s")
 
 
 def generate(out_dir: str | Path, profile_name: str, seed: int = 0, out: TextIO = sys.stderr,
-             only: list[int] | None = None) -> Path:
-    """Make (or complete) the data set of ``profile_name`` in ``out_dir``; runs already there are kept."""
+             only: list[int] | None = None, agents: AgentTeam | None = None) -> Path:
+    """Make (or complete) the data set of ``profile_name`` in ``out_dir``; runs already there are kept.
+    ``agents``: the team's agents run (and are recorded) too; see ``record_run``."""
     profile = PROFILES[profile_name]
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -193,12 +260,17 @@ def generate(out_dir: str | Path, profile_name: str, seed: int = 0, out: TextIO 
     import signal
     if threading.current_thread() is threading.main_thread():      # SIGTERM stops the nodes too
         signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
+    if manifest["runs"] and bool(manifest.get("agents")) != (agents is not None):
+        raise ValueError(f"{manifest_path}: its runs were recorded {'with' if manifest.get('agents') else 'without'} "
+                         "the agents; record the other kind into another directory (--data)")
+    if agents is not None:
+        manifest["agents"] = True          # only then: manifests without agents keep their keys
     done = {r["id"] for r in manifest["runs"]}
     todo = [r for r in run_plan(profile, seed) if r["id"] not in done and (only is None or r["id"] in only)]
     for n, run in enumerate(todo, 1):
         what = f"{run['kind']} in {run['component']}" if run["kind"] else "fault-free"
         print(f"[{n}/{len(todo)}] run {run['id']} ({what})", file=out, flush=True)
-        entry = record_run(run, profile, out_dir, lambda text: print(f"  {text}", file=out, flush=True))
+        entry = record_run(run, profile, out_dir, lambda text: print(f"  {text}", file=out, flush=True), agents)
         manifest["runs"] = sorted([*manifest["runs"], entry], key=lambda r: r["id"])
         manifest_path.write_text(json.dumps(manifest, indent=1))     # after every run: an interrupted
     return out_dir                                                     # generation resumes where it was

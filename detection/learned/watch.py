@@ -7,13 +7,17 @@ every component is a node with the topics it publishes and subscribes, and decla
 from __future__ import annotations
 
 import re
-from typing import Callable, Iterable
+from typing import Callable, Iterable, Sequence
 
 from detection.learned.encoding import RosEncoder
 from detection.learned.features import feature_names
 from detection.learned.model import ComponentModel, ModelFileError
-from detection.learned.observer import LearnedResourceObserver, model_channels, node_processes
+from detection.learned.observer import LearnedResourceObserver, model_channels, model_columns, node_processes
 from detection.learned.ros_tap import Component, RawTap, discover
+from detection.learned.zenoh_events import (AGENT_NODE, ZenohFeed, adopt_bridge_nodes, agent_component,
+                                            agent_processes, is_zenoh_channel, mas_of, wait_for_bridge_nodes)
+
+AGENT_SUFFIX = "_" + AGENT_NODE
 from detection.observation import Observation
 
 
@@ -39,33 +43,49 @@ def architecture_yaml(name: str, components: Iterable[Component]) -> str:
 
 
 class LiveLearnedObserver:
-    """Runs a ``LearnedResourceObserver`` on a ROS 2 domain until ``close()``."""
+    """Runs a ``LearnedResourceObserver`` on a ROS 2 domain (and on Zenoh for agents' models) until ``close()``.
+
+    The ROS 2 components come from the graph under ``namespaces``; an agent's component (a model whose
+    channels include Zenoh keys, ``zenoh_events``) is its ROS 2 bridge node under its name, plus the
+    keys its model was trained on, tapped on a Zenoh session of ours connected to ``zenoh_connect``
+    (loopback endpoints; never multicast). Zenoh's samples are queued and taken in the ROS 2 reader's
+    thread at each tick, so the buffers are only ever touched by one thread."""
 
     def __init__(self, models: dict[str, ComponentModel], namespaces: list[str], emit: Callable[[list[Observation]], object],
                  domain_id: int | None = None, confirm: tuple[int, int] = (3, 5), settle_s: float = 10.0,
-                 skip_unfit: bool = False) -> None:
-        """``settle_s``: how long discovery may take at most. ``skip_unfit``: watch only the components
-        whose model fits the live system (the others are listed in ``unfit``) instead of refusing with a
-        ``ModelFileError``."""
+                 skip_unfit: bool = False, zenoh_connect: Sequence[str] = (), agents_timeout_s: float = 30.0) -> None:
+        """``settle_s``: how long discovery may take at most (it is looked at again until every model's
+        component fits). ``skip_unfit``: watch only the components whose model fits the live system (the
+        others are listed in ``unfit``) instead of refusing with a ``ModelFileError``. ``agents_timeout_s``: how
+        long to wait for the ROS 2 bridge nodes of the agents the models watch (agents start slowly)."""
         import time
 
         import rclpy
 
         from robot_bridge.ros2.runtime import RosContext
 
-        self.tap = None
+        zenoh_columns = {c: {t: cols for t, cols in model_columns(m).items() if is_zenoh_channel(t)}
+                         for c, m in models.items()}
+        agents = [c[:-len(AGENT_SUFFIX)] for c, cols in zenoh_columns.items() if cols and c.endswith(AGENT_SUFFIX)]
+        self.zenoh: ZenohFeed | None = None
+        self.tap: RawTap | None = None
         self.ros = RosContext(domain_id=domain_id).start()
         try:
             node = self.ros.add(rclpy.create_node("faultmas_learned_resource", context=self.ros.context))
-            deadline = time.monotonic() + settle_s          # discovery has no fixed delay (slower on a busy host):
-            while True:                                     # look again until every model's component fits
+            wait_for_bridge_nodes(node, agents, agents_timeout_s)    # missing ones: their models are unfit
+            deadline = time.monotonic() + settle_s   # discovery has no fixed delay (slower on a busy host):
+            self.unfit = {}
+            while True:                              # look again until every model's component fits
                 time.sleep(0.5)
-                self.components, topic_types = discover(node, namespaces, ignore_nodes=[node.get_name()])
+                components, topic_types = discover(node, namespaces, ignore_nodes=[node.get_name()])
+                self.components = adopt_bridge_nodes(components, agents)
+                for agent in agents:                 # an agent whose bridge node is not (yet) in the graph
+                    self.components.setdefault(agent_component(agent), Component(agent_component(agent), "", agent))
                 missing = sorted(set(models) - set(self.components))
                 if not missing:
                     columns = {t: RosEncoder.for_type(ty).columns for t, ty in topic_types.items()}
                     self.unfit = {c: reason for c, m in models.items()
-                                  if (reason := self._unfit(c, m, self.components[c], columns))}
+                                  if (reason := self._unfit(c, m, self.components[c], {**columns, **zenoh_columns[c]}))}
                 if time.monotonic() >= deadline or not (missing or self.unfit):
                     break
             if missing:
@@ -73,26 +93,43 @@ class LiveLearnedObserver:
             if self.unfit and not skip_unfit:
                 raise ModelFileError("; ".join(self.unfit.values()))
             models = {c: m for c, m in models.items() if c not in self.unfit}
-            processes = node_processes([self.components[c] for c in models], domain_id)
+            agent_names = {agent_component(a): a for a in agents}
+            nodes = [self.components[c] for c in models if c not in agent_names]
+            processes = node_processes(nodes, domain_id) if nodes else {}
+            for c, agent in agent_names.items():   # by MAS too: another MAS on this host may have an agent of that name
+                if c in models:
+                    processes.update(agent_processes([agent], mas_of(zenoh_columns[c]), zenoh_connect))
             self.observer = LearnedResourceObserver(models, processes, emit, confirm)
+            keys = {t: cols for c in models for t, cols in zenoh_columns[c].items()}
+            if keys:
+                self.zenoh = ZenohFeed(keys, self.observer.on_event, connect=zenoh_connect)
             self.tap = RawTap(node, {t: ty for t, ty in topic_types.items() if t in self.observer.buffers},
-                              self.observer.on_event, on_tick=self.observer.tick)   # one thread: no race
+                              self.observer.on_event, on_tick=self._tick)   # the reader's thread: no race
         except BaseException:
-            self.ros.close()
+            self.close()
             raise
+
+    def _tick(self) -> None:
+        if self.zenoh is not None:
+            self.zenoh.drain()
+        self.observer.tick()
 
     @staticmethod
     def _unfit(name: str, model: ComponentModel, component: Component, columns: dict[str, list[str]]) -> str:
-        """Why ``model`` cannot watch ``component`` as it runs now ('' when it can)."""
-        live = [n for topic in component.channels for n in feature_names(topic, columns.get(topic, []))]
+        """Why ``model`` cannot watch ``component`` as it runs now ('' when it can). A Zenoh key's
+        columns are the model's own (``columns`` has them): JSON values have no type to compare."""
+        channels = sorted(set(component.channels) | {t for t in columns if is_zenoh_channel(t)})
+        live = [n for topic in channels for n in feature_names(topic, columns.get(topic, []))]
         if live == model.features:
             return ""
         trained = {topic for topic, _ in model_channels(model)}
-        return (f"model of {name!r} does not fit the live system (channels now: {len(component.channels)}, "
-                f"in training: {len(trained)}; new: {sorted(set(component.channels) - trained)[:3]}, "
-                f"gone: {sorted(trained - set(component.channels))[:3]}, or other message types); train it again")
+        return (f"model of {name!r} does not fit the live system (channels now: {len(channels)}, "
+                f"in training: {len(trained)}; new: {sorted(set(channels) - trained)[:3]}, "
+                f"gone: {sorted(trained - set(channels))[:3]}, or other message types); train it again")
 
     def close(self) -> None:
         if self.tap is not None:
             self.tap.close()
+        if self.zenoh is not None:
+            self.zenoh.close()
         self.ros.close()

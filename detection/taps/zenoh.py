@@ -1,5 +1,10 @@
 """The live Zenoh tap: a subscriber per topic key expression, liveliness tokens for ``activated``.
 
+``ZenohKeys`` is the transport part, shared by every detector that listens on Zenoh: one session (its
+own loopback peer, never multicast, or one given), raw payloads of key expressions and liveliness
+changes handed to callbacks. ``ZenohTap`` feeds them to the observers; the learned detector
+(``detection.learned.zenoh_events``) encodes them.
+
 A configured topic ``/robot1/scan`` is the key expression ``robot1/scan``; payloads are decoded as JSON
 only when an observer reads a field (``score``, ``movement``; ``timestamp`` reads ``header.stamp``).
 ``activated(node)`` holds while a liveliness token whose key is the node's name, or ends with
@@ -38,16 +43,51 @@ def key_of(topic: str) -> str:
     return topic.strip("/")
 
 
-class ZenohTap(LiveTap):
-    def __init__(self, config: ObserverConfig, observers: ObserverSet,
-                 on_observations: Callable[[list[Observation]], None], *, session=None,
-                 connect: Sequence[str] = (), clock: Callable[[], int] = time.time_ns) -> None:
-        super().__init__(config, observers, on_observations, clock=clock)
+class ZenohKeys:
+    """Raw samples on one Zenoh session: ``subscribe(key_expr, fn)`` calls ``fn(key, payload)`` on
+    Zenoh's threads; ``liveliness(key_expr, fn)`` calls ``fn(key, alive)`` (history included)."""
+
+    def __init__(self, *, session=None, connect: Sequence[str] = ()) -> None:
         import zenoh
 
         self._owns = session is None
         self.session = session if session is not None else zenoh.open(zenoh_config(connect))
         self._declared: list = []
+
+    def subscribe(self, key_expr: str, on_sample: Callable[[str, bytes], None]) -> None:
+        self._declared.append(self.session.declare_subscriber(
+            key_expr, lambda sample: on_sample(str(sample.key_expr), sample.payload.to_bytes())))
+
+    def liveliness(self, key_expr: str, on_change: Callable[[str, bool], None]) -> None:
+        import zenoh
+
+        self._declared.append(self.session.liveliness().declare_subscriber(
+            key_expr, lambda sample: on_change(str(sample.key_expr), sample.kind == zenoh.SampleKind.PUT),
+            history=True))
+
+    def publisher(self, key: str):
+        pub = self.session.declare_publisher(key)
+        self._declared.append(pub)
+        return pub
+
+    def close(self) -> None:
+        for d in self._declared:
+            try:
+                d.undeclare()
+            except Exception:       # already gone with the session
+                pass
+        self._declared = []
+        if self._owns:
+            self.session.close()
+
+
+class ZenohTap(LiveTap):
+    def __init__(self, config: ObserverConfig, observers: ObserverSet,
+                 on_observations: Callable[[list[Observation]], None], *, session=None,
+                 connect: Sequence[str] = (), clock: Callable[[], int] = time.time_ns) -> None:
+        super().__init__(config, observers, on_observations, clock=clock)
+        self.keys = ZenohKeys(session=session, connect=connect)
+        self.session = self.keys.session
         self._alive: set[str] = set()
         self._stop = threading.Event()
         self._timer: threading.Thread | None = None
@@ -55,21 +95,17 @@ class ZenohTap(LiveTap):
     def start(self) -> "ZenohTap":
         self.begin()
         for topic in self.config.topics:
-            self._declared.append(self.session.declare_subscriber(
-                key_of(topic), lambda sample, t=topic: self.feed(t, raw=sample.payload.to_bytes(), decode=json.loads)))
+            self.keys.subscribe(key_of(topic), lambda key, payload, t=topic: self.feed(t, raw=payload, decode=json.loads))
         if self.config.nodes:
-            self._declared.append(self.session.liveliness().declare_subscriber("**", self._on_token, history=True))
+            self.keys.liveliness("**", self._on_token)
             self.graph(frozenset())
         self._timer = threading.Thread(target=self._ticks, daemon=True, name="faultmas-zenoh-tap")
         self._timer.start()
         return self
 
-    def _on_token(self, sample) -> None:
-        import zenoh
-
-        key = str(sample.key_expr)
+    def _on_token(self, key: str, alive: bool) -> None:
         with self._lock:
-            (self._alive.add if sample.kind == zenoh.SampleKind.PUT else self._alive.discard)(key)
+            (self._alive.add if alive else self._alive.discard)(key)
             names = frozenset(n for k in self._alive for n in ("/" + k, "/" + k.rsplit("/", 1)[-1]))
         self.graph(names)
 
@@ -80,18 +116,11 @@ class ZenohTap(LiveTap):
 
     def info_publisher(self, key: str = INFO_KEY):
         """A pipeline listener putting each ``Update`` as JSON on ``key``."""
-        pub = self.session.declare_publisher(key)
-        self._declared.append(pub)
+        pub = self.keys.publisher(key)
         return lambda update: pub.put(json.dumps(update.to_json()))
 
     def close(self) -> None:
         self._stop.set()
         if self._timer is not None:
             self._timer.join(2.0)
-        for d in self._declared:
-            try:
-                d.undeclare()
-            except Exception:       # already gone with the session
-                pass
-        if self._owns:
-            self.session.close()
+        self.keys.close()

@@ -26,6 +26,12 @@ from robot_bridge.protocol import Action, Completion, Percept, RobotBridge, comp
 from robot_bridge.ros2 import wire
 from robot_bridge.ros2.manifest import ActionMapping, PerceptionMapping, load_actions, load_perceptions
 
+
+def agent_node_name(agent: str) -> str:
+    """The ROS 2 node through which ``agent`` drives its robot (``faultmas_agent_<agent>``, in the
+    robot's namespace); observers find an agent's ROS side by it."""
+    return f"faultmas_agent_{agent}".replace("-", "_")
+
 class Ros2Bridge(RobotBridge):
     """Drives one robot through its ROS 2 nodes (``motion_decomposer`` and the percept synthesizers).
 
@@ -36,6 +42,15 @@ class Ros2Bridge(RobotBridge):
     """
 
     name: ClassVar[str] = "ros2"
+    known_options: ClassVar[dict[str, str]] = {
+        "namespace": "the robot's ROS namespace (default /<robot>)",
+        "agent_name": "the agent name in the wire messages (default the robot name)",
+        "domain_id": "the ROS domain id (default ROS_DOMAIN_ID)",
+        "action_timeout": "seconds an action may take (default: from the action's own time bound)",
+        "actions_manifest": "a jason_ros actions manifest (INI file)",
+        "perceptions_manifest": "a jason_ros perceptions manifest (INI file)",
+        "wait_for_robot": "setup waits until a decomposer listens (default true)",
+    }
 
     def __init__(self, robot: str, **options: Any) -> None:
         super().__init__(robot, **options)
@@ -65,7 +80,7 @@ class Ros2Bridge(RobotBridge):
 
         domain = None if self.domain_id is None else int(self.domain_id)
         self._ros = RosContext(domain_id=domain)
-        node_name = f"faultmas_agent_{self.agent_name}".replace("-", "_")
+        node_name = agent_node_name(self.agent_name)
         import rclpy
         self._node = node = rclpy.create_node(node_name, namespace=self.namespace, context=self._ros.context)
         self._actions = node.create_publisher(String, "jason/actions", RELIABLE)

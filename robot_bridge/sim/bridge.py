@@ -32,6 +32,9 @@ log = logging.getLogger(__name__)
 NAME_RADIUS_M = 0.6
 """How far from a robot's centre a detection may be and still be named after that robot."""
 
+TEAM_SPACING_M = 1.5
+"""How far apart ``SimBridge.for_team`` places a team's robots (the paper's Faulty and Helper: 1.5 m)."""
+
 FRAME_TTL_S = 1.0
 """Camera percepts vanish this long (simulated seconds) after the frame that produced them."""
 
@@ -55,6 +58,17 @@ class SimBridge(RobotBridge):
         self._ready = False
         self._seen: tuple[float, list[Percept]] = (-1.0, [])
         self._unsubscribe = None
+
+    @classmethod
+    def for_team(cls, robots: list[str], **options: object) -> "dict[str, SimBridge]":
+        """The team's robots in one shared world (``world=``, or a new one of ``seed``), side by side
+        ``TEAM_SPACING_M`` apart along -y from (``x``, ``y``), all facing ``yaw_deg`` (the paper's pair: the
+        second robot 1.5 m to the right of the first); the other options go to every robot."""
+        options = dict(options)
+        world = options.pop("world", None) or World(seed=int(options.get("seed", 0)))
+        x, y = float(options.pop("x", 0.0)), float(options.pop("y", 0.0))
+        return {robot: cls(robot, world=world, x=x, y=y - TEAM_SPACING_M * i, **options)
+                for i, robot in enumerate(robots)}
 
     def setup(self, timeout: float = 5.0) -> None:
         """Put the robot into the world (unless already there) and start the shared clock."""

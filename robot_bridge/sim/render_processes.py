@@ -405,11 +405,11 @@ def _attach(name: str, size: int) -> mmap.mmap:
 
 
 def _render_into(segment: mmap.mmap, offset: int, job: tuple) -> None:
-    from robot_bridge.sim import camera
+    from robot_bridge.sim.camera.pipeline import _render
 
     rig, pose, robots, scene, seed = job
-    camera._render(rig, pose, robots, scene, np.random.default_rng(seed), count=False,
-                   out=frame_views(segment, offset, job))
+    _render(rig, pose, robots, scene, np.random.default_rng(seed), count=False,
+            out=frame_views(segment, offset, job))
 
 
 def serve(recv_conn: Connection, send_conn: Connection) -> None:
@@ -420,7 +420,7 @@ def serve(recv_conn: Connection, send_conn: Connection) -> None:
 
     import cv2
 
-    from robot_bridge.sim import camera  # noqa: F401  (imported before "ready": the first frame is not slow)
+    import robot_bridge.sim.camera.pipeline  # noqa: F401  (imported before "ready": the first frame is not slow)
 
     cv2.setNumThreads(1)                    # one core per process: threads would only contend
     objects: dict[int, Any] = {}

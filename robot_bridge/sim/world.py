@@ -23,6 +23,7 @@ import numpy as np
 from robot_bridge import percepts as vocabulary
 from robot_bridge.protocol import Completion, Percept
 from robot_bridge.sim import faults, imu, kobuki, motion, odometry
+from robot_bridge.sim.camera_frame import CameraFrame
 from robot_bridge.sim.faults import NO_FAULT, Fault
 from robot_bridge.sim.odometry_fusion import OdometryFusion, Pose2D
 
@@ -48,20 +49,6 @@ class CameraMount:
     rate_hz: float = 10.0
     rig: object | None = None
     """A ``robot_bridge.sim.camera.CameraRig`` (intrinsics, height, offset); ``None``: the default Kinect."""
-
-
-@dataclass(frozen=True)
-class CameraFrame:
-    """One rendered image: RGB (H x W x 3 uint8) and registered depth (H x W float32 m, 0 = no reading)."""
-
-    robot: str
-    time: float
-    pose: tuple[float, float, float]
-    """Pose of the optical centre in the world (x, y, yaw rad) when the frame was taken."""
-    camera: object
-    """The ``perception.camera.CameraModel`` (intrinsics) of the frame."""
-    rgb: np.ndarray
-    depth: np.ndarray
 
 
 OVER_CURRENT_HOLD_S = 1.0

@@ -22,8 +22,10 @@ def test_tell_achieve_untell_broadcast_and_sources():
    .broadcast(tell, hello).
 """
     lines = run_mas({"alice": alice, "bob": BOB})
+    # untell is no fast path in Jason: it becomes +!kqml_received(alice, untell, ...), whose plan posts
+    # the -price event only when that event is selected, a cycle after `tell hello` was read
     assert _lines(lines, "bob") == ["[bob] got3self", "[bob] got10alice", "[bob] hialice",
-                                    "[bob] lost10alice", "[bob] helloalice"]
+                                    "[bob] helloalice", "[bob] lost10alice"]
 
 
 def test_ask_one_ask_all_and_no_answer():
@@ -59,3 +61,19 @@ def test_told_belief_has_sender_source_and_untell_removes_only_that_source():
 def test_annotated_answer_does_not_unify_as_left_side():
     alice = "!start.\n+!start <- .send(bob, askOne, item(X), A); A = item(V); .print(never).\n-!start[error(E)] <- .print(E).\n"
     assert run_mas({"alice": alice, "bob": "item(a).\n"}) == ["[alice] constraint_failed"]
+
+
+def test_an_ask_is_answered_after_the_goal_sent_before_it():
+    """Jason handles askOne as the event +!kqml_received(...) when it is selected, not when the message
+    is read: a plan for it added by a goal achieved just before (the same sender's previous message)
+    answers it (Jason's own test_kqml_simple_send)."""
+    maria = """
+        ready.            // its event comes first: maria's events lag one cycle behind her messages
+        +ready <- true.
+        +!gg <- .add_plan({+!kqml_received(S, askOne, fullname, M) <- .send(S, tell, name("Maria"), M)}, kk, begin).
+    """
+    bob = """!s.
+        +!s <- .send(maria, achieve, gg); .send(maria, askOne, fullname, X); .print(X).
+    """
+    lines = run_mas({"bob": bob, "maria": maria})  # bob first: both messages wait when maria starts
+    assert lines == ['[bob] name("Maria")[source(maria)]']

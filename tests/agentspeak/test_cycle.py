@@ -110,6 +110,21 @@ def test_fork_join_xor_continues_after_first_and_drops_other():
     assert run_asl(src) == ["c1", "d1", "one"]
 
 
+def test_fork_join_groups_in_parentheses():
+    """Jason's ``(plan body)`` as a fork operand (demos/concurrent-goals): ``|&|`` binds tighter than
+    ``|||``, parentheses group, and a parenthesised sequence runs in order."""
+    src = """!m.
++!m <- !c(3) |&| (!a(5) ||| !b(1)); .print(joined); (.print(s1); .print(s2)); (X = 1); .print(X).
++!a(0).
++!a(N) <- .print(a,N); !a(N-1).
++!b(0).
++!b(N) <- .print(b,N); !b(N-1).
++!c(0).
++!c(N) <- .print(c,N); !c(N-1).
+"""
+    assert run_asl(src) == ["c3", "a5", "b1", "c2", "a4", "c1", "joined", "s1", "s2", "1"]
+
+
 def test_plan_terms_add_and_remove():
     src = """!m.
 +!m <- +{ @dl +!dyn(X) <- .print(dyn, X) }; !dyn(1);

@@ -141,3 +141,14 @@ def test_a_function_registered_after_a_parse_is_seen_by_the_next_parse_of_the_sa
         FUNCTIONS.functions.pop("latecomer.triple", None)
     assert type(before.plans[0].body[0].term.right) is not Func
     assert type(after.plans[0].body[0].term.right) is Func
+
+
+def test_a_rule_function_of_unbound_arguments_waits_until_they_are_bound():
+    """Jason's capply leaves a function it cannot compute yet as it is: a rule function in a .findall
+    query inside a rule is computed per solution (Jason's demos/search, a_star.asl)."""
+    src = ('{ register_function("my.h", 2, "h") }\n'
+           'h(S, G, H) :- H = math.abs(G - S).\n'
+           'q(L) :- .findall(N, (.member(S, [1, 2]) & N = my.h(S, 9) + 0), L).\n'
+           '!g.\n'
+           '+!g <- ?q(L); .print(L).\n')
+    assert run_asl(src) == ["[8,7]"]

@@ -218,6 +218,48 @@ def test_intention_describes_the_stack_as_jason():
         out[0].startswith("running sub")
 
 
+def test_intention_body_keeps_variables_not_values():
+    """Jason's ``IntendedMeans.getAsTerm`` makes the body's variables anonymous instead of applying the
+    unifier, so the same formula run twice with equal values gives two different terms (Jason's test
+    manager counts each assert by this term)."""
+    out = run_asl(asl("""
+        !start.
+        +!start <- X = 1; !check(X); !check(X); .count(seen(_), N); .print(N).
+        +!check(_) : .intention(_, _, [im(_, _, { Cur; _ }, _)|_], current) <- +seen(Cur).
+    """))
+    assert out == ["2"]
+
+
+def test_a_body_taken_from_a_plan_prints_without_braces():
+    """Jason's PlanBody out of a plan is no term of its own: it prints without ``{ }``, so
+    ``.substring(".send(", B, 0)`` holds for ``B`` of ``{@L +!T : C <- B}`` (Jason's own send test)."""
+    out = run_asl(asl("""
+        !g.
+        +!go <- .send(bob, tell, x); .print(y).
+        +!g <- .relevant_plans({+!go}, [{@L +!T : C <- B}]); .print(B);
+               if (.substring(".send(", B, 0)) { .print(yes) }; X = { .print(a) }; .print(X).
+    """))
+    assert out == [".send(bob,tell,x); .print(y)", "yes", "{ .print(a) }"]
+
+
+def test_univ_on_a_plan_and_running_its_body_formula_by_formula():
+    """``Plan =.. [L, T, C, B]`` (Jason's Plan.getAsListOfTerms) and ``{H; R}`` taking the whole first
+    formula, which runs when executed (Jason's demos/meta-programming, its output)."""
+    out = run_asl(asl("""
+        b(10).
+        !start.
+        @test +!g1 : b(10) <- ?b(X); .print(X); !g(X).
+        +!g(X) <- .print(ok, X).
+        +!start <- .relevant_plans({+!g1}, [Plan|_]); Plan =.. [L, T, C, B];
+                   if (C) { .print("run ", T); !show_run(B) }.
+        +!show_run({}) <- .print("end").
+        +!show_run({H; R}) <- .print("command ", H); H; !show_run(R).
+    """))
+    assert [line for line in out if not line.startswith("command ?b(")] == [
+        "run +!g1", "command .print(10)", "10", "command !g(10)", "ok10", "end"]
+    assert len(out) == 7 and out[1].startswith("command ?b(")
+
+
 def test_type_reports_jason_types():
     out = run_asl(asl("""
         !g.
@@ -304,7 +346,7 @@ def test_variable_plan_label_in_a_plan_term():
         @mine[test] +!g <- .relevant_plans({+!g}, [P]); P = {@L +!T : C <- B}; .print(L); .print(B).
     """))
     assert out[0].startswith("mine[")
-    assert out[1].startswith("{ .relevant_plans")
+    assert out[1].startswith(".relevant_plans")  # a body taken from a plan prints without braces (Jason)
 
 
 # -- messages ------------------------------------------------------------------------------------------
@@ -355,3 +397,15 @@ def test_sets_queues_and_maps_as_jason():
                .map.get(M, zz, V, none); .print(V); .findall(K, .map.key(M, K), Ks); .print(Ks).
     """))
     assert out == ["{a,b,c}", "3", "z [y]", "[b,c,d]", "{a->1,b->2}", "none", "[a,b]"]
+
+
+def test_clone_copies_beliefs_and_plans_but_not_goals():
+    """Jason's ``.clone(Name)`` (demos/clone): the copy has the beliefs and plans of the moment it was
+    made, runs none of the goals, and answers messages."""
+    from tests.agentspeak.harness import run_mas
+    main = """test(1).
+        !start.
+        +!start <- +a(40); .clone("bob"); .send(bob, tell, p(10)); .print(started).
+        +p(X) : a(V) & test(T) <- .print(X, " : ", V + T).
+    """
+    assert run_mas({"main": main}) == ["[main] started", "[bob] 10 : 41"]

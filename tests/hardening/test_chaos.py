@@ -58,3 +58,37 @@ def test_an_agent_that_dies_before_it_is_reachable_does_not_hold_the_others(tmp_
     assert "[a] started" in run.out
     assert time.monotonic() - started < 50  # not after the 60 s wait for b (generous for a loaded machine)
     assert any("died before they became reachable" in line and "b" in line for line in run.err)
+
+
+def test_a_stopped_process_is_named_as_frozen_and_no_longer_once_it_continues():
+    """What a run says about a freeze (``RunResult.frozen``): the process stopped by SIGSTOP, and for how long
+    (``FreezeWatch``), even once it was continued."""
+    import subprocess
+    import sys
+
+    import psutil
+
+    from robot_bridge.processes import FreezeWatch, frozen
+
+    sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    watch = FreezeWatch(lambda: {"sleeper": sleeper}, interval=0.1).__enter__()
+    try:
+        assert frozen({"sleeper": sleeper}) == []
+        sleeper.send_signal(signal.SIGSTOP)
+        deadline = time.monotonic() + 10
+        while psutil.Process(sleeper.pid).status() != psutil.STATUS_STOPPED and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert frozen({"sleeper": sleeper, "gone": subprocess.Popen([sys.executable, "-c", ""])}) == ["sleeper"]
+        time.sleep(0.5)  # the watch samples every 0.1 s
+        sleeper.send_signal(signal.SIGCONT)
+        deadline = time.monotonic() + 10
+        while psutil.Process(sleeper.pid).status() == psutil.STATUS_STOPPED and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert frozen({"sleeper": sleeper}) == []
+        watch.__exit__()
+        [(name, seconds)] = watch.report()
+        assert name == "sleeper" and seconds > 0
+    finally:
+        watch.__exit__()
+        sleeper.kill()
+        sleeper.wait()

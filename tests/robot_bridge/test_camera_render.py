@@ -225,19 +225,20 @@ def test_small_cylinders_drawn_together_give_the_pixels_of_drawing_each_in_its_b
     """Far, small cylinders are z-buffered all at once (``_draw_small_cylinders``); the frame, the marker
     pixel counts and the projector shadows must be exactly what drawing them one by one gives."""
     from robot_bridge.sim import camera
+    from robot_bridge.sim.camera import objects
 
-    monkeypatch.setattr(camera, "_ZBUFFER", None)        # numpy draws (test_zbuffer compares the compiled loop)
+    monkeypatch.setattr(objects, "_ZBUFFER", None)        # numpy draws (test_zbuffer compares the compiled loop)
     batched = []
-    spy = camera._draw_small_cylinders
-    monkeypatch.setattr(camera, "_draw_small_cylinders", lambda r, drawn, batch, *a: (batched.append(len(batch)),
+    spy = objects._draw_small_cylinders
+    monkeypatch.setattr(objects, "_draw_small_cylinders", lambda r, drawn, batch, *a: (batched.append(len(batch)),
                                                                                       spy(r, drawn, batch, *a)))
     robots, scene = _crowd()
     samples = [(RIG, CAMERA, robots, scene)] + [(s.rig, s.camera_pose, s.robots, s.scene)
                                                 for s in map(random_scene, range(12))]
     for rig, pose, robots, scene in samples:
         frames = []
-        for limit in (0, camera._BATCH_PX, 10 ** 9):          # one by one, as shipped, all together
-            monkeypatch.setattr(camera, "_BATCH_PX", limit)
+        for limit in (0, objects._BATCH_PX, 10 ** 9):          # one by one, as shipped, all together
+            monkeypatch.setattr(objects, "_BATCH_PX", limit)
             frames.append(camera._render(rig, pose, robots, scene, np.random.default_rng(3), count=count))
         for rgb, depth, pixels in frames[1:]:
             assert np.array_equal(rgb, frames[0][0]) and np.array_equal(depth, frames[0][1])

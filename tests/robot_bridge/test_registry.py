@@ -62,3 +62,44 @@ def test_a_users_bridge_is_found_through_the_entry_point_group(installed_plugin)
     assert bridge.act(Action("moov", (0.5,))).result(0).reason == "unknown_action"
     assert [str(a) for a in bridge.log] == ["move(0.5)"]
     bridge.shutdown()
+
+
+def test_an_unknown_option_is_refused_with_the_bridges_options():
+    with pytest.raises(registry.UnknownBridgeOptionError,
+                       match=r"robot bridge 'sim' has no option 'fualt'; its options: .*camera.*fault.*speed"):
+        robot_bridge.create("sim", "faulty", fualt="encoders")
+    with pytest.raises(registry.UnknownBridgeOptionError, match=r"'ros2' has no option 'domain'; .*domain_id"):
+        robot_bridge.create("ros2", "faulty", domain=3)
+    with pytest.raises(registry.UnknownBridgeOptionError, match=r"its options: none"):
+        robot_bridge.create("robot_bridge.logging_bridge:LoggingBridge", "faulty", speed=1)
+    assert robot_bridge.create("sim", "faulty", fault="encoders", seed=2).robot == "faulty"
+
+
+def test_options_come_from_the_declaration_or_the_constructor():
+    assert {"world", "fault", "camera", "speed"} <= set(registry.known_options(SimBridge))
+    assert registry.known_options(SimBridge)["speed"] == "default 0.0"
+    assert set(registry.known_options(registry.load("zenoh"))) == {"mas", "session", "connect", "action_timeout"}
+    assert "domain_id" in registry.known_options(registry.load("ros2"))
+
+
+def test_command_line_options_become_values():
+    assert registry.parse_options(["seed=3", "speed=0.5", "camera=true", "mas=coop", "seed=4"]) == \
+        {"seed": 4, "speed": 0.5, "camera": True, "mas": "coop"}
+    with pytest.raises(ValueError, match="KEY=VALUE, got 'seed'"):
+        registry.parse_option("seed")
+
+
+def test_a_simulated_team_shares_one_world_side_by_side():
+    team = robot_bridge.create_team("sim", ["faulty", "helper", "third"], seed=5)
+    worlds = {id(bridge.world) for bridge in team.values()}
+    assert len(worlds) == 1
+    for bridge in team.values():
+        bridge.setup()
+    try:
+        world = team["faulty"].world
+        assert [world.pose(name)[:2] for name in team] == [(0.0, 0.0), (0.0, -1.5), (0.0, -3.0)]
+    finally:
+        for bridge in team.values():
+            bridge.shutdown()
+    with pytest.raises(registry.UnknownBridgeOptionError):
+        robot_bridge.create_team("sim", ["a"], sped=1)

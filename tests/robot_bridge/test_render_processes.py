@@ -66,11 +66,19 @@ def test_pixels_kept_by_a_reader_stay_intact_and_a_slot_is_reused_once_nobody_ho
     pool.render(_unread_frames(4, 0.25))                    # new frames must not overwrite the kept ones
     assert all(_same_as_rendered_here(f) for f in kept)
     depth_only = from_worker[0].depth                       # a reader keeping just one image holds the slot
+    size = sum(frame_bytes(kept[0].job))                    # every frame here has the same size
     del kept, from_worker, held
-    slots = sum(len(seg) for seg in worker.segments.values())
-    for _ in range(3):                                      # nothing kept: the same slots serve again
+    slots = sum(len(seg) for seg in worker.segments.values()) // size
+    assert len(worker.free) + len(worker.released) == slots - 1, "a slot nobody holds was not given back"
+    # Nothing kept: the freed slots serve again. How many frames of a render the worker takes varies
+    # with the machine's load, so a render may need more slots at once than the earlier ones did; with
+    # reuse, no render needs more than its frames plus the one held. Without reuse, ten renders would
+    # add at least one slot each.
+    per_render = len(_unread_frames(4, 0.25))
+    bound = max(slots, SLOTS_PER_SEGMENT * -(-(per_render + 1) // SLOTS_PER_SEGMENT))
+    for _ in range(10):
         pool.render(_unread_frames(4, 0.25))
-    assert sum(len(seg) for seg in worker.segments.values()) == slots
+    assert sum(len(seg) for seg in worker.segments.values()) // size <= bound
     assert depth_only.shape == (480, 640) and depth_only.any()
 
 

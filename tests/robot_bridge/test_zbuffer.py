@@ -11,6 +11,7 @@ import pytest
 
 from agentspeak import _speedups
 from robot_bridge.sim import camera, zbuffer
+from robot_bridge.sim.camera import objects
 from robot_bridge.sim.render_scenes import random_scene
 from tests.robot_bridge.test_camera_render import CAMERA, RIG, _crowd
 
@@ -21,7 +22,7 @@ needs_build = pytest.mark.skipif(not BUILT, reason="the z-buffer loop is not bui
 @pytest.mark.skipif(not _speedups.c_compiler_available(), reason="no C compiler: numpy draws")
 def test_a_machine_with_a_compiler_draws_with_the_compiled_loop():
     assert BUILT, "no _zbuffer.json: run make speedups"
-    assert camera._ZBUFFER is not None and zbuffer.load() is not None
+    assert objects._ZBUFFER is not None and zbuffer.load() is not None
 
 
 @needs_build
@@ -39,7 +40,7 @@ def test_the_compiled_loop_gives_the_pixels_counts_and_shadows_of_numpy(monkeypa
     for rig, pose, robots, scene in samples:
         frames = []
         for loop in (compiled, None):
-            monkeypatch.setattr(camera, "_ZBUFFER", loop)
+            monkeypatch.setattr(objects, "_ZBUFFER", loop)
             frames.append(camera._render(rig, pose, robots, scene, np.random.default_rng(5), count=count))
         (rgb, depth, pixels), (rgb_np, depth_np, pixels_np) = frames
         assert np.array_equal(rgb, rgb_np) and np.array_equal(depth, depth_np)

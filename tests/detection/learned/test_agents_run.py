@@ -1,0 +1,132 @@
+"""A short real run with the agents (``faultmas experiment perfbugs --generate --agents``): the ROS 2 team,
+the workload, and Faulty's and Helper's AgentSpeak agents in their own processes over Zenoh. The
+recorder must make each agent a component, with its process's counters, its ROS 2 bridge topics and the
+Zenoh keys it sends and receives on, and leave the ROS 2 channels' columns as in runs without agents."""
+from __future__ import annotations
+
+import json
+import os
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'faultmas[ros2]')")
+
+DOMAIN = 1 + (os.getpid() + 37) % 100
+
+
+@pytest.fixture(scope="module")
+def agents_run(tmp_path_factory):
+    from detection.learned.scenario import Profile, record_run
+    from experiments.perfbugs_agents import CooperativeAgents
+
+    out = tmp_path_factory.mktemp("agents-run")
+    profile = Profile("agents-test", fault_free_runs=1, faulty_runs=0, duration_s=20.0, camera=False,
+                      fault_length_s=(5.0, 10.0))
+    entry = record_run({"id": 0, "seed": 3, "kind": None}, profile, out, lambda text: None,
+                       agents=CooperativeAgents(), domain_id=DOMAIN)
+    manifest = {"format": 1, "profile": {"name": profile.name}, "agents": True, "runs": [entry]}
+    (out / "manifest.json").write_text(json.dumps(manifest))
+    return out, entry
+
+
+@pytest.mark.timeout(240)
+def test_the_agents_are_components_with_their_processes_topics_and_zenoh_keys(agents_run):
+    out, entry = agents_run
+    for agent in ("faulty", "helper"):
+        spec = entry["components"][f"{agent}_agent"]
+        channels = set(spec["inputs"]) | set(spec["outputs"])
+        keys = {c for c in channels if not c.startswith("/")}
+        assert f"/{agent}/jason/actions" in spec["outputs"], spec            # its ROS 2 bridge node
+        assert "faultmas/coop/control" in spec["outputs"], spec              # its progress reports ("agent": A)
+        for key in keys:
+            assert entry["channels"][key]["type"] == "zenoh/json"
+            assert entry["channels"][key]["columns"][0] == "size"
+        assert sum(entry["channels"][k]["events"] for k in keys) > 0
+    control = entry["channels"]["faultmas/coop/control"]["columns"]
+    assert {"agent#len", "command#len", "step#len"} <= set(control)        # generic: the JSON's own fields
+    with np.load(out / entry["file"]) as arrays:
+        counters = arrays["counters/faulty_agent"]
+        assert counters.shape[1] == 8 and len(counters) >= 15 and np.isfinite(counters).all()
+        assert counters[-1, 0] > counters[0, 0]                 # the agent's process did use CPU
+        assert len(arrays["events/faultmas/coop/control/x"]) > 0
+
+
+def test_ros_channels_keep_the_columns_of_runs_without_agents(agents_run):
+    from experiments.perfbugs import data_dir
+
+    _, entry = agents_run
+    smoke = json.loads((data_dir("smoke") / "manifest.json").read_text())["runs"][0]["channels"]
+    ros = {t: spec for t, spec in entry["channels"].items() if t.startswith("/") and t in smoke}
+    assert "/faulty/odom" in ros
+    for topic, spec in ros.items():
+        assert spec["columns"] == smoke[topic]["columns"], topic
+
+
+def test_the_run_loads_as_a_data_set_with_agent_features(agents_run):
+    from detection.learned.dataset import load
+
+    out, _ = agents_run
+    dataset = load(out)
+    samples = dataset.components["helper_agent"]
+    assert any(name.startswith("faultmas/coop/") for name in samples.features)
+    assert any(name.startswith("/helper/") for name in samples.features)
+    assert samples.X.shape == (len(samples.Y), len(samples.features)) and len(samples.Y) >= 15
+
+
+@pytest.mark.timeout(240)
+def test_a_model_of_an_agent_watches_it_live_over_ros2_and_zenoh(agents_run):
+    """The online path for an agent: its model's channels (bridge topics and Zenoh keys) fit the live
+    agent, its process is found by its command line, its keys' samples reach the buffers, and it is
+    scored. The model is the recorded run's feature layout with a neutral fit (no training needed to
+    test the plumbing; detection quality is the data set's evaluation's job)."""
+    import rclpy
+
+    from detection.learned.counters import TARGET_NAMES
+    from detection.learned.dataset import load
+    from detection.learned.model import ComponentModel
+    from detection.learned.scenario import ROBOTS, Workload
+    from detection.learned.watch import LiveLearnedObserver
+    from experiments.perfbugs_agents import CooperativeAgents
+    from robot_bridge.ros2.launch import Supervisor, plan
+    from robot_bridge.ros2.runtime import RosContext
+
+    out, _ = agents_run
+    features = load(out).components["faulty_agent"].features
+    d, k = len(features), len(TARGET_NAMES)
+    model = ComponentModel("faulty_agent", features, list(TARGET_NAMES), np.zeros(d), np.ones(d), np.zeros(k),
+                           np.ones(k), np.zeros((k, d)), np.zeros(k), np.zeros(k), np.eye(k), threshold=1e12,
+                           target_fpr=0.005)
+    domain = 1 + (os.getpid() + 41) % 100
+    agents = CooperativeAgents()
+    supervisor = Supervisor(plan(list(ROBOTS), fault=agents.robot_fault(3), camera=False, seed=3), domain)
+    supervisor.start()
+    team = live = None
+    emitted: list = []
+    try:
+        assert supervisor.wait_ready(90) == set()
+        team = agents.start(domain, 3)
+        with RosContext(domain_id=domain) as work:
+            Workload(work.add(rclpy.create_node("perfbugs_workload", context=work.context)), ROBOTS, seed=3)
+            time.sleep(3.0)
+            live = LiveLearnedObserver({"faulty_agent": model}, [f"/{r}" for r in ROBOTS], emitted.extend, domain,
+                                       zenoh_connect=[team.endpoint])
+            assert live.observer.processes["faulty_agent"].pid == team.pids["faulty"]
+            keys = [t for t in live.observer.buffers if not t.startswith("/")]
+            assert "faultmas/coop/agent/faulty/inbox" in keys
+            drained = []
+            drain = live.zenoh.drain
+            live.zenoh.drain = lambda: drained.append(drain()) or drained[-1]
+            deadline = time.monotonic() + 60
+            while (not emitted or sum(drained) == 0) and time.monotonic() < deadline:
+                time.sleep(0.5)
+    finally:
+        if live is not None:
+            live.close()
+        if team is not None:
+            team.stop()
+        supervisor.stop()
+    assert sum(drained) > 0, "no Zenoh sample of the agents reached the observer"
+    assert [o.literal for o in emitted][:1] == ["resource(faulty_agent)"]
+    assert emitted[0].source == "learned" and np.isfinite(emitted[0].measured)
