@@ -566,6 +566,9 @@ def parse_program_all_errors(text: str, source_file: str = "<string>") -> tuple[
 
 _CLAUSE_START = re.compile(r"^(?=[+\-@!^a-z~{])", re.M)
 
+#: ``faultmas asl check`` reports at most this many syntax errors of one file, then says it stopped.
+MAX_ERRORS = 100
+
 
 def _parse(text: str, source_file: str, stop_at_first: bool) -> tuple[Program, list]:
     program = Program(source_file=source_file)
@@ -589,6 +592,10 @@ def _parse(text: str, source_file: str, stop_at_first: bool) -> tuple[Program, l
             err = _to_syntax_error(exc, text, remaining, source_file, offset_line)
             errors.append(err)
             if stop_at_first:
+                break
+            if len(errors) >= MAX_ERRORS:  # each one re-parses the rest: 30,000 errors took minutes (issue 22)
+                errors.append(AslSyntaxError(f"too many errors ({MAX_ERRORS}); the rest of the file is not checked",
+                                             source_file, err.line, None, None))
                 break
             # re-synchronise: go on at the next line, after the error, that can start a clause
             lines = remaining.split("\n")

@@ -49,22 +49,25 @@ def load_frame(rgb_path: str, depth_path: str):
     if bgr is None:
         raise InputError(f"{rgb_path}: cannot read it as an image (expected a colour PNG)")
     try:
-        depth = np.load(depth_path, allow_pickle=False)
-    except (OSError, ValueError, EOFError) as exc:
-        raise InputError(f"{depth_path}: cannot read it as a .npy array ({exc})") from None
+        # mapped, not read: a header claiming a huge shape costs nothing until the shape is checked below
+        depth = np.load(depth_path, allow_pickle=False, mmap_mode="r")
+    except Exception as exc:  # numpy's header reader raises SyntaxError, tokenize.TokenError, ValueError, ...
+        raise InputError(f"{depth_path}: cannot read it as a .npy array ({type(exc).__name__}: "
+                         f"{str(exc)[:120]})") from None
     if depth.ndim == 3 and depth.shape[2] == 1:
         depth = depth[:, :, 0]
     if depth.ndim != 2:
         raise InputError(f"{depth_path}: expected a 2-D depth array (H x W), got shape {depth.shape}")
+    if depth.shape != bgr.shape[:2]:
+        raise InputError(f"{depth_path}: depth is {depth.shape[1]}x{depth.shape[0]} but {rgb_path} is "
+                         f"{bgr.shape[1]}x{bgr.shape[0]}; they must be registered (same size)")
+    depth = np.array(depth)  # into memory, now that its size is the image's
     if depth.dtype == np.uint16:
         depth = depth.astype(np.float32) / 1000.0                 # 16UC1 millimetres
     elif depth.dtype.kind == "f":
         depth = np.nan_to_num(depth.astype(np.float32), nan=0.0, posinf=0.0, neginf=0.0)
     else:
         raise InputError(f"{depth_path}: expected float32 metres (or uint16 millimetres), got {depth.dtype}")
-    if depth.shape != bgr.shape[:2]:
-        raise InputError(f"{depth_path}: depth is {depth.shape[1]}x{depth.shape[0]} but {rgb_path} is "
-                         f"{bgr.shape[1]}x{bgr.shape[0]}; they must be registered (same size)")
     return cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB), np.where(depth > 0, depth, 0).astype(np.float32)
 
 

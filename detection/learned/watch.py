@@ -52,12 +52,15 @@ class LiveLearnedObserver:
     thread at each tick, so the buffers are only ever touched by one thread."""
 
     def __init__(self, models: dict[str, ComponentModel], namespaces: list[str], emit: Callable[[list[Observation]], object],
-                 domain_id: int | None = None, confirm: tuple[int, int] = (3, 5), settle_s: float = 10.0,
-                 skip_unfit: bool = False, zenoh_connect: Sequence[str] = (), agents_timeout_s: float = 30.0) -> None:
-        """``settle_s``: how long discovery may take at most (it is looked at again until every model's
-        component fits). ``skip_unfit``: watch only the components whose model fits the live system (the
-        others are listed in ``unfit``) instead of refusing with a ``ModelFileError``. ``agents_timeout_s``: how
-        long to wait for the ROS 2 bridge nodes of the agents the models watch (agents start slowly)."""
+                 domain_id: int | None = None, confirm: tuple[int, int] = (3, 5), settle_s: float = 2.0,
+                 skip_unfit: bool = False, zenoh_connect: Sequence[str] = (), agents_timeout_s: float = 30.0,
+                 discovery_s: float = 20.0) -> None:
+        """``skip_unfit``: watch only the components whose model fits the live system (the others are
+        listed in ``unfit``) instead of refusing with a ``ModelFileError``. ``agents_timeout_s``: how
+        long to wait for the ROS 2 bridge nodes of the agents the models watch (agents start slowly).
+        ``discovery_s``: how long discovery may take to show every model's component with all its
+        topics (DDS discovery of a busy graph takes seconds); a model still missing or unfit then is
+        refused (or, with ``skip_unfit``, left out)."""
         import time
 
         import rclpy
@@ -72,22 +75,21 @@ class LiveLearnedObserver:
         self.ros = RosContext(domain_id=domain_id).start()
         try:
             node = self.ros.add(rclpy.create_node("faultmas_learned_resource", context=self.ros.context))
+            time.sleep(settle_s)                                     # discovery has no fixed delay
             wait_for_bridge_nodes(node, agents, agents_timeout_s)    # missing ones: their models are unfit
-            deadline = time.monotonic() + settle_s   # discovery has no fixed delay (slower on a busy host):
-            self.unfit = {}
-            while True:                              # look again until every model's component fits
-                time.sleep(0.5)
+            deadline = time.monotonic() + discovery_s
+            while True:            # until every model's component is seen with all its topics, or the deadline
                 components, topic_types = discover(node, namespaces, ignore_nodes=[node.get_name()])
                 self.components = adopt_bridge_nodes(components, agents)
-                for agent in agents:                 # an agent whose bridge node is not (yet) in the graph
+                for agent in agents:               # an agent whose bridge node is not (yet) in the graph
                     self.components.setdefault(agent_component(agent), Component(agent_component(agent), "", agent))
                 missing = sorted(set(models) - set(self.components))
-                if not missing:
-                    columns = {t: RosEncoder.for_type(ty).columns for t, ty in topic_types.items()}
-                    self.unfit = {c: reason for c, m in models.items()
-                                  if (reason := self._unfit(c, m, self.components[c], {**columns, **zenoh_columns[c]}))}
-                if time.monotonic() >= deadline or not (missing or self.unfit):
+                columns = {t: RosEncoder.for_type(ty).columns for t, ty in topic_types.items()}
+                self.unfit = {c: reason for c, m in models.items() if c in self.components
+                              and (reason := self._unfit(c, m, self.components[c], {**columns, **zenoh_columns[c]}))}
+                if (not missing and not self.unfit) or time.monotonic() > deadline:
                     break
+                time.sleep(0.5)
             if missing:
                 raise ModelFileError(f"models for components not running here: {', '.join(missing)}")
             if self.unfit and not skip_unfit:

@@ -31,8 +31,9 @@ def _on_alarm(signum, frame):
     raise _Hang()
 
 
-def fuzz_round(name: str, chunk: int, input_seconds: int, found: list) -> int:
-    """``chunk`` inputs to boundary ``name``; what escaped its own errors goes to ``found``. Returns the count."""
+def fuzz_round(name: str, chunk: int, input_seconds: int, found: list, current: Path | None = None) -> int:
+    """``chunk`` inputs to boundary ``name``; what escaped its own errors goes to ``found``. Returns the count.
+    ``current``: each input is written there first, so one that crashes the interpreter is kept."""
     boundary, allowed, seeds = BOUNDARIES[name]
     count = 0
 
@@ -41,6 +42,9 @@ def fuzz_round(name: str, chunk: int, input_seconds: int, found: list) -> int:
     def one(data: bytes) -> None:
         nonlocal count
         count += 1
+        if current is not None:
+            current.write_bytes(data)
+            current.with_suffix(".boundary").write_text(name)
         signal.alarm(input_seconds)
         try:
             boundary(data)
@@ -60,37 +64,75 @@ def fuzz_round(name: str, chunk: int, input_seconds: int, found: list) -> int:
     return count
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--minutes", type=float, default=60.0)
-    parser.add_argument("--chunk", type=int, default=50)
-    parser.add_argument("--input-seconds", type=int, default=60)
-    parser.add_argument("--found", default="fuzz-found", help="folder for the inputs that escaped")
-    args = parser.parse_args(argv)
+def worker(minutes: float, chunk: int, input_seconds: int, folder: Path) -> int:
+    """Fuzz every boundary in turn for ``minutes``; a JSON line per round with the totals so far."""
     signal.signal(signal.SIGALRM, _on_alarm)
     totals = {name: {"inputs": 0, "cpu_s": 0.0} for name in BOUNDARIES}
     found: list = []
-    deadline = time.monotonic() + args.minutes * 60
-    round_number = 0
+    current = folder / "current.input"
+    deadline = time.monotonic() + minutes * 60
+    round_number = reported = 0
     while time.monotonic() < deadline:
         round_number += 1
         for name in BOUNDARIES:
             if time.monotonic() >= deadline:
                 break
             cpu = time.process_time()
-            totals[name]["inputs"] += fuzz_round(name, args.chunk, args.input_seconds, found)
+            totals[name]["inputs"] += fuzz_round(name, chunk, input_seconds, found, current)
             totals[name]["cpu_s"] += time.process_time() - cpu
-        print(json.dumps({"round": round_number, "inputs": sum(t["inputs"] for t in totals.values()),
-                          "escaped": len(found)}), flush=True)
-    folder = Path(args.found)
-    for index, item in enumerate(found):
-        folder.mkdir(exist_ok=True)
-        (folder / f"{index}.{item[0]}").write_bytes(item[2])
-        print(f"ESCAPED {item[0]}: {item[1]}\n{item[3] if len(item) > 3 else ''}", flush=True)
-    print(json.dumps({"summary": {name: {"inputs": t["inputs"], "cpu_s": round(t["cpu_s"], 1)}
-                                  for name, t in totals.items()}, "escaped": len(found),
-                      "minutes": args.minutes}), flush=True)
+            for item in found[reported:]:  # at once: a run that crashes later keeps what it found
+                index = len(list(folder.glob("escaped-*")))
+                (folder / f"escaped-{index}.{item[0]}").write_bytes(item[2])
+                print(f"ESCAPED {item[0]}: {item[1]}\n{item[3] if len(item) > 3 else ''}", flush=True)
+            reported = len(found)
+            print(json.dumps({"round": round_number, "after": name, "escaped": len(found), "totals": totals}),
+                  flush=True)
     return 1 if found else 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--minutes", type=float, default=60.0)
+    parser.add_argument("--chunk", type=int, default=50)
+    parser.add_argument("--input-seconds", type=int, default=60)
+    parser.add_argument("--found", default="fuzz-found", help="folder for the inputs that escaped or crashed")
+    parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    folder = Path(args.found)
+    folder.mkdir(parents=True, exist_ok=True)
+    if args.worker:
+        return worker(args.minutes, args.chunk, args.input_seconds, folder)
+    # the supervisor: a worker that dies (SIGSEGV: the C stack) is named with its input and replaced
+    import subprocess
+    started = time.monotonic()
+    grand = {name: {"inputs": 0, "cpu_s": 0.0} for name in BOUNDARIES}
+    crashes = escaped = 0
+    while (left := args.minutes - (time.monotonic() - started) / 60) > 0.05:
+        worker_process = subprocess.Popen([sys.executable, "-m", "tests.hardening.fuzz_campaign", "--worker",
+                                           "--minutes", str(left), "--chunk", str(args.chunk), "--input-seconds",
+                                           str(args.input_seconds), "--found", str(folder)],
+                                          stdout=subprocess.PIPE, text=True)
+        last = None
+        for line in worker_process.stdout:
+            print(line, end="", flush=True)
+            if line.startswith('{"round"'):
+                last = json.loads(line)
+        code = worker_process.wait()
+        if last is not None:
+            for name, total in last["totals"].items():
+                grand[name]["inputs"] += total["inputs"]
+                grand[name]["cpu_s"] += total["cpu_s"]
+            escaped += last["escaped"]
+        if code < 0:
+            crashes += 1
+            boundary = (folder / "current.boundary").read_text() if (folder / "current.boundary").exists() else "?"
+            kept = folder / f"crash-{crashes}.{boundary}"
+            (folder / "current.input").replace(kept)
+            print(f"CRASH {boundary}: the worker died by signal {-code}; its input is {kept}", flush=True)
+    print(json.dumps({"summary": {name: {"inputs": t["inputs"], "cpu_s": round(t["cpu_s"], 1)}
+                                  for name, t in grand.items()}, "escaped": escaped, "crashes": crashes,
+                      "minutes": args.minutes}), flush=True)
+    return 1 if escaped or crashes else 0
 
 
 if __name__ == "__main__":

@@ -34,6 +34,14 @@ def test_asl_check_locates_each_bad_file(tmp_path, capsys, content, expected):
     assert expected in err.replace(str(tmp_path) + "/", "")
 
 
+@pytest.mark.timeout(120)  # before: every error re-parsed the rest, minutes for this file (found by the fuzz)
+def test_asl_check_stops_after_a_hundred_errors(tmp_path, capsys):
+    (tmp_path / "x.asl").write_bytes(b"b(1).\n" + b"@c(X).\n" * 30000)
+    err = run(capsys, "asl", "check", str(tmp_path / "x.asl"))
+    assert "x.asl:101: too many errors (100); the rest of the file is not checked" in err.replace(str(tmp_path) + "/", "")
+    assert err.count("x.asl:") == 101
+
+
 @pytest.mark.parametrize("agents, expected", [
     (b"a #99999999999999999999;", "p.mas2j:3:8: instance count 99999999999999999999 is out of range"),
     (b"a #2;\n    a1;", "p.mas2j:4:5: agent name 'a1' is declared twice"),

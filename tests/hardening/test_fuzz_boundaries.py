@@ -20,7 +20,7 @@ from tests.hardening.boundaries import BOUNDARIES
 CORPUS = Path(__file__).resolve().parent / "corpus"
 PROFILE = os.environ.get("FAULTMAS_FUZZ_PROFILE", "short")
 EXAMPLES = {"short": 40, "campaign": int(os.environ.get("FAULTMAS_FUZZ_EXAMPLES", "20000"))}[PROFILE]
-BY_EXTENSION = {".asl": "asl", ".mas2j": "mas2j", ".txt": None, ".json": None, ".yaml": "yaml_model"}
+BY_EXTENSION = {".asl": "asl", ".mas2j": "mas2j", ".txt": None, ".json": None, ".yaml": "yaml_model", ".npy": "depth"}
 CORPUS_BOUNDARY = {"deep_content.txt": "content", "duplicate_from.json": "envelope",
                    "deep_json.json": "observations", "deep_formula.txt": "formula"}
 GRAMMAR_BYTES = b"()[]{}<>!?~+-*/=&|:;.,\"'\\@#$%^_ \n\t0123456789aXzAB\x00\xe9\xff"
