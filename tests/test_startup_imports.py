@@ -59,3 +59,13 @@ def test_a_yaml_model_still_reads_its_formulas(tmp_path):
     status, output, imported = _imported_by(["diagnose", str(model), "--obs", str(obs), "--json"], ("yaml", "lark"))
     assert (status, json.loads(output)["diagnoses"] if status == 0 else output) == (0, [["bulb"]])
     assert imported == ["lark", "yaml"]
+
+
+def test_a_project_without_environment_does_not_load_the_bridge_registry(tmp_path):
+    """The registry lists installed bridges through importlib.metadata: a cost only a project naming one pays."""
+    (tmp_path / "hello.asl").write_text('!start.\n+!start <- .print("hello world").\n')
+    (tmp_path / "hello.mas2j").write_text("MAS hello {\n    agents:\n        hello hello.asl;\n}\n")
+    status, output, imported = _imported_by(["mas", "run", str(tmp_path / "hello.mas2j")],
+                                            ("robot_bridge.registry", "importlib.metadata"))
+    assert (status, output.strip().splitlines()[-1]) == (0, "[hello] hello world")
+    assert "robot_bridge.registry" not in imported

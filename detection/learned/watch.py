@@ -48,7 +48,7 @@ class LiveLearnedObserver:
     The ROS 2 components come from the graph under ``namespaces``; an agent's component (a model whose
     channels include Zenoh keys, ``zenoh_events``) is its ROS 2 bridge node under its name, plus the
     keys its model was trained on, tapped on a Zenoh session of ours connected to ``zenoh_connect``
-    (loopback endpoints; never multicast). Zenoh's samples are queued and taken in the executor's
+    (loopback endpoints; never multicast). Zenoh's samples are queued and taken in the ROS 2 reader's
     thread at each tick, so the buffers are only ever touched by one thread."""
 
     def __init__(self, models: dict[str, ComponentModel], namespaces: list[str], emit: Callable[[list[Observation]], object],
@@ -71,6 +71,7 @@ class LiveLearnedObserver:
                          for c, m in models.items()}
         agents = [c[:-len(AGENT_SUFFIX)] for c, cols in zenoh_columns.items() if cols and c.endswith(AGENT_SUFFIX)]
         self.zenoh: ZenohFeed | None = None
+        self.tap: RawTap | None = None
         self.ros = RosContext(domain_id=domain_id).start()
         try:
             node = self.ros.add(rclpy.create_node("faultmas_learned_resource", context=self.ros.context))
@@ -101,12 +102,11 @@ class LiveLearnedObserver:
                 if c in models:
                     processes.update(agent_processes([agent], mas_of(zenoh_columns[c]), zenoh_connect))
             self.observer = LearnedResourceObserver(models, processes, emit, confirm)
-            self.tap = RawTap(node, {t: ty for t, ty in topic_types.items()
-                                     if t in self.observer.buffers}, self.observer.on_event)
             keys = {t: cols for c in models for t, cols in zenoh_columns[c].items()}
             if keys:
                 self.zenoh = ZenohFeed(keys, self.observer.on_event, connect=zenoh_connect)
-            node.create_timer(1.0, self._tick)                       # the executor's thread: no race with the tap
+            self.tap = RawTap(node, {t: ty for t, ty in topic_types.items() if t in self.observer.buffers},
+                              self.observer.on_event, on_tick=self._tick)   # the reader's thread: no race
         except BaseException:
             self.close()
             raise
@@ -130,6 +130,8 @@ class LiveLearnedObserver:
                 f"gone: {sorted(trained - set(channels))[:3]}, or other message types); train it again")
 
     def close(self) -> None:
+        if self.tap is not None:
+            self.tap.close()
         if self.zenoh is not None:
             self.zenoh.close()
         self.ros.close()

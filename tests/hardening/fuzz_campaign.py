@@ -1,11 +1,13 @@
 """The long fuzz run of issue 22, by time rather than by count: every boundary of ``boundaries.BOUNDARIES`` in
 turn gets ``--chunk`` mutated inputs (the strategy of ``test_fuzz_boundaries``, a fresh random seed each
-round) until ``--minutes`` have passed. It prints a line per round and, at the end, the inputs and CPU
-seconds per boundary and every input that raised anything but the boundary's own errors (saved under
-``--found`` for the corpus). A crash of the interpreter ends the run (the last round line says where); a hang
-is bounded by ``--input-seconds`` per input (SIGALRM).
+round) until ``--minutes`` have passed. It prints a line per boundary and round with the totals so far
+and, at the end, the inputs and CPU seconds per boundary. Every input that raised anything but the
+boundary's own errors is saved under ``--found`` (for the corpus). The fuzzing runs in a worker process:
+one that crashes (the C stack) is replaced, and the input it died on is kept (``crash-N.<boundary>``). A
+hang is bounded by ``--input-seconds`` of CPU per input (SIGPROF: on a machine shared with other work,
+wall time would call slowness a hang).
 
-``python -m tests.hardening.fuzz_campaign --minutes 60`` (``make campaign`` runs the count-based profile)."""
+``python -m tests.hardening.fuzz_campaign --minutes 60`` (the first step of ``make campaign``)."""
 from __future__ import annotations
 
 import argparse
@@ -45,7 +47,7 @@ def fuzz_round(name: str, chunk: int, input_seconds: int, found: list, current: 
         if current is not None:
             current.write_bytes(data)
             current.with_suffix(".boundary").write_text(name)
-        signal.alarm(input_seconds)
+        signal.setitimer(signal.ITIMER_PROF, input_seconds)  # CPU seconds: a loaded machine is no hang
         try:
             boundary(data)
         except allowed:
@@ -56,7 +58,7 @@ def fuzz_round(name: str, chunk: int, input_seconds: int, found: list, current: 
             found.append((name, f"{type(exc).__name__}: {str(exc)[:200]}",
                           data, traceback.format_exc(limit=4)))
         finally:
-            signal.alarm(0)
+            signal.setitimer(signal.ITIMER_PROF, 0)
     try:
         one()
     except Unsatisfiable:
@@ -66,7 +68,7 @@ def fuzz_round(name: str, chunk: int, input_seconds: int, found: list, current: 
 
 def worker(minutes: float, chunk: int, input_seconds: int, folder: Path) -> int:
     """Fuzz every boundary in turn for ``minutes``; a JSON line per round with the totals so far."""
-    signal.signal(signal.SIGALRM, _on_alarm)
+    signal.signal(signal.SIGPROF, _on_alarm)
     totals = {name: {"inputs": 0, "cpu_s": 0.0} for name in BOUNDARIES}
     found: list = []
     current = folder / "current.input"
