@@ -87,7 +87,9 @@ class BuildWithManifest(build_ext):
         built = {ext.name: SPEEDUPS["source_digest"](SPEEDUPS["source_path"](ext.name, HERE / "agentspeak"))
                  for ext in self.extensions if ext.name != ZBUFFER["MODULE"] and ext.name in self.compiled_now}
         package_dir = Path(self.get_ext_fullpath("agentspeak.terms")).parent   # the tree, or the wheel's
-        (package_dir / SPEEDUPS["MANIFEST"]).write_text(json.dumps(built, indent=1, sort_keys=True) + "\n")
+        stamps = {m: SPEEDUPS["source_stamp"](SPEEDUPS["source_path"](m, HERE / "agentspeak")) for m in built}
+        record = {**built, SPEEDUPS["STAMPS"]: stamps}    # stamps: the quick check at every start (_speedups.py)
+        (package_dir / SPEEDUPS["MANIFEST"]).write_text(json.dumps(record, indent=1, sort_keys=True) + "\n")
         for module, compiled in SPEEDUPS["compiled_files"](package_dir).items():
             if module not in built:   # not made by this build from the source on disk: never imported, so gone
                 compiled.unlink()

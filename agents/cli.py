@@ -8,10 +8,12 @@ heavy libraries (OpenCV, rclpy, Zenoh) only inside the function that runs.
 from __future__ import annotations
 
 import argparse
+import functools
 import importlib
+import os
 import re
 import sys
-from typing import Sequence
+from collections.abc import Sequence      # not typing: its import is a tenth of `faultmas --help`
 
 COMMANDS: dict[str, tuple[str, str]] = {
     # ADDING A SUB-COMMAND IS ONE LINE HERE: "name": ("module with add_parser(subparsers)", "one-line help").
@@ -94,6 +96,22 @@ def _with_logging_options(parser: argparse.ArgumentParser) -> None:
                 _with_logging_options(child)
 
 
+def help_width() -> int:
+    """The width argparse gives its help (``COLUMNS``, else the terminal's, else 80; less its margin of 2),
+    found without ``shutil``: argparse imports it for that alone, and its import (with bz2 and lzma) is a
+    noticeable part of ``faultmas --help`` (issue 23)."""
+    try:
+        columns = int(os.environ.get("COLUMNS", ""))
+    except ValueError:
+        columns = 0
+    if columns <= 0:
+        try:
+            columns = os.get_terminal_size(sys.__stdout__.fileno()).columns
+        except (AttributeError, ValueError, OSError):
+            columns = 0
+    return (columns or 80) - 2
+
+
 def command_of(argv: Sequence[str]) -> str | None:
     """The sub-command named in ``argv`` (its first word that is one), or None."""
     return next((word for word in argv if word in COMMANDS), None)
@@ -101,7 +119,8 @@ def command_of(argv: Sequence[str]) -> str | None:
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser; only ``command``'s module is imported (None: none, e.g. for ``faultmas --help``)."""
-    parser = argparse.ArgumentParser(prog="faultmas", description=DESCRIPTION)
+    parser = argparse.ArgumentParser(prog="faultmas", description=DESCRIPTION,
+                                     formatter_class=functools.partial(argparse.HelpFormatter, width=help_width()))
     parser.add_argument("--version", action=_VersionAction, help="print the installed version and exit")
     add_logging_options(parser, top=True)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")

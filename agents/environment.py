@@ -35,6 +35,8 @@ def choose_bridge(project=None, name: str | None = None, option_texts: list[str]
     ``option_texts`` (``--bridge-option``) add to, or replace, the project's options of the same bridge.
     None: no bridge. ``ValueError`` (with the project's file and line where it comes from there) for an
     unknown bridge or option."""
+    if name is None and (project is None or not project.environment):
+        return None     # before the registry's import (importlib.metadata): most projects name no bridge
     from robot_bridge.registry import UnknownBridgeError, available, check_options, load, parse_option
 
     where, texts = "", []

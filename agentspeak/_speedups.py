@@ -22,14 +22,14 @@ This module must import only the standard library: ``setup.py`` reads it before 
 """
 from __future__ import annotations
 
-import hashlib
 import importlib.machinery
 import os
 import sys
 from pathlib import Path
 
 # Imported where used, not here: this module runs at every start of faultmas (issue 23: start-up time), and
-# json, logging, shlex, shutil, sysconfig and importlib.util are needed only by the build or on a stale build.
+# hashlib, logging, shlex, shutil, sysconfig and importlib.util are needed only by the build or on a stale
+# build (json to read the record).
 
 # The interpreter's modules, compiled when a C compiler and Cython are at hand. Left out: the parser (a
 # Lark transformer, already served by lark-cython), the command line and the project-file reader (cold
@@ -37,7 +37,7 @@ from pathlib import Path
 # agent.pxd: compiled as a plain class, the reasoning cycle ran count 13% slower than from source (CPython
 # 3.11's specialised attribute access beats the generic lookups compiled code makes on plain objects).
 COMPILED_MODULES = (
-    "agentspeak.agent", "agentspeak.arch", "agentspeak.beliefs", "agentspeak.communication",
+    "agentspeak.agent", "agentspeak.arch", "agentspeak.beliefs", "agentspeak.body", "agentspeak.communication",
     "agentspeak.copier", "agentspeak.errors", "agentspeak.fork", "agentspeak.ground_terms",
     "agentspeak.intentions", "agentspeak.program", "agentspeak.runtime", "agentspeak.solver",
     "agentspeak.terms", "agentspeak.unify",
@@ -60,11 +60,30 @@ def source_path(module: str, package_dir: Path = _PACKAGE_DIR) -> Path:
 
 def source_digest(path: Path) -> str:
     """SHA-256 of a module's ``.py`` and, if there is one, of the ``.pxd`` beside it (its C types)."""
+    import hashlib
+
     digest = hashlib.sha256(path.read_bytes())
     declarations = path.with_suffix(".pxd")
     if declarations.exists():
         digest.update(b"\0pxd\0" + declarations.read_bytes())
     return digest.hexdigest()
+
+
+def source_stamp(path: Path) -> str:
+    """Size and modification time of a module's ``.py`` and ``.pxd``: what the build saw, cheaply compared at
+    every start (as Python's own ``.pyc`` check); only a file whose stamp differs is hashed."""
+    stamps = []
+    for file in (path, path.with_suffix(".pxd")):
+        try:
+            info = os.stat(file)
+        except OSError:
+            continue
+        stamps.append(f"{info.st_size}:{info.st_mtime_ns}")
+    return "/".join(stamps)
+
+
+STAMPS = "stamps"
+"""The manifest's key for ``{module: source_stamp}`` (beside ``{module: source_digest}``)."""
 
 
 def pure_requested() -> bool:
@@ -84,14 +103,18 @@ def c_compiler_available() -> bool:
 
 def compiled_files(package_dir: Path) -> dict[str, Path]:
     """Every module of the package with a compiled file beside its source, listed or not (a file left by an
-    older build must not be imported either): ``{module: its compiled file}``."""
+    older build must not be imported either): ``{module: its compiled file}``. (``os.walk``: this runs at
+    every start, and three ``Path.rglob`` cost several times more.)"""
     found = {}
-    for suffix in importlib.machinery.EXTENSION_SUFFIXES:
-        for compiled in package_dir.rglob(f"*{suffix}"):
-            source = compiled.with_name(compiled.name[:-len(suffix)] + ".py")
-            if source.exists():
-                parts = source.relative_to(package_dir).with_suffix("").parts
-                found[".".join((package_dir.name, *parts))] = compiled
+    suffixes = sorted(importlib.machinery.EXTENSION_SUFFIXES, key=len, reverse=True)   # the longest first
+    for folder, dirs, files in os.walk(package_dir):
+        dirs[:] = [d for d in dirs if d != "__pycache__"]
+        names = set(files)
+        for name in files:
+            suffix = next((x for x in suffixes if name.endswith(x)), None)
+            if suffix is not None and name[:-len(suffix)] + ".py" in names:
+                parts = Path(folder, name[:-len(suffix)]).relative_to(package_dir).parts
+                found[".".join((package_dir.name, *parts))] = Path(folder, name)
     return found
 
 
@@ -115,7 +138,9 @@ def modules_to_load_from_source(package_dir: Path = _PACKAGE_DIR) -> tuple[dict[
     if pure_requested():
         return present, []
     built = built_digests(package_dir)
-    stale = sorted(m for m, src in present.items() if built.get(m) != source_digest(src))
+    stamps = built.get(STAMPS) if isinstance(built.get(STAMPS), dict) else {}
+    stale = sorted(m for m, src in present.items()
+                   if not (stamps.get(m) == source_stamp(src) and m in built) and built.get(m) != source_digest(src))
     # a listed module the build did not compile (its C compile failed: the extensions are optional)
     stale += sorted(m for m in COMPILED_MODULES if m not in present and source_path(m, package_dir).exists())
     # all or none: compiled modules share C types (agent.so reads intentions.Frame's fields directly,

@@ -1,13 +1,10 @@
 # C types for the compiled build (see intentions.pxd). Agent is an extension type with its hot fields
 # declared (and a __dict__ for everything else, so users and bridges may still add attributes); the
-# reasoning cycle's methods and the hottest body formulas are cpdef with typed locals, so they read
+# reasoning cycle's methods (and the hottest body formulas, body.pxd) are cpdef with typed locals, so they read
 # intentions, intended means and frames as structs. A Python subclass may still override any of them.
 cimport cython
 from agentspeak.intentions cimport Event, Frame, IntendedMeans, Intention
 from agentspeak.program cimport Trigger
-
-cdef class IAContext:
-    cdef public object agent, intention, im, b, trail
 
 cdef class Agent:
     cdef dict __dict__
@@ -23,8 +20,3 @@ cdef class Agent:
 
     @cython.locals(intention=Intention, im=IntendedMeans, frame=Frame, top=IntendedMeans, f0=Frame)
     cpdef act(self)
-
-@cython.locals(ctx=IAContext)
-cpdef _exec_internal(Agent ag, Intention intention, IntendedMeans im, Frame frame, instr)
-
-cpdef _exec_constraint(Agent ag, Intention intention, IntendedMeans im, Frame frame, instr)

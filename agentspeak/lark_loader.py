@@ -12,7 +12,6 @@ refuses that at import time with the one-line fix (``WrongLarkError``), which ``
 """
 from __future__ import annotations
 
-import hashlib
 import os
 import re
 import sys
@@ -82,6 +81,8 @@ def lalr_parser(grammar_file: Path, **options: Any) -> Lark:
 
     The file name holds a digest of the grammar text and the options, so a changed grammar never meets
     an old table (Lark checks its own digest on load too, and rebuilds on a mismatch or a damaged file)."""
+    import hashlib                     # here: every command imports this module, few build a parser
+
     from lark import Lark
 
     text = Path(grammar_file).read_text(encoding="utf-8")

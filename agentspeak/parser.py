@@ -62,6 +62,29 @@ def _is_ia_name(name: str) -> bool:
     return "." in name and name[0] != "'"
 
 
+class _ParenBody(tuple):
+    """The formulas of a body written in parentheses (``(!a ||| !b)``) where a formula stands."""
+
+
+def _bodies_only_as_formulas(*names: str):
+    """Wrap the named transformer methods so that a body in parentheses among their parts (a term, a
+    context, a condition) is a syntax error, as in Jason, instead of a value nobody can use."""
+    def decorate(cls):
+        for name in names:
+            def checked(self, c, _f=getattr(cls, name)):
+                for x in c:
+                    if type(x) is _ParenBody:
+                        raise _BadInput("a body in parentheses (formulas joined by ';', '|&|' or '|||') "
+                                        "stands only where a body formula does, not as a term or condition")
+                return _f(self, c)
+            setattr(cls, name, checked)
+        return cls
+    return decorate
+
+
+@_bodies_only_as_formulas("belief", "rule", "plan", "if_stmt", "elif_part", "while_stmt", "for_stmt",
+                          "plan_term_full", "plan_term_ctx", "prefixed", "expr", "atomic_formula",
+                          "annotations", "list")
 class _ToProgram(Transformer):
     """One method per grammar rule; builds runtime objects directly (no parse tree kept)."""
 
@@ -491,10 +514,6 @@ def _binary(op: str, left: Term, right: Term) -> Term:
 
 
 _MAX_INT_DIGITS = 4300  # CPython's limit on int(str) (sys.get_int_max_str_digits)
-
-
-class _ParenBody(tuple):
-    """The formulas of a body written in parentheses (``(!a ||| !b)``) where a formula stands."""
 
 
 class _BadInput(Exception):

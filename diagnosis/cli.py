@@ -66,10 +66,11 @@ def model_file(name: str) -> str:
     """``name`` as given when it is a file; else a model shipped with faultmas by that name
     (``turtlebot_hardware`` is ``plans/turtlebot_hardware.yaml``, as ``.diagnose`` finds it)."""
     import os
-    from importlib import resources
 
     if os.path.exists(name) or os.sep in name:
         return name
+    from importlib import resources
+
     shipped = resources.files("plans")
     for suffix in ("", ".yaml", ".bench"):
         candidate = shipped.joinpath(name + suffix)

@@ -24,7 +24,8 @@ candidates ("exactly H faulty": propagation) and returns a conflict from its cor
 
 Models with fault modes use the bound on the model's solver directly. The minimum cardinality comes
 from RC2 (core-guided MaxSAT). Time limits interrupt the solver through one shared watchdog thread
-(``deadline``).
+(``deadline``). The totalizer and RC2 are imported when first needed: most queries use neither, and a
+short ``faultmas diagnose`` is mostly start-up (issue 23).
 
 The default solver is Glucose 4: it releases the GIL while solving (other threads of the agent keep
 running) and honours ``interrupt()``, which the time limits rely on; CaDiCaL in python-sat does neither.
@@ -38,9 +39,6 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Callable, Iterator, Mapping, Sequence
 
-from pysat.card import ITotalizer
-from pysat.examples.rc2 import RC2
-from pysat.formula import WCNF
 from pysat.solvers import Solver
 
 from diagnosis.deadline import Deadline
@@ -119,7 +117,7 @@ class Diagnoser:
         self._component_of = {v: c for c, v in model.ab_var.items()}
         self._index = {c: i for i, c in enumerate(model.components)}
         self._top = model.num_vars
-        self._totalizer: ITotalizer | None = None
+        self._totalizer = None       # pysat.card.ITotalizer over the health variables, made when first bound
         self._solver_name = solver
         self._healthy = [-v for v in self._ab]
         self._position = {v: i for i, v in enumerate(self._ab)}
@@ -154,6 +152,8 @@ class Diagnoser:
         if k >= n:
             return []
         if self._totalizer is None:
+            from pysat.card import ITotalizer
+
             self._totalizer = ITotalizer(lits=self._ab, ubound=max(k, 1), top_id=self._top)
             self._solver.append_formula(self._totalizer.cnf.clauses)
             self._top = self._totalizer.top_id
@@ -449,6 +449,9 @@ class Diagnoser:
         deadline = deadline or Deadline(None)
         if deadline.expired():
             raise TimedOut
+        from pysat.examples.rc2 import RC2
+        from pysat.formula import WCNF
+
         wcnf = WCNF()
         wcnf.extend([list(c) for c in self.model.clauses])
         wcnf.extend([[lit] for lit in self._base(observations)])

@@ -5,17 +5,19 @@ immutable AST and the AST into CNF. Clausification goes through negation normal 
 Plaisted-Greenbaum variant of Tseitin's encoding (one implication per auxiliary variable): for every
 assignment of the model's own variables the clauses are satisfiable exactly when the formula is true,
 which is all that consistency-based diagnosis asks of them.
+
+Lark is imported by the first ``parse_formula``: the AST and the clausifier serve netlists too (``.bench``
+models have no formulas), and Lark's import is a large part of a short ``faultmas diagnose`` (issue 23).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Callable, Union
+from typing import TYPE_CHECKING, Callable, Union
 
-from agentspeak.lark_loader import lalr_parser  # first: it refuses lark-parser 0.12 with the fix
-from lark import Lark, Transformer, v_args
-from lark.exceptions import UnexpectedEOF, UnexpectedInput
+if TYPE_CHECKING:
+    from lark import Lark, Transformer
 
 from agentspeak.nesting import MAX_NESTING, first_too_deep_bracket, nesting_depth, too_deep_message
 
@@ -69,8 +71,9 @@ def atom_text(functor: str, args: list[str] | tuple[str, ...]) -> str:
     return f"{functor}({','.join(args)})"
 
 
-@v_args(inline=True)
-class _ToAst(Transformer):
+class _ToAst:
+    """The parse tree's rules as AST nodes (made a Lark ``Transformer`` by ``_transformer``)."""
+
     def plain(self, name):
         text = str(name)
         if text == "true":
@@ -109,7 +112,18 @@ _TOKEN_NAMES = {"LPAR": "'('", "RPAR": "')'", "NAME": "a name", "NOT": "'!'", "C
 
 @lru_cache(maxsize=1)
 def _parser() -> Lark:
+    from agentspeak.lark_loader import lalr_parser  # first: it refuses lark-parser 0.12 with the fix
+
     return lalr_parser(Path(__file__).with_name("formula.lark"), maybe_placeholders=False)
+
+
+@lru_cache(maxsize=1)
+def _transformer() -> type[Transformer]:
+    from lark import Transformer, v_args
+
+    # the methods copied, not inherited: v_args wraps only methods defined in the class itself
+    rules = {name: f for name, f in vars(_ToAst).items() if not name.startswith("__")}
+    return v_args(inline=True)(type("_ToAst", (Transformer,), rules))
 
 
 def parse_formula(text: str) -> Formula:
@@ -120,8 +134,11 @@ def parse_formula(text: str) -> Formula:
     too_deep = first_too_deep_bracket(text)
     if too_deep is not None:
         raise FormulaSyntaxError(too_deep_message(), too_deep + 1)
+    parser = _parser()
+    from lark.exceptions import UnexpectedEOF, UnexpectedInput
+
     try:
-        tree = _parser().parse(text)
+        tree = parser.parse(text)
     except UnexpectedInput as exc:
         expected = sorted(_TOKEN_NAMES.get(t, t) for t in (getattr(exc, "expected", None) or []))
         what = f"; expected {' or '.join(expected)}" if expected else ""
@@ -131,7 +148,7 @@ def parse_formula(text: str) -> Formula:
         found = text[exc.pos_in_stream:exc.pos_in_stream + 2].strip() or text[exc.pos_in_stream:][:1]
         raise FormulaSyntaxError(f"unexpected {found!r}{what}", exc.column) from None
     try:
-        formula = _ToAst().transform(tree)
+        formula = _transformer()().transform(tree)
     except RecursionError:  # a long chain of binary operators
         raise FormulaSyntaxError(too_deep_message(), None) from None
     except Exception as exc:  # lark wraps transformer errors in VisitError

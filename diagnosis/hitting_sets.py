@@ -18,7 +18,6 @@ from __future__ import annotations
 import itertools
 from typing import Callable, Iterator, Mapping, Sequence
 
-from pysat.card import ITotalizer
 from pysat.solvers import Solver
 
 
@@ -33,7 +32,7 @@ class HittingSetSolver:
         self.ubound = max(ubound, 1)
         self.members: list[int] = []       # health variables that occur in some conflict
         self._member_set: set[int] = set()
-        self.totalizer: ITotalizer | None = None
+        self.totalizer = None     # pysat.card.ITotalizer, imported when first needed (start-up: issue 23)
         self._signature: dict[int, int] = {}            # member -> bit set of the conflicts it is in
         self._classes: dict[int, list[int]] = {}        # bit set -> members with exactly that set
         self._conflicts = 0
@@ -79,6 +78,8 @@ class HittingSetSolver:
             self._classes.setdefault(0, []).append(v)
         self.solver.set_phases([-v for v in new])
         if self.totalizer is None:
+            from pysat.card import ITotalizer
+
             self.totalizer = ITotalizer(lits=list(new), ubound=self.ubound, top_id=self.top)
             self.solver.append_formula(self.totalizer.cnf.clauses)
         else:

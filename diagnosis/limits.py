@@ -3,20 +3,23 @@
 Why: the search honours its ``Deadline`` (it stops and reports what it found, INCOMPLETE), but a run
 also reads the model and builds the solver, and a search step in C (a cardinality encoding growing)
 does not look at the clock. A 6,000-gate chain once ran 49 s under ``--timeout 5`` and took 3.3 GB.
-Here one watcher thread samples the process's resident memory (psutil) and the clock; past the memory
+Here one watcher thread samples the process's resident memory and the clock; past the memory
 limit, or past the timeout plus a grace for the search to report on its own, it writes one line
 naming the phase and the limit and ends the process with ``EXIT_LIMIT``. The process is ended, not
 interrupted: a thread cannot interrupt C code, and memory must stop growing at once.
+
+The resident size is read by psutil, but only once the process's peak resident size (``getrusage``, in
+the standard library) has passed the limit: the current size is never above the peak, so a run that
+stays below the limit never imports psutil (its import is a large part of a short run's start-up: issue 23).
 """
 from __future__ import annotations
 
 import os
+import resource
 import sys
 import threading
 import time
 from typing import TextIO
-
-import psutil
 
 #: Exit status of a run stopped by a limit (0: answered, 2: bad input).
 EXIT_LIMIT = 3
@@ -26,6 +29,7 @@ DEFAULT_MAX_MEMORY_MB = 2048
 #: Seconds past ``--timeout`` the search gets to stop by itself and report what it found.
 GRACE = 1.0
 POLL = 0.02
+_MAXRSS_UNIT = 1 if sys.platform == "darwin" else 1024      # ru_maxrss: bytes on macOS, KiB on Linux
 
 
 class RunLimits:
@@ -41,7 +45,7 @@ class RunLimits:
         self.current = "starting"
         self.peak = 0
         self._done = threading.Event()
-        self._process = psutil.Process()
+        self._process = None     # psutil.Process(), made once the peak passes the limit
         self._stopping = threading.Lock()  # one message, whichever thread finds the limit first
         self._thread = threading.Thread(target=self._watch, name="diagnose-limits", daemon=True)
 
@@ -69,7 +73,7 @@ class RunLimits:
 
     def _check(self) -> None:
         if self.max_bytes is not None:
-            rss = self._process.memory_info().rss
+            rss = self._resident_bytes()
             self.peak = max(self.peak, rss)
             if rss > self.max_bytes:
                 self._stop(f"memory limit of {self.max_bytes // 2 ** 20} MiB exceeded while {self.current} "
@@ -77,6 +81,17 @@ class RunLimits:
                            f"with --max-card or --max-count")
         if self.timeout is not None and time.monotonic() > self.started + self.timeout + GRACE:
             self._stop(f"--timeout {self.timeout:g} s reached while {self.current}")
+
+    def _resident_bytes(self) -> int:
+        """The resident size now, or the peak so far while the peak is within the limit (then so is now)."""
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * _MAXRSS_UNIT
+        if peak <= self.max_bytes:
+            return peak
+        if self._process is None:
+            import psutil
+
+            self._process = psutil.Process()
+        return self._process.memory_info().rss
 
     def _stop(self, message: str) -> None:
         self._stopping.acquire()

@@ -69,6 +69,7 @@ class RosEncoder:
         self.msg_class = msg_class
         self.columns: list[str] = [SIZE_COLUMN] + [name for name, _ in fields]
         self._getters = [get for _, get in fields]
+        self._cdr: CdrColumns | bool | None = None          # built on first use
 
     @classmethod
     def for_type(cls, type_name: str) -> "RosEncoder":
@@ -85,9 +86,228 @@ class RosEncoder:
                            count=len(self.columns))
 
     def encode_raw(self, data: bytes) -> np.ndarray:
-        """The vector of a serialised (CDR) message."""
+        """The vector of a serialised (CDR) message: read in place (``CdrColumns``) when its layout
+        allows, else deserialised by rclpy; the same numbers either way (tested)."""
+        if self._cdr is None:
+            self._cdr = CdrColumns.for_class(self.msg_class, self.columns[1:])
+        if self._cdr:
+            vector = self._cdr.read(data)
+            if vector is not None:
+                return vector
         from rclpy.serialization import deserialize_message
         return self.encode(deserialize_message(data, self.msg_class), len(data))
+
+
+_CODES = {"boolean": "?", "octet": "B", "char": "B", "int8": "b", "uint8": "B", "int16": "h", "uint16": "H",
+          "int32": "i", "uint32": "I", "int64": "q", "uint64": "Q", "float": "f", "double": "d"}
+
+
+class _Unsupported(Exception):
+    """A field type the in-place reader does not handle (wide strings, long double): rclpy decodes."""
+
+
+def _plan(cls: type, prefix: tuple[str, ...], labels: list[str]) -> list[tuple]:
+    """The CDR walk of ``cls`` as ``(kind, arg, column)`` steps; ``labels`` gets ``_walk``'s column
+    names in the same order (columns are numbered by position in ``labels``)."""
+    from rosidl_parser import definition as idl
+
+    def element(slot) -> tuple:
+        if isinstance(slot, idl.BasicType):
+            if slot.typename not in _CODES:
+                raise _Unsupported(slot.typename)
+            return ("num", _CODES[slot.typename], None)
+        if isinstance(slot, idl.AbstractString):
+            return ("str", None, None)
+        if isinstance(slot, idl.NamespacedType):
+            return ("opaque", _plan(_message_class(slot), (), []), None)     # walked, no columns
+        raise _Unsupported(type(slot).__name__)
+
+    steps: list[tuple] = []
+    for name, slot in zip(cls.get_fields_and_field_types(), cls.SLOT_TYPES):
+        path = (*prefix, name)
+        label = ".".join(path)
+        if isinstance(slot, idl.NamespacedType):
+            if (*slot.namespaces, slot.name) in SKIPPED_TYPES:
+                steps.append(element(slot))
+            else:
+                steps.append(("struct", _plan(_message_class(slot), path, labels), None))
+        elif isinstance(slot, idl.BasicType):
+            kind, code, _ = element(slot)
+            labels.append(label)
+            steps.append((kind, code, len(labels) - 1))
+        elif isinstance(slot, idl.AbstractString):
+            labels.append(f"{label}#len")
+            steps.append(("str", None, len(labels) - 1))
+        elif isinstance(slot, idl.AbstractSequence):
+            labels.append(f"{label}#len")
+            steps.append(("seq", element(slot.value_type), len(labels) - 1))
+        elif isinstance(slot, idl.Array):
+            columns = None
+            if isinstance(slot.value_type, idl.BasicType) and slot.size <= SMALL_ARRAY:
+                columns = []
+                for i in range(slot.size):
+                    labels.append(f"{label}[{i}]")
+                    columns.append(len(labels) - 1)
+            steps.append(("arr", (element(slot.value_type), slot.size), columns))
+        else:
+            raise _Unsupported(type(slot).__name__)
+    return steps
+
+
+class CdrColumns:
+    """An encoder's numbers read straight from the CDR bytes, without deserialising the message.
+
+    Why: deserialising an Odometry with rclpy and walking its fields costs ~65 µs; reading the same
+    numbers in place ~3 µs, which is what lets the learned detector watch a live team on a few % of
+    a core. A message's layout (where each number is) depends only on the lengths of its strings and
+    sequences; it is worked out once per message size by walking the type (classic little-endian CDR,
+    as ROS 2 sends it: each primitive aligned to its size, at most 8, counted from after the 4-byte
+    encapsulation header) and kept as one ``struct`` format. The next message of that size is read with
+    it only if its length fields hold the same values (else, like a big-endian or non-ASCII message,
+    ``read`` returns None and the caller deserialises).
+    """
+
+    MAX_LAYOUTS = 256           # distinct message sizes kept per type (JSON strings vary)
+
+    def __init__(self, steps: list[tuple], width: int) -> None:
+        self.steps, self.width = steps, width
+        self._layouts: dict[int, tuple] = {}
+
+    @classmethod
+    def for_class(cls, msg_class: type, columns: list[str]) -> "CdrColumns | bool":
+        """The reader for ``msg_class`` whose columns are ``columns`` (an encoder's, without ``size``);
+        False when the type has a field it cannot read or its walk would not give those columns."""
+        labels: list[str] = []
+        try:
+            steps = _plan(msg_class, (), labels)
+        except (_Unsupported, ImportError, AttributeError):
+            return False
+        return cls(steps, len(columns) + 1) if labels == columns else False
+
+    def read(self, data: bytes) -> np.ndarray | None:
+        """The encoder's vector of ``data``, or None when this reader cannot vouch for it."""
+        if len(data) < 4 or data[1] != 1:           # encapsulation: CDR little endian
+            return None
+        layout = self._layouts.get(len(data))
+        if layout is not None and layout[1](values := layout[0](data)) != layout[2]:
+            layout = None                           # same size, other string lengths: walk this one
+        if layout is None:
+            layout = self._layout(data)
+            if layout is None:
+                return None
+            if len(self._layouts) >= self.MAX_LAYOUTS:
+                self._layouts.clear()
+            self._layouts[len(data)] = layout
+            values = layout[0](data)
+        _, _, _, strings, pick, adjust = layout
+        for start, end in strings:
+            if not data[start:end].isascii():       # a string's length in characters is not its bytes
+                return None
+        vector = np.array((len(data), *pick(values)), dtype=np.float64)
+        vector -= adjust
+        return vector
+
+    def _layout(self, data: bytes) -> tuple | None:
+        import struct
+
+        fields: list[tuple[int, str, int | None, bool]] = []      # offset in data, code, column, is a length
+        strings: list[tuple[int, int]] = []
+        end = len(data) - 4
+
+        def length(pos: int, column: int | None) -> tuple[int, int]:
+            pos += -pos % 4
+            if pos + 4 > end:
+                raise IndexError
+            fields.append((pos + 4, "I", column, True))
+            return pos + 4, int.from_bytes(data[pos + 4:pos + 8], "little")
+
+        def walk(steps, pos: int, keep: bool) -> int:
+            for kind, arg, column in steps:
+                column = column if keep else None
+                if kind == "num":
+                    size = struct.calcsize(arg)
+                    pos += -pos % min(size, 8)
+                    if column is not None:
+                        fields.append((pos + 4, arg, column, False))
+                    pos += size
+                elif kind == "str":
+                    pos, n = length(pos, column)
+                    if column is not None and n:
+                        strings.append((pos + 4, pos + 4 + n - 1))
+                    pos += n
+                elif kind == "struct":
+                    pos = walk(arg, pos, keep)
+                elif kind == "opaque":
+                    pos = walk(arg, pos, False)
+                elif kind == "seq":
+                    pos, n = length(pos, column)
+                    pos = skip(arg, n, pos)
+                else:                                           # arr
+                    item, count = arg
+                    if column is not None:
+                        size = struct.calcsize(item[1])
+                        for c in column:
+                            pos += -pos % min(size, 8)
+                            fields.append((pos + 4, item[1], c, False))
+                            pos += size
+                    else:
+                        pos = skip(item, count, pos)
+                if pos > end:
+                    raise IndexError
+            return pos
+
+        def skip(item: tuple, count: int, pos: int) -> int:
+            if item[0] == "num":
+                size = struct.calcsize(item[1])
+                return pos + (-pos % min(size, 8)) + count * size if count else pos
+            for _ in range(count):
+                pos = walk([item], pos, False)
+            return pos
+
+        try:
+            walk(self.steps, 0, True)
+        except IndexError:
+            return None
+        fields.sort()
+        fmt, at = "<", 0
+        for offset, code, _, _ in fields:
+            fmt += f"{offset - at}x{code}" if offset > at else code
+            at = offset + struct.calcsize(code)
+        unpack = struct.Struct(fmt).unpack_from
+        length_at = [i for i, f in enumerate(fields) if f[3]]
+        values = unpack(data)
+        by_column = sorted((f[2], i) for i, f in enumerate(fields) if f[2] is not None)
+        if [c for c, _ in by_column] != list(range(self.width - 1)):
+            return None
+        adjust = np.zeros(self.width)
+        for column, i in by_column:
+            if fields[i][3] and self._is_string(column):
+                adjust[column + 1] = 1.0                        # CDR counts a string's NUL
+        return (unpack, _getter_of(length_at), _getter_of(length_at)(values), tuple(strings),
+                _getter_of([i for _, i in by_column]), adjust)
+
+    def _is_string(self, column: int) -> bool:
+        def find(steps) -> bool | None:
+            for kind, arg, col in steps:
+                if col == column:
+                    return kind == "str"
+                if kind == "struct":
+                    found = find(arg)
+                    if found is not None:
+                        return found
+            return None
+        return bool(find(self.steps))
+
+
+def _getter_of(indices: list[int]) -> Callable[[tuple], tuple]:
+    """``values -> tuple(values[i] for i in indices)`` at C speed."""
+    import operator
+    if not indices:
+        return lambda values: ()
+    if len(indices) == 1:
+        i = indices[0]
+        return lambda values: (values[i],)
+    return operator.itemgetter(*indices)
 
 
 def flatten_json(value: Any, prefix: str = "") -> dict[str, float]:

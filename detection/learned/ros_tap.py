@@ -1,5 +1,6 @@
 """The live ROS 2 side of the learned detector: which component uses which topic, and every message
-on those topics as (time, channel, encoded vector), read through raw subscriptions.
+on those topics as (time, channel, encoded vector), read through the one ROS 2 reader
+(``detection.taps.ros2_reader``).
 
 The components and their channels come from the ROS graph itself (publishers and subscriptions per
 topic), so no per-system table is written by hand. Only topics inside the watched namespaces are
@@ -8,7 +9,6 @@ taken (``/rosout`` and ``/parameter_events`` are every node's housekeeping, not 
 from __future__ import annotations
 
 import logging
-import time
 from dataclasses import dataclass, field
 from typing import Callable, Iterable
 
@@ -66,33 +66,46 @@ def discover(node, namespaces: Iterable[str], ignore_nodes: Iterable[str] = ()) 
     return components, {t: ty for t, ty in types.items() if t in used}
 
 
-class RawTap:
-    """Raw subscriptions on ``topics``; each message is encoded and handed to ``on_event(t, topic, vector)``.
+BATCH_S = 0.1
+"""Messages are taken ten times a second (at most 10 of a 100-deep queue: a 1 kHz topic loses none)."""
 
-    A message that cannot be decoded is counted in ``dropped`` (per topic), never raised in the executor.
+
+class RawTap:
+    """Every message on ``topics`` encoded and handed to ``on_event(t, topic, vector)``, read by the
+    one ROS 2 reader (``detection.taps.ros2_reader.TopicReader``) on a node of its own in ``node``'s
+    context; ``on_tick()`` (if given) runs every ``tick_s`` seconds on the same thread, so a user
+    needs no lock between events and ticks. ``close()`` stops it (closing the context does too).
+
+    A message that cannot be decoded is counted in ``dropped`` (per topic), never raised in the reader.
     """
 
     def __init__(self, node, topic_types: dict[str, str], on_event: Callable[[float, str, np.ndarray], None],
-                 clock: Callable[[], float] = time.time) -> None:
-        from rclpy.qos import QoSProfile, ReliabilityPolicy
+                 on_tick: Callable[[], None] | None = None, tick_s: float = 1.0) -> None:
+        from detection.taps.ros2_reader import TopicReader
 
         self.encoders = {topic: RosEncoder.for_type(type_name) for topic, type_name in topic_types.items()}
         self.dropped: dict[str, int] = {}
         self.received = 0
-        self._on_event, self._clock = on_event, clock           # before the first message can arrive
-        qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT)   # matches every publisher
+        self._on_event = on_event                               # before the first message can arrive
+        self.reader = TopicReader(node.context, self._on_batch, on_tick=on_tick, tick_s=tick_s, batch_s=BATCH_S,
+                                  name=f"{node.get_name()}_tap")
         for topic, encoder in self.encoders.items():
-            node.create_subscription(encoder.msg_class, topic,
-                                     lambda data, t=topic, e=encoder: self._on_raw(t, e, data), qos, raw=True)
+            self.reader.subscribe(topic, encoder.msg_class)
+        self.reader.start()
 
-    def _on_raw(self, topic: str, encoder: RosEncoder, data: bytes) -> None:
-        now = self._clock()
-        try:
-            vector = encoder.encode_raw(data)
-        except Exception as exc:                # a bad message is counted and logged, never kills the tap
-            self.dropped[topic] = self.dropped.get(topic, 0) + 1
-            if self.dropped[topic] == 1 or self.dropped[topic] % 1000 == 0:
-                log.warning("learned tap: %d message(s) on %s could not be encoded (%s)", self.dropped[topic], topic, exc)
-            return
-        self.received += 1
-        self._on_event(now, topic, vector)
+    def close(self) -> None:
+        self.reader.close()
+
+    def _on_batch(self, batch) -> None:
+        encoders, on_event = self.encoders, self._on_event
+        for t_ns, topic, data in batch:
+            try:
+                vector = encoders[topic].encode_raw(data)
+            except Exception as exc:            # a bad message is counted and logged, never kills the tap
+                self.dropped[topic] = self.dropped.get(topic, 0) + 1
+                if self.dropped[topic] == 1 or self.dropped[topic] % 1000 == 0:
+                    log.warning("learned tap: %d message(s) on %s could not be encoded (%s)",
+                                self.dropped[topic], topic, exc)
+                continue
+            self.received += 1
+            on_event(t_ns / 1e9, topic, vector)

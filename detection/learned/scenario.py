@@ -152,13 +152,38 @@ def _domain_id(seed: int) -> int:
     return 101 + (seed + int(time.time())) % 100        # 101..200: clear of the tests' and run's ids
 
 
+DISCOVERY_S = 60.0
+"""How long the recorder waits for the graph to show every node of the plan with all its topics."""
+
+
+def settled_graph(probe, expected: set[str], what: str, timeout_s: float = DISCOVERY_S):
+    """``discover`` once every node in ``expected`` is in the graph and two looks a second apart agree.
+
+    Discovery has no fixed delay: on a busy host a fixed wait missed nodes, and a run recorded without
+    them would silently lack components. A graph that does not settle in ``timeout_s`` fails the run."""
+    from detection.learned.ros_tap import discover
+
+    deadline, last = time.monotonic() + timeout_s, None
+    while True:
+        time.sleep(1.0)
+        components, topic_types = discover(probe, [f"/{r}" for r in ROBOTS])
+        now = ({n: c.to_dict() for n, c in components.items()}, topic_types)
+        if expected <= set(components) and now == last:
+            return components, topic_types
+        if time.monotonic() >= deadline:
+            missing = sorted(expected - set(components))
+            raise RuntimeError(f"{what}: the ROS 2 graph did not settle in {timeout_s:.0f} s"
+                               + (f" (nodes not seen: {', '.join(missing)})" if missing else " (topics still changing)"))
+        last = now
+
+
 def record_run(run: dict, profile: Profile, out_dir: Path, progress: Callable[[str], None],
                agents: AgentTeam | None = None, domain_id: int | None = None) -> dict:
     """Launch the team, run the workload for ``profile.duration_s`` and record; returns the run's manifest
     entry. With ``agents`` the team's agents run over Zenoh as well and are recorded as components.
     ``domain_id``: the ROS domain (default: one of 101..200 from the seed and the clock)."""
     from detection.learned.record import RunRecorder
-    from detection.learned.ros_tap import RawTap, discover
+    from detection.learned.ros_tap import RawTap
     from detection.learned.zenoh_events import (CHANNEL_TYPE, ZenohEventTap, adopt_bridge_nodes, agent_component,
                                                 merge_zenoh)
     from robot_bridge.ros2.launch import Supervisor, plan
@@ -186,10 +211,9 @@ def record_run(run: dict, profile: Profile, out_dir: Path, progress: Callable[[s
             with RosContext(domain_id=domain) as ros:
                 import rclpy
                 probe = ros.add(rclpy.create_node("faultmas_perfbugs_recorder", context=ros.context))
-                time.sleep(2.0)                                     # the graph settles
                 if team is not None:
                     _wait_for_bridge_nodes(probe, team, run["id"])
-                components, topic_types = discover(probe, [f"/{r}" for r in ROBOTS])
+                components, topic_types = settled_graph(probe, set(pids), f"run {run['id']}")
                 if team is not None:
                     components = adopt_bridge_nodes(components, team.pids)
                 agent_pids = {agent_component(a): pid for a, pid in team.pids.items()} if team else {}

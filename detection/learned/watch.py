@@ -48,15 +48,19 @@ class LiveLearnedObserver:
     The ROS 2 components come from the graph under ``namespaces``; an agent's component (a model whose
     channels include Zenoh keys, ``zenoh_events``) is its ROS 2 bridge node under its name, plus the
     keys its model was trained on, tapped on a Zenoh session of ours connected to ``zenoh_connect``
-    (loopback endpoints; never multicast). Zenoh's samples are queued and taken in the executor's
+    (loopback endpoints; never multicast). Zenoh's samples are queued and taken in the ROS 2 reader's
     thread at each tick, so the buffers are only ever touched by one thread."""
 
     def __init__(self, models: dict[str, ComponentModel], namespaces: list[str], emit: Callable[[list[Observation]], object],
                  domain_id: int | None = None, confirm: tuple[int, int] = (3, 5), settle_s: float = 2.0,
-                 skip_unfit: bool = False, zenoh_connect: Sequence[str] = (), agents_timeout_s: float = 30.0) -> None:
+                 skip_unfit: bool = False, zenoh_connect: Sequence[str] = (), agents_timeout_s: float = 30.0,
+                 discovery_s: float = 20.0) -> None:
         """``skip_unfit``: watch only the components whose model fits the live system (the others are
         listed in ``unfit``) instead of refusing with a ``ModelFileError``. ``agents_timeout_s``: how
-        long to wait for the ROS 2 bridge nodes of the agents the models watch (agents start slowly)."""
+        long to wait for the ROS 2 bridge nodes of the agents the models watch (agents start slowly).
+        ``discovery_s``: how long discovery may take to show every model's component with all its
+        topics (DDS discovery of a busy graph takes seconds); a model still missing or unfit then is
+        refused (or, with ``skip_unfit``, left out)."""
         import time
 
         import rclpy
@@ -67,21 +71,27 @@ class LiveLearnedObserver:
                          for c, m in models.items()}
         agents = [c[:-len(AGENT_SUFFIX)] for c, cols in zenoh_columns.items() if cols and c.endswith(AGENT_SUFFIX)]
         self.zenoh: ZenohFeed | None = None
+        self.tap: RawTap | None = None
         self.ros = RosContext(domain_id=domain_id).start()
         try:
             node = self.ros.add(rclpy.create_node("faultmas_learned_resource", context=self.ros.context))
             time.sleep(settle_s)                                     # discovery has no fixed delay
             wait_for_bridge_nodes(node, agents, agents_timeout_s)    # missing ones: their models are unfit
-            components, topic_types = discover(node, namespaces, ignore_nodes=[node.get_name()])
-            self.components = adopt_bridge_nodes(components, agents)
-            for agent in agents:                   # an agent whose bridge node is not (yet) in the graph
-                self.components.setdefault(agent_component(agent), Component(agent_component(agent), "", agent))
-            missing = sorted(set(models) - set(self.components))
+            deadline = time.monotonic() + discovery_s
+            while True:            # until every model's component is seen with all its topics, or the deadline
+                components, topic_types = discover(node, namespaces, ignore_nodes=[node.get_name()])
+                self.components = adopt_bridge_nodes(components, agents)
+                for agent in agents:               # an agent whose bridge node is not (yet) in the graph
+                    self.components.setdefault(agent_component(agent), Component(agent_component(agent), "", agent))
+                missing = sorted(set(models) - set(self.components))
+                columns = {t: RosEncoder.for_type(ty).columns for t, ty in topic_types.items()}
+                self.unfit = {c: reason for c, m in models.items() if c in self.components
+                              and (reason := self._unfit(c, m, self.components[c], {**columns, **zenoh_columns[c]}))}
+                if (not missing and not self.unfit) or time.monotonic() > deadline:
+                    break
+                time.sleep(0.5)
             if missing:
                 raise ModelFileError(f"models for components not running here: {', '.join(missing)}")
-            columns = {t: RosEncoder.for_type(ty).columns for t, ty in topic_types.items()}
-            self.unfit = {c: reason for c, m in models.items()
-                          if (reason := self._unfit(c, m, self.components[c], {**columns, **zenoh_columns[c]}))}
             if self.unfit and not skip_unfit:
                 raise ModelFileError("; ".join(self.unfit.values()))
             models = {c: m for c, m in models.items() if c not in self.unfit}
@@ -92,12 +102,11 @@ class LiveLearnedObserver:
                 if c in models:
                     processes.update(agent_processes([agent], mas_of(zenoh_columns[c]), zenoh_connect))
             self.observer = LearnedResourceObserver(models, processes, emit, confirm)
-            self.tap = RawTap(node, {t: ty for t, ty in topic_types.items()
-                                     if t in self.observer.buffers}, self.observer.on_event)
             keys = {t: cols for c in models for t, cols in zenoh_columns[c].items()}
             if keys:
                 self.zenoh = ZenohFeed(keys, self.observer.on_event, connect=zenoh_connect)
-            node.create_timer(1.0, self._tick)                       # the executor's thread: no race with the tap
+            self.tap = RawTap(node, {t: ty for t, ty in topic_types.items() if t in self.observer.buffers},
+                              self.observer.on_event, on_tick=self._tick)   # the reader's thread: no race
         except BaseException:
             self.close()
             raise
@@ -121,6 +130,8 @@ class LiveLearnedObserver:
                 f"gone: {sorted(trained - set(channels))[:3]}, or other message types); train it again")
 
     def close(self) -> None:
+        if self.tap is not None:
+            self.tap.close()
         if self.zenoh is not None:
             self.zenoh.close()
         self.ros.close()

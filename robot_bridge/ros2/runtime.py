@@ -118,6 +118,18 @@ class RosContext:
         self.close()
 
 
+def _not_shutting_down(rclpy, grace_s: float = 1.0) -> bool:
+    """Whether the context is still up ``grace_s`` after an error. rclpy's signal handler shuts the
+    context down from another thread: a take that fails in that window (seen at the end of a data
+    generation run: "Unable to convert call argument '0'") is the shutdown, not a defect."""
+    deadline = time.monotonic() + grace_s
+    while rclpy.ok():
+        if time.monotonic() >= deadline:
+            return True
+        time.sleep(0.05)
+    return False
+
+
 def run_node(node_factory: Callable[..., object], description: str, argv: Sequence[str] | None = None,
              configure: Callable[[argparse.ArgumentParser], None] | None = None) -> int:
     """The ``main`` of one node process: ``python -m robot_bridge.ros2.X [--robot R] [--ros-args ...]``.
@@ -152,8 +164,8 @@ def run_node(node_factory: Callable[..., object], description: str, argv: Sequen
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except Exception:
-        if rclpy.ok():
-            raise                 # a real error, not a message taken while SIGINT shut us down
+        if _not_shutting_down(rclpy):
+            raise                 # a real error, not a message taken while SIGINT/SIGTERM shut us down
     finally:
         if bugs is not None:
             bugs.stop()

@@ -125,6 +125,17 @@ def test_fork_join_groups_in_parentheses():
     assert run_asl(src) == ["c3", "a5", "b1", "c2", "a4", "c1", "joined", "s1", "s2", "1"]
 
 
+def test_a_body_in_parentheses_is_no_term():
+    """Jason reads ``( body )`` only where a body formula stands: as a term it is a syntax error."""
+    import pytest
+
+    from agentspeak.errors import AslSyntaxError
+    from agentspeak.parser import parse_program
+    for src in ("+!g <- X = (!a ||| !b).", "+!g <- .print((a; b)).", "p :- (a |&| b)."):
+        with pytest.raises(AslSyntaxError, match="body in parentheses"):
+            parse_program(src, "t.asl")
+
+
 def test_plan_terms_add_and_remove():
     src = """!m.
 +!m <- +{ @dl +!dyn(X) <- .print(dyn, X) }; !dyn(1);

@@ -88,7 +88,7 @@ def test_suspend_and_resume_current_and_bottom_goal():
     src = """!s. !w.
 +!s <- .print(s0); !!r; .suspend; .print(s1).
 +!r <- .print(r); .resume(s).
-+!w <- .wait(10); .suspend(w2); .print(w_done).
++!w <- .wait(300); .suspend(w2); .print(w_done).   // long enough for s1 first on a loaded machine
 """
     assert run_asl(src) == ["s0", "r", "s1", "w_done"]
 

@@ -3,6 +3,7 @@ never with FAULTMAS_PURE_PYTHON=1. Each case imports in a fresh interpreter, as 
 from __future__ import annotations
 
 import importlib
+import importlib.machinery
 import json
 import re
 import os
@@ -164,3 +165,35 @@ def test_a_python_subclass_of_agent_overrides_the_compiled_cycle_and_adds_attrib
     assert runtime.run(timeout=10) == "idle"
     assert lines == ["done"]
     assert agent.acts >= 4 and agent.cycles_seen >= agent.acts
+
+
+def _fake_build(tmp_path: Path, digest_ok: bool, stamp_ok: bool) -> Path:
+    """A package ``agentspeak`` with one module and a compiled file beside it (never imported here), and a
+    manifest whose digest and stamp of that module are right or wrong as asked."""
+    package = tmp_path / "agentspeak"
+    package.mkdir()
+    source = package / "fork.py"
+    source.write_text("X = 1\n")
+    (package / f"fork{importlib.machinery.EXTENSION_SUFFIXES[0]}").write_bytes(b"")
+    record = {"agentspeak.fork": _speedups.source_digest(source) if digest_ok else "0" * 64,
+              _speedups.STAMPS: {"agentspeak.fork": _speedups.source_stamp(source) if stamp_ok else "1:2"}}
+    (package / _speedups.MANIFEST).write_text(json.dumps(record))
+    return package
+
+
+@pytest.mark.parametrize("digest_ok, stamp_ok, stale", [
+    (True, True, False),
+    (True, False, False),      # touched, not edited: the digest decides
+    (False, True, False),      # the stamp the build saw is trusted without hashing, as Python trusts a .pyc's
+    (False, False, True),      # edited since the build
+])
+def test_the_start_hashes_a_source_only_when_its_size_or_time_changed(tmp_path, digest_ok, stamp_ok, stale,
+                                                                        monkeypatch):
+    monkeypatch.delenv(_speedups.PURE_ENV, raising=False)
+    package = _fake_build(tmp_path, digest_ok, stamp_ok)
+    hashed, digest = [], _speedups.source_digest
+    monkeypatch.setattr(_speedups, "source_digest", lambda path: hashed.append(path) or digest(path))
+    sources, stale_modules = _speedups.modules_to_load_from_source(package)
+    assert stale_modules == (["agentspeak.fork"] if stale else [])
+    assert bool(sources) == stale
+    assert bool(hashed) == (not stamp_ok)

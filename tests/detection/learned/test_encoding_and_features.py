@@ -82,3 +82,78 @@ def test_online_buffer_gives_the_offline_features():
             i += 1
         online.append(buffer.features(tick))
     np.testing.assert_allclose(np.array(online), offline, rtol=1e-12, atol=1e-12)
+
+
+def _messages_of_every_shape():
+    """Messages whose layouts differ in every way CDR allows: strings (also non-ASCII), sequences of
+    numbers, strings and structs, small and large fixed arrays, nested headers, booleans, float32."""
+    import random
+
+    from geometry_msgs.msg import PoseArray, Pose, Twist
+    from nav_msgs.msg import Odometry
+    from sensor_msgs.msg import CameraInfo, Image, Imu, JointState
+    from std_msgs.msg import Empty, String
+
+    rng = random.Random(7)
+    out = []
+    for _ in range(20):
+        odom = Odometry()
+        odom.header.frame_id = "odom" * rng.randint(0, 3)
+        odom.child_frame_id = "base" * rng.randint(0, 3)
+        odom.header.stamp.sec = rng.randint(0, 2**31 - 1)
+        odom.pose.pose.position.x = rng.uniform(-1e6, 1e6)
+        odom.twist.twist.angular.z = rng.gauss(0, 1)
+        imu = Imu()
+        imu.orientation.w = rng.random()
+        imu.angular_velocity_covariance = [rng.random() for _ in range(9)]
+        names = [rng.choice("abcdef") * rng.randint(0, 4) for _ in range(rng.randint(0, 4))]
+        joints = JointState(name=names, position=[rng.random() for _ in names], effort=[1.0] * rng.randint(0, 2))
+        info = CameraInfo(distortion_model="plumb_bob", d=[rng.random() for _ in range(rng.randint(0, 5))],
+                          width=rng.randint(0, 640), binning_x=rng.randint(0, 4))
+        info.k = [rng.random() for _ in range(9)]
+        info.roi.do_rectify = rng.random() < 0.5
+        image = Image(encoding="rgb8", height=2, width=3, is_bigendian=rng.randint(0, 1),
+                      data=bytes(rng.randrange(256) for _ in range(rng.randint(0, 18))))
+        poses = PoseArray(poses=[Pose() for _ in range(rng.randint(0, 3))])
+        text = String(data=rng.choice(["", "plain", '{"x": 1}', "é und ü", "日本"]) * rng.randint(1, 3))
+        twist = Twist()
+        twist.linear.x = float("nan") if rng.random() < 0.2 else rng.random()
+        out += [odom, imu, joints, info, image, poses, text, twist, Empty()]
+    same_size = [JointState(name=["ab", "c"], position=[1.0, 2.0]), JointState(name=["a", "bc"], position=[3.0, 4.0])]
+    return out + same_size
+
+
+def test_numbers_read_in_place_from_cdr_equal_rclpys_deserialised_message():
+    """``encode_raw`` reads the CDR bytes in place (``CdrColumns``); it must give exactly the vector of
+    the deserialised message for any layout, including two messages of one size whose strings differ."""
+    pytest.importorskip("rclpy")
+    from rclpy.serialization import deserialize_message, serialize_message
+
+    from detection.learned.encoding import RosEncoder
+
+    messages = _messages_of_every_shape()
+    non_ascii = sum(1 for m in messages if isinstance(getattr(m, "data", b""), str) and not m.data.isascii())
+    encoders, in_place = {}, 0
+    for msg in messages:
+        encoder = encoders.setdefault(type(msg), RosEncoder(type(msg)))
+        data = serialize_message(msg)
+        expected = encoder.encode(deserialize_message(data, type(msg)), len(data))
+        np.testing.assert_array_equal(encoder.encode_raw(data), expected, err_msg=type(msg).__name__)
+        in_place += encoder._cdr.read(data) is not None
+    assert all(encoder._cdr for encoder in encoders.values())          # every type has an in-place reader
+    assert non_ascii and in_place == len(messages) - non_ascii        # all but the non-ASCII texts
+
+
+def test_a_message_shorter_than_its_layout_is_not_read_in_place():
+    pytest.importorskip("rclpy")
+    from nav_msgs.msg import Odometry
+    from rclpy.serialization import serialize_message
+
+    from detection.learned.encoding import RosEncoder
+
+    encoder = RosEncoder(Odometry)
+    data = serialize_message(Odometry(child_frame_id="base"))
+    encoder.encode_raw(data)
+    assert encoder._cdr.read(data[:-40]) is None and encoder._cdr.read(data[:3]) is None
+    big_endian = data[:1] + b"\x00" + data[2:]
+    assert encoder._cdr.read(big_endian) is None
