@@ -49,6 +49,8 @@ def read_observations(path: str) -> dict[str, bool]:
         raise SourceError(f"cannot read observations: {exc.strerror}", file=path) from None
     except json.JSONDecodeError as exc:
         raise SourceError(f"not JSON: {exc.msg}", file=path, line=exc.lineno, column=exc.colno) from None
+    except SourceError:
+        raise  # located already (read_source: not UTF-8)
     except ValueError as exc:  # an integer over Python's 4,300-digit limit (found by the fuzz campaign)
         raise SourceError(f"not usable JSON: {str(exc)[:80]}", file=path) from None
     if not isinstance(data, dict):
