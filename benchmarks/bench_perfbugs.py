@@ -61,7 +61,9 @@ def _watch_child(domain: int, models_dir: str, seconds: float) -> None:
         live.close()
 
 
-def _live_share(models, seconds: float) -> tuple[float, int, int]:
+def _live_share(models, seconds: float, camera: bool) -> tuple[float, int, int]:
+    """The team is launched as the models' data set was recorded (``camera``): models of the camera
+    nodes refuse a team without them, and models without them would not watch the images."""
     import rclpy
 
     from detection.learned.scenario import ROBOTS, Workload
@@ -72,7 +74,7 @@ def _live_share(models, seconds: float) -> tuple[float, int, int]:
     with tempfile.TemporaryDirectory() as tmp:
         for name, model in models.items():
             model.save(Path(tmp) / f"{name}.npz")
-        supervisor = Supervisor(plan(list(ROBOTS), camera=False), domain)
+        supervisor = Supervisor(plan(list(ROBOTS), camera=camera), domain)
         supervisor.start()
         try:
             if supervisor.wait_ready(90):
@@ -124,8 +126,9 @@ def run(quick: bool = False) -> str:
     if quick:
         lines.append(f"{'online observer CPU share, live team':<58} {'(skipped: --quick)':>14}")
     else:
-        share, ticks, messages, dds, tick = _live_share(models, 30.0)
-        lines.append(f"{f'online observer CPU share, live team ({messages / 30:.0f} msg/s, {ticks} ticks)':<58} "
+        from detection.learned.scenario import PROFILES
+        share, ticks, messages, dds, tick = _live_share(models, 30.0, PROFILES[profile].camera)
+        lines.append(f"{f'online observer CPU share, live team, {profile} models ({messages / 30:.0f} msg/s, {ticks} ticks)':<58} "
                      f"{share * 100:>12.2f} % {'<= 2 %':>10}")
         lines.append(f"{'  of which Fast DDS receive threads':<58} {dds * 100:>12.2f} %")
         lines.append(f"{'  of which ticks (psutil counters + features + models)':<58} {tick * 100:>12.2f} %")
