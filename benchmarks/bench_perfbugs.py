@@ -26,10 +26,11 @@ TARGET_TICK_MS = 1.0
 TARGET_CPU_SHARE = 0.02
 
 
-def _dataset():
+def _dataset(profiles: tuple[str, ...] = ("paper", "smoke")):
+    """The first data set present of ``profiles`` (--quick prefers the small one: it checks the harness)."""
     from detection.learned.dataset import load
     from experiments.perfbugs import data_dir
-    for profile in ("paper", "smoke"):
+    for profile in profiles:
         if (data_dir(profile) / "manifest.json").exists():
             return profile, load(data_dir(profile))
     raise RuntimeError("no perfbugs data set: faultmas experiment perfbugs --generate")
@@ -100,7 +101,7 @@ def run(quick: bool = False) -> str:
     from detection.learned.evaluate import partitions, train_models
     from detection.learned.observer import LearnedResourceObserver, replay
 
-    profile, dataset = _dataset()
+    profile, dataset = _dataset(("smoke", "paper") if quick else ("paper", "smoke"))
     parts = partitions(dataset.fault_free_runs(), 1 if len(dataset.fault_free_runs()) < 10 else 2)
     started = time.process_time()
     models = train_models(dataset, parts, 0.005)
