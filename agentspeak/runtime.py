@@ -305,7 +305,9 @@ class LocalRuntime:
                 for agent in list(timed):
                     if not agent.timers:
                         timed.discard(agent)
-                    elif agent.timers[0][0] <= now and (not ready or ready[0] is not agent):
+                    elif agent.timers[0][0] <= now and not (agent.running or agent.events) \
+                            and (not ready or ready[0] is not agent):
+                        # (a busy agent runs its timers by its own clock, in its turns: Agent.sense)
                         due.append((agent.timers[0][0], agent))
                 if due:
                     # first in line, the earliest first, even if already queued: a .wait or .at that is
@@ -346,13 +348,12 @@ class LocalRuntime:
                     self._yield_to = None
                 if agent.timers:
                     timed.add(agent)  # timers are only set by the agent itself, during its turn
-                    if agent.timers[0][0] <= monotonic():
-                        self.wake(agent)
-                        continue
-                if (agent.events or agent.running or agent.mailbox or agent.feedback) \
-                        and agent.name not in ready_set:  # has_work(), and not woken meanwhile
-                    ready_set.add(agent.name)
-                    busy.append(agent)
+                if agent.events or agent.running or agent.mailbox or agent.feedback:  # has_work()
+                    if agent.name not in ready_set:  # (unless woken meanwhile)
+                        ready_set.add(agent.name)
+                        busy.append(agent)
+                elif agent.timers and agent.timers[0][0] <= monotonic():
+                    self.wake(agent)
                 continue
             if stop_when_idle and self.idle() and not self._external_pending():
                 return "idle"

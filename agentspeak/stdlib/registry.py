@@ -68,6 +68,9 @@ class Suspend:
     on_event: Callable[[Any, Any], bool] | None = None
     term: Any = None
     """Why, as a term (``.suspended(G, R)`` gives it; Jason's ``wait(W)[time(T)]`` for ``.wait``)."""
+    answer_waiting: Callable[[float], bool] | None = None
+    """For an ask: is an answer sent by this (monotonic) deadline still unread in the mailbox? Then the
+    timeout waits for it to be read."""
 
 
 @dataclass(frozen=True)
