@@ -245,6 +245,8 @@ def record_run(run: dict, profile: Profile, out_dir: Path, progress: Callable[[s
                 while time.time() < end:
                     if supervisor.dead():
                         raise RuntimeError(f"run {run['id']}: a node died: {supervisor.dead()}")
+                    if recorder.lost:    # an agent's process too: its counters would be missing, not healthy
+                        raise RuntimeError(f"run {run['id']}: a process ended during the run: {', '.join(recorder.lost)}")
                     time.sleep(min(5.0, max(0.0, end - time.time())))
                     progress(f"run {run['id']}: {time.time() - began:4.0f}/{profile.duration_s:.0f} s, "
                              f"{tap.received} messages" + (f", {zenoh_tap.received} on Zenoh" if zenoh_tap else ""))
