@@ -807,6 +807,12 @@ class Agent:
             if done[0] or intention.dropped:
                 return
             done[0] = True
+            # ended otherwise (timeout, future): its waiter must go, or a later matching event would
+            # "resume" an intention that has moved on or finished (an IndexError that killed the agent)
+            if susp.event is not None:
+                self.event_waiters = [w for w in self.event_waiters if w[2] is not susp]
+            if susp.until is not None:
+                self.condition_waiters = [w for w in self.condition_waiters if w[1] is not susp]
             held = intention.waiting
             if held is not susp:
                 if held is not None and getattr(held, "inner", None) is susp:
