@@ -52,7 +52,8 @@ def main(argv: list[str] | None = None) -> int:
             if "FAILED" in line or "NOT ACHIEVED" in line or "not launched" in line:
                 print(line)
     load = os.getloadavg()[0] / (os.cpu_count() or 1)
-    print(f"Jason unit tests: {executed}/{passed} (executed/passed), Java Jason: 468/468; "
+    how = "--processes" if args.processes else "in one process"
+    print(f"Jason unit tests ({how}): {executed}/{passed} (executed/passed), Java Jason: 468/468; "
           f"{time.monotonic() - started:.0f} s; load {load:.1f} per core")
     if (executed != passed or not executed) and load > 1.5:
         # the scheduler and the timers keep the order an agent on a thread of its own sees (docs/language.md,
