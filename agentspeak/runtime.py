@@ -305,10 +305,10 @@ class LocalRuntime:
                 for agent in list(timed):
                     if not agent.timers:
                         timed.discard(agent)
-                    elif agent.timers[0][0] + agent.timer_lag <= now and not (agent.running or agent.events) \
+                    elif agent.timers[0][0] <= now and not (agent.running or agent.events) \
                             and (not ready or ready[0] is not agent):
                         # (a busy agent runs its timers by its own clock, in its turns: Agent.sense)
-                        due.append((agent.timers[0][0] + agent.timer_lag, agent))
+                        due.append((agent.timers[0][0], agent))
                 if due:
                     # first in line, the earliest first, even if already queued: a .wait or .at that is
                     # due goes on at once, as an agent on a thread of its own would (Jason), not after a
@@ -356,13 +356,13 @@ class LocalRuntime:
                     if agent.name not in ready_set:  # (unless woken meanwhile)
                         ready_set.add(agent.name)
                         busy.append(agent)
-                elif agent.timers and agent.timers[0][0] + agent.timer_lag <= monotonic():
+                elif agent.timers and agent.timers[0][0] <= monotonic():
                     self.wake(agent)
                 continue
             if stop_when_idle and self.idle() and not self._external_pending():
                 return "idle"
             # nothing ready: sleep until the next timer, a wake-up, or the deadline
-            waits = [a.timers[0][0] + a.timer_lag for a in timed if a.timers]
+            waits = [a.timers[0][0] for a in timed if a.timers]
             if self._stop_at is not None:
                 waits.append(self._stop_at)
             if deadline is not None:
