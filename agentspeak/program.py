@@ -314,6 +314,13 @@ class Plan:
     all_unifs: bool = field(init=False, default=False)
     goal_condition: Term | None = field(init=False, default=None)
     """Jason 3.2's ``+!g <: C <- body``: the goal is achieved as soon as C holds."""
+    sub_plans: tuple = field(init=False, default=())
+    """Jason(ER)'s ``+!g <- body. { sub-plans }``: plans relevant only while this plan's intended
+    means is on an intention; their variables of the same name are this plan's (the parser maps them)."""
+    sub_library: object = field(init=False, default=None, repr=False)
+    """The ``PlanLibrary`` of ``sub_plans`` once the plan is in an agent's library (its father is that
+    library); ``scope`` is the library a sub-plan lives in."""
+    scope: object = field(init=False, default=None, repr=False)
     matcher: tuple | None = field(init=False, default=None, repr=False)
     """(trigger variables, compiled context, tail-call key) for deliberation, made on first use
     (``plan_matcher``); shared by every agent whose plan has the same terms."""
@@ -335,6 +342,13 @@ class Plan:
             annots = self.label.annots if self.label is not None else None
             self.label = Literal(f"p__{_plan_counter[0]}", (), annots)
         return self.label
+
+    def copy(self) -> "Plan":
+        """A new Plan object over the same terms (each agent's library holds its own plans)."""
+        q = Plan(self.trigger, self.context, self.body, self.label, self.source_file, self.line)
+        q.goal_condition = self.goal_condition
+        q.sub_plans = self.sub_plans
+        return q
 
     def renamed(self) -> "Plan":
         """A copy with fresh variables (used when a plan is stored as a term)."""
@@ -363,9 +377,47 @@ class Plan:
         text += str(self.trigger)
         if self.context is not None:
             text += " : " + to_str(self.context)
+        if self.goal_condition is not None:
+            text += " <: " + to_str(self.goal_condition)
         if self.body:
             text += " <- " + body_str(self.body)
         return text
+
+    def source_text(self, indent: str = "") -> str:
+        """The plan as AgentSpeak source, its sub-plans in a block after it (``.save_agent``)."""
+        text = indent + str(self) + "."
+        if self.sub_plans:
+            inner = "\n".join(p.source_text(indent + "   ") for p in self.sub_plans)
+            text += " {\n" + inner + "\n" + indent + "}"
+        return text
+
+
+def plan_variables(plan: Plan) -> list:
+    """The variables of a plan: label, trigger, context, goal condition and body."""
+    out: list = []
+    for t in (plan.label, plan.trigger.literal, plan.context, plan.goal_condition):
+        if t is not None:
+            variables(t, out)
+    return body_variables(plan.body, out)
+
+
+def with_sub_plans(plan: Plan, subs: list) -> Plan:
+    """``plan`` with Jason(ER) sub-plans attached. A sub-plan's variable named as one of the plan's is
+    that variable (Jason's unifiers go by name: the sub-plan starts from the bindings the plan had when
+    it was selected), at any depth of nesting."""
+    names = {v.name: v for v in plan_variables(plan) if v.name != "_"}
+    q = plan.copy()
+    q.sub_plans = plan.sub_plans + tuple(_share_variables(sp, names) for sp in subs)
+    return q
+
+
+def _share_variables(sub: Plan, names: dict) -> Plan:
+    mapping = {v: names[v.name] for v in plan_variables(sub) if v.name in names and names[v.name] is not v}
+    r = sub.resolved(mapping) if mapping else sub.copy()
+    inner = dict(names)
+    inner.update((v.name, v) for v in plan_variables(r) if v.name != "_")
+    r.sub_plans = tuple(_share_variables(s, inner) for s in sub.sub_plans)
+    return r
 
 
 def plan_matcher(plan: Plan) -> tuple:
