@@ -5,7 +5,7 @@ instruction keeps the source line it came from so failures can say ``code_line``
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 from agentspeak.terms import (
@@ -327,6 +327,10 @@ class Plan:
 
     def __post_init__(self) -> None:
         self.refresh_label_flags()
+
+    def __getstate__(self) -> dict:
+        # without the matcher: it holds compiled closures, made again on first use (agentspeak/parse_cache.py)
+        return {**self.__dict__, "matcher": None}
 
     def refresh_label_flags(self) -> None:
         annots = self.label.annots if type(self.label) is Literal and self.label.annots else ()
@@ -759,6 +763,18 @@ class Program:
     plans: list = field(default_factory=list)         # Plan
     source_file: str = ""
     warnings: list = field(default_factory=list)
+
+
+def copy_program(program: Program) -> Program:
+    """A program of new Plan and Rule objects over the same (immutable) terms and instructions: what each
+    agent of a shared source gets (plans hold per-agent labels and flags)."""
+    return Program(
+        beliefs=list(program.beliefs),
+        rules=[replace(r) for r in program.rules],
+        goals=list(program.goals),
+        plans=[p.copy() for p in program.plans],
+        source_file=program.source_file,
+        warnings=list(program.warnings))
 
 
 def is_var(t: Term) -> bool:

@@ -18,7 +18,7 @@ from typing import Callable, Iterable
 from agentspeak.agent import Agent
 from agentspeak.arch import AgentArch
 from agentspeak.communication import Message
-from agentspeak.parser import parse_program
+from agentspeak.parse_cache import cached_program   # not the parser: a file parsed before skips Lark
 from agentspeak.stdlib.registry import CURRENT
 from agentspeak.terms import Literal
 
@@ -112,7 +112,7 @@ class LocalRuntime:
         if name in self.agents:
             raise ValueError(f"an agent named {name!r} already exists")
         if program is None:
-            program = parse_program(source or "", source_file)
+            program = cached_program(source or "", source_file)
         agent = Agent(name, arch=arch or LocalArch(self), source_file=source_file)
         for lit in extra_beliefs:
             agent.add_initial_belief(lit)
@@ -144,7 +144,7 @@ class LocalRuntime:
         try:
             with open(path, encoding="utf-8") as f:
                 text = f.read()
-            program = parse_program(text, path, source_path=tuple(self.source_dirs))
+            program = cached_program(text, path, tuple(self.source_dirs))
         except OSError as exc:
             raise IAError("ia_failed", f".create_agent: cannot read {path}: {exc.strerror or exc}") from None
         except AslSyntaxError as exc:
