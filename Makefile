@@ -76,11 +76,14 @@ SOAK_WALL_SECONDS ?= 36000
 soak: speedups
 	$(PY) -m tests.hardening.soak --sim-seconds $(SOAK_SIM_SECONDS) --wall-seconds $(SOAK_WALL_SECONDS) --out soak.jsonl
 
-# Jason 3.3.2's own AgentSpeak unit tests, run unchanged from ../shared (see tests/jason_suite): fails
-# unless every executed test passes, and prints executed/passed
+# Jason 3.3.2's own AgentSpeak unit tests, run unchanged from ../shared (see tests/jason_suite), in one
+# process and with --processes (both run; fails unless every executed test passed in both); prints
+# executed/passed for each
 JASON_TESTS ?= ../shared/jason-unit-tests
 jason-tests: speedups
-	$(PY) -m tests.jason_suite $(abspath $(JASON_TESTS))
+	@$(PY) -m tests.jason_suite $(abspath $(JASON_TESTS)); in_process=$$?; \
+	$(PY) -m tests.jason_suite $(abspath $(JASON_TESTS)) --processes; processes=$$?; \
+	exit $$((in_process | processes))
 
 # A user's install, slow (~2 min: a fresh venv, plain `pip install '.[ros2]'`, then `faultmas run`), so not
 # part of `make test`: tests/test_install.py (issue 23).

@@ -42,8 +42,8 @@ _JAG_AWAKING = Literal("jag_awaking")
 _seq = itertools.count()
 
 TIMER_STEP = 0.001
-"""How far past its timers a busy agent's clock moves in one reasoning cycle (seconds), see ``sense``."""
-TIMER_MAX_LAG = 1.0
+"""How far a busy agent's timer clock moves in one reasoning cycle at most (seconds), see ``sense``."""
+TIMER_MAX_LAG = 2.0
 """... and how far behind the real clock it may fall at most."""
 
 
@@ -69,7 +69,9 @@ class Agent:
         self.mailbox: deque = deque()          # appended from any thread
         self.feedback: deque = deque()         # callables run in the sense phase (thread-safe append)
         self.timers: list = []                 # heap of (when, seq, callback)
-        self.timer_clock = 0.0                 # up to when timers have been run (see sense)
+        self.timer_lag = 0.0                   # how far the timer clock is behind the real one (see sense)
+        self.timer_seen = 0.0                  # real time of the last look at the timers
+        self.timer_busy = False                # busy at that look
         self.event_waiters: list = []          # (trigger pattern, intention, suspend)
         self.condition_waiters: list = []      # (intention, suspend)
         self.pending_futures = 0               # actions / awaited results in flight
@@ -301,7 +303,8 @@ class Agent:
         return not (self.has_work() or self.timers or self.pending_futures)
 
     def next_timer(self) -> float | None:
-        return self.timers[0][0] if self.timers else None
+        """The real time the next timer is due at the earliest."""
+        return self.timers[0][0] + self.timer_lag if self.timers else None
 
     # -- sense
     def sense(self) -> bool:
@@ -317,21 +320,23 @@ class Agent:
             did = True
         timers = self.timers
         if timers:
-            # The timers run in the order of their deadlines, and a busy agent (events or intentions to
-            # run) moves its timer clock at most TIMER_STEP per cycle: when the process got no CPU for a
-            # while, what an agent on a thread of its own does in a few cycles after one deadline still
-            # happens before the next (.wait(50) then 20 formulas, before another intention's .wait(150)
-            # ends), as in Jason on a machine with time to spare. An idle agent's clock is the real one.
+            # Timers run by the agent's timer clock, in the order of their deadlines on it. While the agent
+            # stays busy (events or intentions to run) that clock moves at most TIMER_STEP per cycle, and
+            # deadlines are set on it: when the process gets the CPU seldom, what an agent on a thread of
+            # its own does in a few cycles after one deadline still happens before the next (.wait(50)
+            # then 20 formulas, before another intention's .wait(150) ends; six .wait(50) in a row end
+            # before a .wait(500) begun with them), as Jason on a machine with time to spare. The clock
+            # falls at most TIMER_MAX_LAG behind, and no timer ends before its time on the real clock.
             now = time.monotonic()
-            if self.running or self.events:
-                clock = self.timer_clock + TIMER_STEP
-                if clock > now:
-                    clock = now
-                elif clock < now - TIMER_MAX_LAG:
-                    clock = now - TIMER_MAX_LAG
-            else:
-                clock = now
-            self.timer_clock = clock
+            busy = bool(self.running or self.events)
+            if busy and self.timer_busy:
+                slow = now - self.timer_seen - TIMER_STEP
+                if slow > 0.0:
+                    lag = self.timer_lag + slow
+                    self.timer_lag = lag if lag < TIMER_MAX_LAG else TIMER_MAX_LAG
+            self.timer_seen = now
+            self.timer_busy = busy
+            clock = now - self.timer_lag
             if timers[0][0] <= clock:
                 due = []
                 while timers and timers[0][0] <= clock:
@@ -996,9 +1001,10 @@ class Agent:
 
     def add_timer(self, seconds: float, callback: Callable[[], None]) -> None:
         now = time.monotonic()
-        if not self.timers:
-            self.timer_clock = now
-        heapq.heappush(self.timers, (now + max(0.0, seconds), next(_seq), callback))
+        if not self.timers:  # (set in a cycle of this agent: the time to its next cycle is busy if it is then)
+            self.timer_lag, self.timer_seen, self.timer_busy = 0.0, now, True
+        # on the timer clock: ``timers[0][0] + timer_lag`` is the real time it is due at the earliest
+        heapq.heappush(self.timers, (now - self.timer_lag + max(0.0, seconds), next(_seq), callback))
         self.arch.wake(self)
 
     def post_feedback(self, callback: Callable[[], None]) -> None:
