@@ -409,3 +409,14 @@ def test_clone_copies_beliefs_and_plans_but_not_goals():
         +p(X) : a(V) & test(T) <- .print(X, " : ", V + T).
     """
     assert run_mas({"main": main}) == ["[main] started", "[bob] 10 : 41"]
+
+
+def test_stop_mas_with_a_delay_posts_jag_shutting_down_to_every_agent_and_runs_until_then():
+    # RunLocalMAS.stopAgs: with a deadline, every agent gets +jag_shutting_down(Deadline) and runs
+    # that long; .stopMAS itself succeeds (its caller goes on)
+    out = run_mas({
+        "a": "!s.\n+!s <- .stopMAS(300); .print(goes_on).\n"
+             "+jag_shutting_down(T) <- .print(a_down, T).\n",
+        "b": "+jag_shutting_down(T) <- .wait(100); .print(b_packed, T / 1000).\n",
+    }, timeout=10)
+    assert sorted(out) == ["[a] a_down300", "[a] goes_on", "[b] b_packed0.3"]
