@@ -360,6 +360,8 @@ class Agent:
         if intention is not None and intention.dropped:
             return True
         self.current_intention = intention  # what .intention(..., current) means in a plan context
+        if self.bb.select_option:
+            return self._select_option_bb(ev)
         if intention is not None:
             if intention.stack:
                 top_plan = intention.stack[-1].plan
@@ -438,6 +440,51 @@ class Agent:
                     self._check_deadline(lit, intention if intention is not None else self.running[-1])
             return True
         self._no_plan(ev, "no_applicable", f"found a goal for which there is no applicable plan: {trigger}")
+        return True
+
+    def _select_option_bb(self, ev: Event) -> bool:
+        """Jason 3.3's ``select__option(Event, IntentionId, Plan, Unifier)`` rules: every option (each
+        applicable plan with each solution of its context) is tested with the rule, and the first that
+        passes is taken (Agent.selectOptionBB; -1 is the id of an external event's intention)."""
+        from agentspeak.solver import solve
+        from agentspeak.terms import make_list
+        trigger, intention = ev.trigger, ev.intention
+        lit = trigger.literal
+        options: list = []
+        for plan in self.plans.relevant(trigger):
+            b: dict = {}
+            if not unify(plan.trigger.literal, lit, b, []):
+                continue
+            if plan.context is None:
+                options.append((plan, b))
+                continue
+            try:
+                for _ in solve(self, plan.context, b, []):
+                    options.append((plan, dict(b)))
+            except (SolveError, ArithmeticError_, RecursionError, TypeError, ValueError) as exc:
+                log.warning("[%s] error in the context of the plan at %s:%s: %s", self.name,
+                            plan.source_file, plan.line, getattr(exc, "message", exc))
+        event = P.PlanTerm(plan=Plan(Trigger(trigger.op, trigger.kind, lit)), bare=True)
+        ident = intention.id if intention is not None else -1
+        chosen = None
+        for plan, b in options:
+            unifier = make_list([Literal("map", (Var(v.name), resolve(v, b))) for v in b
+                                 if type(v) is Var and not v.name.startswith("_")])
+            query = Literal("select__option", (event, ident, P.PlanTerm(plan=plan.resolved(b)), unifier))
+            try:
+                ok = solve_first(self, query, {})
+            except (SolveError, ArithmeticError_, RecursionError, TypeError, ValueError) as exc:
+                log.warning("[%s] error in select__option: %s", self.name, getattr(exc, "message", exc))
+                ok = False
+            if ok and chosen is None:
+                chosen = (plan, b)
+        if chosen is None:
+            kind = "applicable" if self.plans.relevant(trigger) else "relevant"
+            self._no_plan(ev, "no_" + kind, f"found a goal for which there is no {kind} plan: {trigger}")
+            return True
+        self.push_im(ev, *chosen)
+        if trigger.op == ADD and trigger.kind == ACHIEVE and self.plans.has_meta:
+            self.goal_state(trigger, "executing")
         return True
 
     # ------------------------------------------------------------------ Jason(ER) sub-plans

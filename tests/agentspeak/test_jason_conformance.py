@@ -420,3 +420,16 @@ def test_stop_mas_with_a_delay_posts_jag_shutting_down_to_every_agent_and_runs_u
         "b": "+jag_shutting_down(T) <- .wait(100); .print(b_packed, T / 1000).\n",
     }, timeout=10)
     assert sorted(out) == ["[a] a_down300", "[a] goes_on", "[b] b_packed0.3"]
+
+
+def test_a_select_option_rule_chooses_among_the_options():
+    # Agent.selectOptionBB (Jason 3.3, demos/selectOptionBB): each option (plan x context solution) is
+    # tested with select__option(Event, IntentionId, Plan, Unifier); the first that passes is taken
+    out = run_asl(asl("""
+        select__option(E, I, P, U) :- .print(I, " ", U) & P = {@L +!T : C <- B} & L =.. [_, _, As] & .member(kk, As).
+        a(10). a(20). b(30).
+        !g.
+        +!g : a(X) <- .print(X).
+        @pt[kk] +!g : b(X) <- .print(X).
+    """))
+    assert out == ["-1 [map(X,10)]", "-1 [map(X,20)]", "-1 [map(X,30)]", "30"]
