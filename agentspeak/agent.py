@@ -41,6 +41,11 @@ _JAG_SLEEPING = Literal("jag_sleeping")
 _JAG_AWAKING = Literal("jag_awaking")
 _seq = itertools.count()
 
+TIMER_STEP = 0.001
+"""How far past its timers a busy agent's clock moves in one reasoning cycle (seconds), see ``sense``."""
+TIMER_MAX_LAG = 1.0
+"""... and how far behind the real clock it may fall at most."""
+
 
 
 
@@ -64,6 +69,7 @@ class Agent:
         self.mailbox: deque = deque()          # appended from any thread
         self.feedback: deque = deque()         # callables run in the sense phase (thread-safe append)
         self.timers: list = []                 # heap of (when, seq, callback)
+        self.timer_clock = 0.0                 # up to when timers have been run (see sense)
         self.event_waiters: list = []          # (trigger pattern, intention, suspend)
         self.condition_waiters: list = []      # (intention, suspend)
         self.pending_futures = 0               # actions / awaited results in flight
@@ -309,12 +315,30 @@ class Agent:
         while self.feedback:
             self.feedback.popleft()()
             did = True
-        if self.timers and self.timers[0][0] <= time.monotonic():
+        timers = self.timers
+        if timers:
+            # The timers run in the order of their deadlines, and a busy agent (events or intentions to
+            # run) moves its timer clock at most TIMER_STEP per cycle: when the process got no CPU for a
+            # while, what an agent on a thread of its own does in a few cycles after one deadline still
+            # happens before the next (.wait(50) then 20 formulas, before another intention's .wait(150)
+            # ends), as in Jason on a machine with time to spare. An idle agent's clock is the real one.
             now = time.monotonic()
-            while self.timers and self.timers[0][0] <= now:
-                _, _, callback = heapq.heappop(self.timers)
-                callback()
-            did = True
+            if self.running or self.events:
+                clock = self.timer_clock + TIMER_STEP
+                if clock > now:
+                    clock = now
+                elif clock < now - TIMER_MAX_LAG:
+                    clock = now - TIMER_MAX_LAG
+            else:
+                clock = now
+            self.timer_clock = clock
+            if timers[0][0] <= clock:
+                due = []
+                while timers and timers[0][0] <= clock:
+                    due.append(heapq.heappop(timers)[2])
+                for callback in due:  # a callback may set a timer due at once: it runs next cycle
+                    callback()
+                did = True
         if self.mailbox:
             receive_message(self, self.mailbox.popleft())
             did = True
@@ -916,6 +940,12 @@ class Agent:
             if done[0] or intention.dropped:
                 return
             done[0] = True
+            # ended otherwise (timeout, future): its waiter must go, or a later matching event would
+            # "resume" an intention that has moved on or finished (an IndexError that killed the agent)
+            if susp.event is not None:
+                self.event_waiters = [w for w in self.event_waiters if w[2] is not susp]
+            if susp.until is not None:
+                self.condition_waiters = [w for w in self.condition_waiters if w[1] is not susp]
             held = intention.waiting
             if held is not susp:
                 if held is not None and getattr(held, "inner", None) is susp:
@@ -970,8 +1000,13 @@ class Agent:
                 self.arch.wake(self)
             susp.future.add_done_callback(on_done)
         if susp.timeout is not None:
+            deadline = time.monotonic() + susp.timeout
+
             def on_timeout() -> None:
                 if done[0]:
+                    return
+                if susp.answer_waiting is not None and susp.answer_waiting(deadline):
+                    self.add_timer(0.0, on_timeout)  # again once the answer in the mailbox is read
                     return
                 if susp.on_timeout is not None:
                     try:
@@ -1007,7 +1042,10 @@ class Agent:
                 self._resume(intention, True, susp)
 
     def add_timer(self, seconds: float, callback: Callable[[], None]) -> None:
-        heapq.heappush(self.timers, (time.monotonic() + max(0.0, seconds), next(_seq), callback))
+        now = time.monotonic()
+        if not self.timers:
+            self.timer_clock = now
+        heapq.heappush(self.timers, (now + max(0.0, seconds), next(_seq), callback))
         self.arch.wake(self)
 
     def post_feedback(self, callback: Callable[[], None]) -> None:

@@ -6,7 +6,6 @@ column, and saying what was expected. ``parse_program_all_errors`` keeps going a
 """
 from __future__ import annotations
 
-import dataclasses
 import os
 import re
 import threading
@@ -23,7 +22,8 @@ from agentspeak.nesting import MAX_NESTING, first_too_deep_bracket, nesting_dept
 from agentspeak.program import (
     ACHIEVE, ADD, BEL, DEL, META, TEST, Achieve, AchieveNew, Action, AddBel, AddBelEnd, AddBelNew,
     AddPlan, Constraint, DelBel, DelBelNew, ExecVar, Fork, If, InternalAction, Plan, PlanTerm,
-    Instr, Program, RemovePlan, Rule, Test, Trigger, TriggerInstr, UpdBel, While, For, with_sub_plans,
+    Instr, Program, RemovePlan, Rule, Test, Trigger, TriggerInstr, UpdBel, While, For, copy_program,
+    with_sub_plans,
 )
 from agentspeak.patterns import PATTERNS, PatternError, apply_pattern
 from agentspeak.stdlib.functions import FUNCTIONS, check_function_name, rule_function
@@ -545,7 +545,7 @@ def parse_program(text: str, source_file: str = "<string>", base_dir: str | None
     key = (text, source_file, len(FUNCTIONS.functions))
     cached = _PARSED.get(key) or _PARSED.get(key + (tuple(source_path),))
     if cached is not None:
-        return _copy_program(cached)
+        return copy_program(cached)
     program, errors = _parse(text, source_file, stop_at_first=True)
     if errors:
         raise errors[0]
@@ -560,27 +560,12 @@ def parse_program(text: str, source_file: str = "<string>", base_dir: str | None
         except (KeyError, RuntimeError, StopIteration):  # another thread got there first
             pass
     _PARSED[key] = program
-    return _copy_program(program)
+    return copy_program(program)
 
 
 _PARSED: dict[tuple, Program] = {}
 """(text, file) -> the program as parsed (never handed out: callers get copies)."""
 _PARSED_MAX = 32
-
-
-def _copy_program(program: Program) -> Program:
-    """A program of new Plan and Rule objects over the same (immutable) terms and instructions."""
-    return Program(
-        beliefs=list(program.beliefs),
-        rules=[dataclasses.replace(r) for r in program.rules],
-        goals=list(program.goals),
-        plans=[_copy_plan(p) for p in program.plans],
-        source_file=program.source_file,
-        warnings=list(program.warnings))
-
-
-def _copy_plan(p: Plan) -> Plan:
-    return p.copy()
 
 
 def parse_program_all_errors(text: str, source_file: str = "<string>") -> tuple[Program, list[AslSyntaxError]]:

@@ -5,7 +5,7 @@ instruction keeps the source line it came from so failures can say ``code_line``
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 from agentspeak.terms import (
@@ -328,6 +328,10 @@ class Plan:
     def __post_init__(self) -> None:
         self.refresh_label_flags()
 
+    def __getstate__(self) -> dict:
+        # without the matcher: it holds compiled closures, made again on first use (agentspeak/parse_cache.py)
+        return {**self.__dict__, "matcher": None}
+
     def refresh_label_flags(self) -> None:
         annots = self.label.annots if type(self.label) is Literal and self.label.annots else ()
         names = {a.functor for a in annots if isinstance(a, Literal)}
@@ -506,14 +510,29 @@ class PlanTerm:
         return Plan(trig) if trig is not None else None
 
     def resolve(self, b: Bindings) -> "PlanTerm":
+        if self.body is not None:
+            # Jason's PlanBodyImpl.capply: a body term gets the bindings, and the arithmetic and functions
+            # of its formulas are computed (`{ !assert_equals(1, .count(b(_))) }` stored in a belief
+            # holds the count of that moment, so two such beliefs can be equal: Jason's own test manager
+            # counts its asserts that way). Conditions of if/while/for stay code.
+            if not self._bound_in(b) and not self._has_calls():
+                return self
+            return PlanTerm(body=tuple([_capply_instr(i, b) for i in self.body]), bare=self.bare)
         if not self._bound_in(b):
             return self
         if self.plan is not None:
             return PlanTerm(plan=self.plan.resolved(b))
-        if self.body is not None:
-            return PlanTerm(body=map_body(self.body, lambda t: substitute(t, b)), bare=self.bare)
         r = self.rule
         return PlanTerm(rule=Rule(substitute(r.head, b), substitute(r.body, b), r.source_file, r.line))
+
+    def _has_calls(self) -> bool:
+        """Does a simple formula of this body term hold arithmetic or a function call?"""
+        for instr in self.body:
+            if not isinstance(instr, (If, While, For, Fork)):
+                for t in instr.terms():
+                    if _holds_call(t):
+                        return True
+        return False
 
     def rename(self, mapping: dict) -> "PlanTerm":
         if self.plan is not None:
@@ -600,6 +619,40 @@ class PlanTerm:
 
 
 _TRUE = Literal("true")
+
+
+def _holds_call(t: Term) -> bool:
+    tt = type(t)
+    if tt is Func or tt is Arith:
+        return True
+    if tt is Literal:
+        return any(_holds_call(x) for x in t.args) or bool(t.annots) and any(_holds_call(x) for x in t.annots)
+    if tt is Cons:
+        while type(t) is Cons:
+            if _holds_call(t.head):
+                return True
+            t = t.tail
+        return False
+    if tt is Rel or tt is And or tt is Or:
+        return _holds_call(t.left) or _holds_call(t.right)
+    if tt is Not:
+        return _holds_call(t.arg)
+    return False
+
+
+def _capply_instr(instr: "Instr", b: Bindings) -> "Instr":
+    if isinstance(instr, (If, While, For, Fork)):
+        return instr.map_terms(lambda t: substitute(t, b))
+    return instr.map_terms(lambda t: _capply(t, b))
+
+
+def _capply(t: Term, b: Bindings) -> Term:
+    """``resolve`` (bindings applied, ground arithmetic and functions computed); a term that cannot be
+    computed now is kept as it is, with the bindings applied (Jason logs it and keeps the term)."""
+    try:
+        return resolve(t, b)
+    except Exception:  # noqa: BLE001 - an expression that fails now stays code, as in Jason
+        return substitute(t, b)
 
 
 def substitute(t: Term, b: Bindings) -> Term:
@@ -710,6 +763,18 @@ class Program:
     plans: list = field(default_factory=list)         # Plan
     source_file: str = ""
     warnings: list = field(default_factory=list)
+
+
+def copy_program(program: Program) -> Program:
+    """A program of new Plan and Rule objects over the same (immutable) terms and instructions: what each
+    agent of a shared source gets (plans hold per-agent labels and flags)."""
+    return Program(
+        beliefs=list(program.beliefs),
+        rules=[replace(r) for r in program.rules],
+        goals=list(program.goals),
+        plans=[p.copy() for p in program.plans],
+        source_file=program.source_file,
+        warnings=list(program.warnings))
 
 
 def is_var(t: Term) -> bool:

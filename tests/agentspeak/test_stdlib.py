@@ -69,6 +69,18 @@ def test_wait_forms():
     assert run_asl(src) == ["w1", "gone", "w2", "flagged", "three_arg_continues", "two_arg_fails"]
 
 
+def test_an_event_after_a_wait_timed_out_resumes_nothing():
+    """A ``.wait({+go}, T)`` that timed out must stop waiting: a later ``+go`` once "resumed" the finished
+    intention (an IndexError that killed an agent process when the event came in a message)."""
+    src = """!main. !other. !later.
++!main <- .wait({+go}, 30, E); .print(continued).
++!other <- .wait({+go}, 30); .print(never).
+-!other <- .print(timed_out).
++!later <- .wait(200); +go; .print(still_running).
+"""
+    assert sorted(run_asl(src)) == ["continued", "still_running", "timed_out"]
+
+
 def test_wait_milliseconds():
     assert body(".wait(20); .print(after)") == ["after"]
 
