@@ -534,6 +534,18 @@ class Agent:
         self._no_plan(ev, error, f"found a goal for which there is no {kind} plan: {trigger}")
         return True
 
+    @staticmethod
+    def _relevant_in_scope(trigger: Trigger, intention: Intention) -> bool:
+        """A plan for ``trigger`` among the sub-plans the intention's top plan sees (its own, then the
+        blocks around it): where a failure plan ``-!g`` of a sub-goal may be written."""
+        top = intention.stack[-1].plan if intention.stack else None
+        library = None if top is None else (top.sub_library if top.sub_library is not None else top.scope)
+        while library is not None:
+            if library.relevant(trigger):
+                return True
+            library = library.father
+        return False
+
     def _option(self, plan: Plan, lit: Term, start: dict | None) -> dict | None:
         """The bindings with which ``plan`` is applicable to the event literal ``lit`` (None if it is not)."""
         b = dict(start) if start else {}
@@ -616,8 +628,8 @@ class Agent:
         # an internal subgoal without a plan: fail it (its -!g plan, or the callers')
         lit = trigger.literal
         annots = self._failure_annots(error, message, self._current_instr(intention))
-        fkey_lit = lit
-        if self.plans.relevant(Trigger(DEL, trigger.kind, fkey_lit)):
+        failed = Trigger(DEL, trigger.kind, lit)
+        if self.plans.relevant(failed) or (self.plans.has_sub_plans and self._relevant_in_scope(failed, intention)):
             self.post_internal(Trigger(DEL, trigger.kind, _add_annots(lit, annots)), intention)
             return
         self._fail(intention, error, message, annots=annots)
@@ -900,7 +912,9 @@ class Agent:
                 if self.plans.has_meta:
                     self.goal_state(Trigger(ADD, trig.kind, resolve(im.event_literal, im.b)), "failed",
                                     Literal(error))
-                if type(lit) is Literal and self.plans.relevant(Trigger(DEL, trig.kind, lit)):
+                failed = Trigger(DEL, trig.kind, lit)
+                if type(lit) is Literal and (self.plans.relevant(failed) or (
+                        self.plans.has_sub_plans and self._relevant_in_scope(failed, intention))):
                     self.events.append(Event(Trigger(DEL, trig.kind, _add_annots(lit, annots)), intention, im))
                     self._notify_waiters(self.events[-1].trigger)
                     self._suspend(intention, "event")
