@@ -386,13 +386,14 @@ class Agent:
         self.current_intention = intention  # what .intention(..., current) means in a plan context
         if self.bb.select_option:
             return self._select_option_bb(ev)
-        if intention is not None:
-            if intention.stack:
-                top_plan = intention.stack[-1].plan
-                if top_plan.sub_library is not None or top_plan.scope is not None:
-                    return self._deliberate_in_scope(ev)
-        elif self.plans.has_update_sub_plans and trigger.kind == BEL and trigger.op != META:
-            self._branch_for_update(trigger)
+        if self.plans.has_sub_plans:  # Jason(ER): only agents with sub-plans pay for these checks
+            if intention is not None:
+                if intention.stack:
+                    top_plan = intention.stack[-1].plan
+                    if top_plan.sub_library is not None or top_plan.scope is not None:
+                        return self._deliberate_in_scope(ev)
+            elif self.plans.has_update_sub_plans and trigger.kind == BEL and trigger.op != META:
+                self._branch_for_update(trigger)
         lit = trigger.literal
         if type(lit) is Literal:
             # PlanLibrary.relevant, inlined; every plan listed under the key has the event's
