@@ -389,13 +389,16 @@ class Agent:
         if intention is not None and intention.dropped:
             return True
         self.current_intention = intention  # what .intention(..., current) means in a plan context
-        if intention is not None:
-            if intention.stack:
-                top_plan = intention.stack[-1].plan
-                if top_plan.sub_library is not None or top_plan.scope is not None:
-                    return self._deliberate_in_scope(ev)
-        elif self.plans.has_update_sub_plans and trigger.kind == BEL and trigger.op != META:
-            self._branch_for_update(trigger)
+        if self.bb.select_option:
+            return self._select_option_bb(ev)
+        if self.plans.has_sub_plans:  # Jason(ER): only agents with sub-plans pay for these checks
+            if intention is not None:
+                if intention.stack:
+                    top_plan = intention.stack[-1].plan
+                    if top_plan.sub_library is not None or top_plan.scope is not None:
+                        return self._deliberate_in_scope(ev)
+            elif self.plans.has_update_sub_plans and trigger.kind == BEL and trigger.op != META:
+                self._branch_for_update(trigger)
         lit = trigger.literal
         if type(lit) is Literal:
             # PlanLibrary.relevant, inlined; every plan listed under the key has the event's
@@ -469,6 +472,51 @@ class Agent:
         self._no_plan(ev, "no_applicable", f"found a goal for which there is no applicable plan: {trigger}")
         return True
 
+    def _select_option_bb(self, ev: Event) -> bool:
+        """Jason 3.3's ``select__option(Event, IntentionId, Plan, Unifier)`` rules: every option (each
+        applicable plan with each solution of its context) is tested with the rule, and the first that
+        passes is taken (Agent.selectOptionBB; -1 is the id of an external event's intention)."""
+        from agentspeak.solver import solve
+        from agentspeak.terms import make_list
+        trigger, intention = ev.trigger, ev.intention
+        lit = trigger.literal
+        options: list = []
+        for plan in self.plans.relevant(trigger):
+            b: dict = {}
+            if not unify(plan.trigger.literal, lit, b, []):
+                continue
+            if plan.context is None:
+                options.append((plan, b))
+                continue
+            try:
+                for _ in solve(self, plan.context, b, []):
+                    options.append((plan, dict(b)))
+            except (SolveError, ArithmeticError_, RecursionError, TypeError, ValueError) as exc:
+                log.warning("[%s] error in the context of the plan at %s:%s: %s", self.name,
+                            plan.source_file, plan.line, getattr(exc, "message", exc))
+        event = P.PlanTerm(plan=Plan(Trigger(trigger.op, trigger.kind, lit)), bare=True)
+        ident = intention.id if intention is not None else -1
+        chosen = None
+        for plan, b in options:
+            unifier = make_list([Literal("map", (Var(v.name), resolve(v, b))) for v in b
+                                 if type(v) is Var and not v.name.startswith("_")])
+            query = Literal("select__option", (event, ident, P.PlanTerm(plan=plan.resolved(b)), unifier))
+            try:
+                ok = solve_first(self, query, {})
+            except (SolveError, ArithmeticError_, RecursionError, TypeError, ValueError) as exc:
+                log.warning("[%s] error in select__option: %s", self.name, getattr(exc, "message", exc))
+                ok = False
+            if ok and chosen is None:
+                chosen = (plan, b)
+        if chosen is None:
+            kind = "applicable" if self.plans.relevant(trigger) else "relevant"
+            self._no_plan(ev, "no_" + kind, f"found a goal for which there is no {kind} plan: {trigger}")
+            return True
+        self.push_im(ev, *chosen)
+        if trigger.op == ADD and trigger.kind == ACHIEVE and self.plans.has_meta:
+            self.goal_state(trigger, "executing")
+        return True
+
     # ------------------------------------------------------------------ Jason(ER) sub-plans
     def _deliberate_in_scope(self, ev: Event) -> bool:
         """An event of an intention whose top plan has sub-plans, or is one: its plans are looked for
@@ -491,6 +539,18 @@ class Agent:
         kind = "relevant" if error == "no_relevant" else "applicable"
         self._no_plan(ev, error, f"found a goal for which there is no {kind} plan: {trigger}")
         return True
+
+    @staticmethod
+    def _relevant_in_scope(trigger: Trigger, intention: Intention) -> bool:
+        """A plan for ``trigger`` among the sub-plans the intention's top plan sees (its own, then the
+        blocks around it): where a failure plan ``-!g`` of a sub-goal may be written."""
+        top = intention.stack[-1].plan if intention.stack else None
+        library = None if top is None else (top.sub_library if top.sub_library is not None else top.scope)
+        while library is not None:
+            if library.relevant(trigger):
+                return True
+            library = library.father
+        return False
 
     def _option(self, plan: Plan, lit: Term, start: dict | None) -> dict | None:
         """The bindings with which ``plan`` is applicable to the event literal ``lit`` (None if it is not)."""
@@ -574,8 +634,8 @@ class Agent:
         # an internal subgoal without a plan: fail it (its -!g plan, or the callers')
         lit = trigger.literal
         annots = self._failure_annots(error, message, self._current_instr(intention))
-        fkey_lit = lit
-        if self.plans.relevant(Trigger(DEL, trigger.kind, fkey_lit)):
+        failed = Trigger(DEL, trigger.kind, lit)
+        if self.plans.relevant(failed) or (self.plans.has_sub_plans and self._relevant_in_scope(failed, intention)):
             self.post_internal(Trigger(DEL, trigger.kind, _add_annots(lit, annots)), intention)
             return
         self._fail(intention, error, message, annots=annots)
@@ -858,7 +918,9 @@ class Agent:
                 if self.plans.has_meta:
                     self.goal_state(Trigger(ADD, trig.kind, resolve(im.event_literal, im.b)), "failed",
                                     Literal(error))
-                if type(lit) is Literal and self.plans.relevant(Trigger(DEL, trig.kind, lit)):
+                failed = Trigger(DEL, trig.kind, lit)
+                if type(lit) is Literal and (self.plans.relevant(failed) or (
+                        self.plans.has_sub_plans and self._relevant_in_scope(failed, intention))):
                     self.events.append(Event(Trigger(DEL, trig.kind, _add_annots(lit, annots)), intention, im))
                     self._notify_waiters(self.events[-1].trigger)
                     self._suspend(intention, "event")

@@ -247,6 +247,14 @@ class LocalRuntime:
         log.warning("message %s to unknown agent '%s' dropped", message.msg_id, message.receiver)
 
     def stop(self, delay: float = 0.0) -> None:
+        """Stop the MAS ``delay`` seconds from now; with a delay, every agent first gets the event
+        ``+jag_shutting_down(MS)`` to prepare itself (Jason's ``RunLocalMAS.stopAgs``)."""
+        if delay > 0 and get_ident() == self._loop_thread:
+            from agentspeak.program import ADD, BEL, Trigger
+            ms = round(delay * 1000)
+            for agent in list(self.agents.values()):
+                agent.post_external(Trigger(ADD, BEL, Literal("jag_shutting_down", (ms,))), force=True)
+                self.wake(agent)
         with self._cond:
             self._stop_at = time.monotonic() + delay
             self._cond.notify()

@@ -154,9 +154,10 @@ def wait(ctx, what, timeout=None, elapsed=None):
 
 @internal_action(".stopMAS", args=(0, 2))
 def stop_mas(ctx, delay=0, code=0):
-    """Stop every agent of the MAS."""
+    """Stop every agent of the MAS; with a delay (ms), each agent gets ``+jag_shutting_down(Delay)``
+    and runs until then, the caller too (as Jason)."""
     ctx.agent.arch.stop_mas(ctx.agent, (delay or 0) / 1000.0)
-    return Suspend(reason="stopping")
+    return True if delay else Suspend(reason="stopping")
 
 
 @internal_action(".include", args=(1, 2))
