@@ -69,8 +69,9 @@ campaign: speedups
 	FAULTMAS_CHAOS=campaign $(PY) -m pytest -q -s -p no:cacheprovider tests/hardening/test_chaos_campaign.py \
 		tests/hardening/test_multihost_netns.py
 
-# The soak (tests/hardening/soak.py): team-of-6 runs back to back until SOAK_SIM_SECONDS of simulated time
-# (default 1 h) or SOAK_WALL_SECONDS of wall time; RSS slope, threads, descriptors, intentions left per run.
+# The soak (tests/hardening/soak.py): one team of 6 that stays up and diagnoses fault after fault until
+# SOAK_SIM_SECONDS of simulated time (default 1 h) or SOAK_WALL_SECONDS of wall time; RSS slopes (this process
+# and every agent), threads, descriptors, Zenoh declarations, stuck intentions, per task.
 SOAK_SIM_SECONDS ?= 3600
 SOAK_WALL_SECONDS ?= 36000
 soak: speedups
