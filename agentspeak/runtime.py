@@ -30,6 +30,10 @@ TURN_SECONDS = 0.005
 """... or fewer, when its cycles are slow: with many busy agents a round stays short."""
 
 
+def _when(entry: tuple) -> float:
+    return entry[0]
+
+
 class LocalArch(AgentArch):
     """Architecture of an agent run by ``LocalRuntime``: in-process mailbox, shared console."""
 
@@ -77,7 +81,14 @@ class LocalRuntime:
     def __init__(self, printer: Callable[[str, str], None] | None = None,
                  environment: Callable[[Agent, Literal], object] | None = None) -> None:
         self.agents: dict[str, Agent] = {}
+        # Two queues, so that an agent that waited (for a message, a timer, its start) answers within a
+        # turn or two, as an agent on a thread of its own does (Jason), while agents that stay busy turn
+        # after turn share what is left: `ready` holds agents woken up, `busy` those whose turn ended
+        # with work left. With 50 busy agents a round of every agent takes seconds on a loaded machine;
+        # Jason's own tests expect a tell answered, or an .at run, within 200-500 ms.
         self.ready: deque[Agent] = deque()
+        self.busy: deque[Agent] = deque()
+        self._woken_turns = 0                # turns given to woken agents in a row (see _run)
         self._timed: set[Agent] = set()      # agents that had timers at the end of their last turn
         self._ready_set: set[str] = set()
         self._cond = threading.Condition()
@@ -169,17 +180,17 @@ class LocalRuntime:
         self.wake(clone)
         return unique
 
-    def _run_next(self, first: Agent, then: Agent) -> None:
-        """Put ``first`` then ``then`` at the head of the ready queue (a new agent starts at once, and
-        its creator goes on right after it, as if each had a thread of its own)."""
-        for agent in (then, first):
-            if agent.name in self._ready_set:
+    def _run_first(self, agent: Agent) -> None:
+        """Put ``agent`` at the head of the ready queue (moved there if it is already queued)."""
+        if agent.name in self._ready_set:
+            for queue in (self.ready, self.busy):
                 try:
-                    self.ready.remove(agent)
+                    queue.remove(agent)
+                    break
                 except ValueError:
                     pass
-            self._ready_set.add(agent.name)
-            self.ready.appendleft(agent)
+        self._ready_set.add(agent.name)
+        self.ready.appendleft(agent)
 
     def kill_agent(self, name: str) -> bool:
         """Remove an agent (Jason's ``.kill_agent``): its intentions stop, later messages to it are
@@ -247,7 +258,8 @@ class LocalRuntime:
         with self._cond:
             self._sleepers += 1
             try:
-                return self._cond.wait_for(lambda: bool(self.ready) or self._stop_at is not None, timeout)
+                return self._cond.wait_for(lambda: bool(self.ready) or bool(self.busy) or self._stop_at is not None,
+                                           timeout)
             finally:
                 self._sleepers -= 1
 
@@ -259,7 +271,7 @@ class LocalRuntime:
 
     # -- the loop
     def idle(self) -> bool:
-        return not self.ready and all(a.is_idle() for a in self.agents.values())
+        return not self.ready and not self.busy and all(a.is_idle() for a in self.agents.values())
 
     def run(self, timeout: float | None = None, stop_when_idle: bool = True) -> str:
         """Run until ``.stopMAS``, until idle (if asked) or until ``timeout`` seconds. Returns why."""
@@ -273,6 +285,7 @@ class LocalRuntime:
     def _run(self, timeout: float | None, stop_when_idle: bool) -> str:
         deadline = None if timeout is None else time.monotonic() + timeout
         ready = self.ready
+        busy = self.busy
         ready_set = self._ready_set
         timed = self._timed
         timed.update([a for a in self.agents.values() if a.timers])  # a list: a generator is a closure, which
@@ -288,18 +301,31 @@ class LocalRuntime:
             # timers that are due make their agents ready (only agents that have timers are looked at)
             if timed:
                 now = monotonic()
+                due = []
                 for agent in list(timed):
                     if not agent.timers:
                         timed.discard(agent)
-                    elif agent.timers[0][0] <= now and agent.name not in ready_set:
-                        # first in line: a .wait or .at that is due goes on at once, as an agent on a
-                        # thread of its own would (Jason), not after a round of every busy agent
-                        ready_set.add(agent.name)
-                        ready.appendleft(agent)
-            if ready:
+                    elif agent.timers[0][0] <= now and not (agent.running or agent.events) \
+                            and (not ready or ready[0] is not agent):
+                        # (a busy agent runs its timers by its own clock, in its turns: Agent.sense)
+                        due.append((agent.timers[0][0], agent))
+                if due:
+                    # first in line, the earliest first, even if already queued: a .wait or .at that is
+                    # due goes on at once, as an agent on a thread of its own would (Jason), not after a
+                    # round of every busy agent (with 50 busy agents that round takes seconds)
+                    due.sort(key=_when)
+                    for _, agent in reversed(due):
+                        self._run_first(agent)
+            if ready or busy:
                 # no lock: a wake from another thread in between either finds the agent still marked
-                # ready (and the has_work() check after its turn sees the news) or queues it again
-                agent = ready.popleft()
+                # ready (and the has_work() check after its turn sees the news) or queues it again.
+                # Woken agents first, but a busy one gets every fourth turn (none starves).
+                if ready and (not busy or self._woken_turns < 3):
+                    agent = ready.popleft()
+                    self._woken_turns += 1
+                else:
+                    agent = busy.popleft()
+                    self._woken_turns = 0
                 ready_set.discard(agent.name)
                 CURRENT.agent = agent  # whose beliefs functions such as .count(Q) read
                 started = 0.0
@@ -316,14 +342,17 @@ class LocalRuntime:
                         elif monotonic() - started > TURN_SECONDS:
                             break  # slow cycles: the others get their turn (timers stay timely)
                 if self._yield_to is not None:
-                    self._run_next(self._yield_to, agent)
+                    # the new agent starts at once; its creator takes its turn in the rotation like every
+                    # other agent (a creator that loops must not hold the others back, nor be held back)
+                    self._run_first(self._yield_to)
                     self._yield_to = None
                 if agent.timers:
                     timed.add(agent)  # timers are only set by the agent itself, during its turn
-                    if agent.timers[0][0] <= monotonic():
-                        self.wake(agent)
-                        continue
                 if agent.events or agent.running or agent.mailbox or agent.feedback:  # has_work()
+                    if agent.name not in ready_set:  # (unless woken meanwhile)
+                        ready_set.add(agent.name)
+                        busy.append(agent)
+                elif agent.timers and agent.timers[0][0] <= monotonic():
                     self.wake(agent)
                 continue
             if stop_when_idle and self.idle() and not self._external_pending():
