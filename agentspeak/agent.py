@@ -82,10 +82,22 @@ class Agent:
 
     def _see_arch(self, arch: Any) -> None:
         """A new architecture (set at start, or by a bridge): the default ``perceive`` never returns
-        percepts, so the sense phase skips calling it."""
+        percepts, so the sense phase skips calling it. Its environment's clock becomes the agent's
+        (``AgentArch.environment_clock``); timers already set keep the time they had left."""
         from agentspeak.arch import AgentArch
         self._arch_seen = arch
         self._perceive = None if type(arch).perceive is AgentArch.perceive else arch.perceive
+        clock = getattr(arch, "environment_clock", None)
+        clock = (clock() if clock is not None else None) or time.monotonic
+        old = getattr(self, "clock", None)
+        if old is not None and old is not clock and self.timers:
+            now, then = old(), clock()
+            self.timers = [(then + (when - now), seq, callback) for when, seq, callback in self.timers]
+            heapq.heapify(self.timers)
+        self.clock = clock
+        """Seconds, the agent's time: its timers (``.wait``, ``.at``, answer and action timeouts) count in
+        it. Wall time (``time.monotonic``), as in Jason, unless the environment has a clock of its own (a
+        simulated robot's: see ``robot_bridge.clock``)."""
 
     # ------------------------------------------------------------------ loading
     def load(self, program: Program) -> None:
@@ -309,8 +321,8 @@ class Agent:
         while self.feedback:
             self.feedback.popleft()()
             did = True
-        if self.timers and self.timers[0][0] <= time.monotonic():
-            now = time.monotonic()
+        if self.timers and self.timers[0][0] <= self.clock():
+            now = self.clock()
             while self.timers and self.timers[0][0] <= now:
                 _, _, callback = heapq.heappop(self.timers)
                 callback()
@@ -874,7 +886,7 @@ class Agent:
                 self._resume(intention, True, susp)
 
     def add_timer(self, seconds: float, callback: Callable[[], None]) -> None:
-        heapq.heappush(self.timers, (time.monotonic() + max(0.0, seconds), next(_seq), callback))
+        heapq.heappush(self.timers, (self.clock() + max(0.0, seconds), next(_seq), callback))
         self.arch.wake(self)
 
     def post_feedback(self, callback: Callable[[], None]) -> None:

@@ -28,6 +28,8 @@ CYCLES_PER_TURN = 64
 """Reasoning cycles an agent runs before the next ready agent gets its turn (fairness)."""
 TURN_SECONDS = 0.005
 """... or fewer, when its cycles are slow: with many busy agents a round stays short."""
+CLOCK_POLL_S = 0.02
+"""How often an idle loop looks at timers that count in an environment's clock (one simulator step)."""
 
 
 class LocalArch(AgentArch):
@@ -287,11 +289,10 @@ class LocalRuntime:
                 return "timeout"
             # timers that are due make their agents ready (only agents that have timers are looked at)
             if timed:
-                now = monotonic()
                 for agent in list(timed):
                     if not agent.timers:
                         timed.discard(agent)
-                    elif agent.timers[0][0] <= now and agent.name not in ready_set:
+                    elif agent.timers[0][0] <= agent.clock() and agent.name not in ready_set:
                         # first in line: a .wait or .at that is due goes on at once, as an agent on a
                         # thread of its own would (Jason), not after a round of every busy agent
                         ready_set.add(agent.name)
@@ -320,7 +321,7 @@ class LocalRuntime:
                     self._yield_to = None
                 if agent.timers:
                     timed.add(agent)  # timers are only set by the agent itself, during its turn
-                    if agent.timers[0][0] <= monotonic():
+                    if agent.timers[0][0] <= agent.clock():
                         self.wake(agent)
                         continue
                 if agent.events or agent.running or agent.mailbox or agent.feedback:  # has_work()
@@ -329,12 +330,13 @@ class LocalRuntime:
             if stop_when_idle and self.idle() and not self._external_pending():
                 return "idle"
             # nothing ready: sleep until the next timer, a wake-up, or the deadline
-            waits = [a.timers[0][0] for a in timed if a.timers]
+            now = monotonic()
+            waits = [_timer_wait(a, now) for a in timed if a.timers]
             if self._stop_at is not None:
-                waits.append(self._stop_at)
+                waits.append(self._stop_at - now)
             if deadline is not None:
-                waits.append(deadline)
-            wait = max(0.0, min(waits) - monotonic()) if waits else 0.5
+                waits.append(deadline - now)
+            wait = max(0.0, min(waits)) if waits else 0.5
             with self._cond:
                 if not self.ready:
                     self._sleepers += 1
@@ -346,3 +348,13 @@ class LocalRuntime:
     def _external_pending(self) -> bool:
         hook = getattr(self, "external_pending", None)
         return bool(hook()) if hook else False
+
+
+def _timer_wait(agent: Agent, now: float) -> float:
+    """Wall seconds to sleep before ``agent``'s next timer may be due. On an environment's clock (a
+    simulator's, which may run slower or faster than wall time) it is looked at again every
+    ``CLOCK_POLL_S``: the comparison costs nothing, the agent runs only once its timer is due."""
+    clock = agent.clock
+    if clock is time.monotonic:
+        return agent.timers[0][0] - now
+    return min(agent.timers[0][0] - clock(), CLOCK_POLL_S)

@@ -23,6 +23,7 @@ from concurrent.futures import Future
 from typing import ClassVar
 
 from robot_bridge import actions, percepts
+from robot_bridge.clock import FollowingClock
 from robot_bridge.protocol import Action, Completion, Percept, RobotBridge, completed
 from robot_bridge.sim.runner import WorldRunner, shared_runner
 from robot_bridge.sim.world import CameraFrame, World
@@ -58,6 +59,7 @@ class SimBridge(RobotBridge):
         self._ready = False
         self._seen: tuple[float, list[Percept]] = (-1.0, [])
         self._unsubscribe = None
+        self._clock = FollowingClock(lambda: self.world.time)
 
     @classmethod
     def for_team(cls, robots: list[str], **options: object) -> "dict[str, SimBridge]":
@@ -108,6 +110,10 @@ class SimBridge(RobotBridge):
         if seen and self.world.time - taken <= FRAME_TTL_S:
             found += seen
         return found
+
+    def clock(self) -> float:
+        """Simulated time (the world's), running on at wall pace if the world stops stepping."""
+        return self._clock()
 
     def _on_frame(self, frame: CameraFrame) -> None:
         """A new camera frame: detect robots in its pixels, as a real camera's frame would be."""
