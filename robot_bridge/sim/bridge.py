@@ -78,7 +78,8 @@ class SimBridge(RobotBridge):
             self.world.add_robot(self.robot, **self._placement)
         if self._placement["camera"]:
             self._detect = _load_detector()
-            self._unsubscribe = self.world.subscribe_camera(self.robot, self._on_frame, reads_pixels=True)
+            self._unsubscribe = self.world.subscribe_camera(self.robot, self._on_frame, reads_pixels=True,
+                                                            robots_only=True)
         if self.drive:
             self._runner = shared_runner(self.world, self.speed)
             self._runner.acquire()
@@ -116,7 +117,13 @@ class SimBridge(RobotBridge):
         return self._clock()
 
     def _on_frame(self, frame: CameraFrame) -> None:
-        """A new camera frame: detect robots in its pixels, as a real camera's frame would be."""
+        """A new camera frame: detect robots in its pixels, as a real camera's frame would be. A frame in
+        which no robot can be (none in the view within the depth range) is not rendered: the detector
+        would find nothing in it (``tests/robot_bridge/test_world_camera.py``), and in a team spread over
+        the arena that is most frames."""
+        if not getattr(frame, "may_show_robots", True):
+            self._seen = (frame.time, [])
+            return
         best = self._detect(frame.rgb, frame.depth, frame.camera)
         if best is None:
             self._seen = (frame.time, [])
