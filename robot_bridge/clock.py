@@ -7,9 +7,12 @@ camera frames, three seconds for a helper to answer. Counted in wall time, those
 simulated robot has moved at all, and helpers give up before they arrive. So an agent whose robot has a
 clock counts its waits and timeouts in that clock (``agentspeak.agent.Agent.clock``).
 
-The clock never stops an agent: while the source is silent (a simulator killed or frozen, a server that
-publishes no clock, or no tick received yet) it runs on at wall pace after ``stale`` seconds, so no
-``.wait`` waits forever. It is continuous and never goes backwards, whatever the source does.
+The clock never stops an agent for good: while the source is gone (a simulator killed or frozen, a server
+that publishes no clock, or no tick received yet) it runs on at wall pace after ``stale`` seconds, so no
+``.wait`` waits forever. Whether the source is gone is ``alive()``'s to say when the owner knows (the
+world's runner thread still stepping, however slowly; a server still sending ticks): a simulator that is
+merely slow (a starved process may take seconds per step) or paused by its owner keeps the agents' time
+standing, as ROS timers stand while Gazebo is paused. It is continuous and never goes backwards.
 """
 from __future__ import annotations
 
@@ -17,22 +20,24 @@ import threading
 import time
 from typing import Callable
 
-STALE_S = 5.0
-"""Wall seconds without a tick of the source after which the clock runs on at wall pace. Longer than any
-single simulator step takes under load (a step renders every camera that is due: ~1 s seen at load 40)."""
+STALE_S = 15.0
+"""Wall seconds the source may be gone before the clock runs on at wall pace: longer than a starved
+process's scheduling gaps (a simulator step of a team took over 5 s at a load of 46 on 2 cores)."""
 
 
 class FollowingClock:
-    """Seconds that advance as ``source()`` does (``None``: no reading yet), and at wall pace while it does not
-    change for more than ``stale`` wall seconds (from the start: until its first reading). Thread-safe."""
+    """Seconds that advance as ``source()`` does (``None``: no reading yet), and at wall pace once the source
+    has been gone for ``stale`` wall seconds (from the start: until its first reading). Gone: ``alive()``
+    is false, or, without ``alive``, no change of the reading. Thread-safe."""
 
     def __init__(self, source: Callable[[], float | None], stale: float = STALE_S,
-                 wall: Callable[[], float] = time.monotonic) -> None:
-        self._source, self._stale, self._wall = source, stale, wall
+                 wall: Callable[[], float] = time.monotonic, alive: Callable[[], bool] | None = None) -> None:
+        self._source, self._stale, self._wall, self._alive = source, stale, wall, alive
         self._lock = threading.Lock()
         self._last: float | None = None      # the source's reading at its last change
         self._value = 0.0                    # this clock's value at that change
         self._changed_at = wall()            # wall time of that change (or of the start)
+        self._alive_at = -float("inf")       # wall time ``alive()`` was last seen true
 
     def __call__(self) -> float:
         reading = self._source()
@@ -48,13 +53,16 @@ class FollowingClock:
 
     @property
     def following(self) -> bool:
-        """Whether the source has ticked within ``stale`` wall seconds (False: running at wall pace)."""
+        """Whether the clock follows its source now (False: no reading yet, or running at wall pace)."""
         with self._lock:
-            return self._last is not None and self._wall() - self._changed_at <= self._stale
+            return self._last is not None and self._free_run(self._wall()) == 0.0
 
     def _free_run(self, now: float) -> float:
         """Seconds gained at wall pace since the last change: all of them before the first reading, those
         beyond ``stale`` after it."""
         if self._last is None:
             return now - self._changed_at
-        return max(0.0, now - self._changed_at - self._stale)
+        if self._alive is not None and self._alive():
+            self._alive_at = now
+            return 0.0
+        return max(0.0, now - max(self._changed_at, self._alive_at) - self._stale)

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
 from concurrent.futures import Future
 from typing import Any, ClassVar
 
@@ -37,6 +38,9 @@ from robot_bridge.protocol import Action, Completion, Percept, RobotBridge, comp
 log = logging.getLogger(__name__)
 
 EXPIRE_INTERVAL_S = 0.05
+CLOCK_SILENCE_S = 5.0
+"""Wall seconds without a clock tick (sent every 20 ms) after which the server counts as gone; the clock
+then runs on at wall pace after ``robot_bridge.clock.STALE_S`` more."""
 
 
 def robot_key(mas: str, robot: str, channel: str) -> str:
@@ -62,7 +66,8 @@ class ZenohBridge(RobotBridge):
         self.connect = (connect,) if isinstance(connect, str) else tuple(connect)
         self.action_timeout = action_timeout
         self._server_time: float | None = None
-        self._clock = FollowingClock(lambda: self._server_time)
+        self._clock_heard = -float("inf")       # wall time of the last tick (the server sends one per 20 ms)
+        self._clock = FollowingClock(lambda: self._server_time, alive=self._server_ticks)
         self._pending = PendingActions(self._clock)
         self._store = PerceptStore(robot)
         self._declared: list = []
@@ -160,6 +165,11 @@ class ZenohBridge(RobotBridge):
             log.warning("%s: dropped a bad clock message %.40r (expected seconds as a number): %s", self.robot, text, exc)
             return
         self._server_time = seconds
+        self._clock_heard = time.monotonic()
+
+    def _server_ticks(self) -> bool:
+        """Whether the server's clock ticks arrive (a paused world's time stands; a dead server's does not)."""
+        return time.monotonic() - self._clock_heard < CLOCK_SILENCE_S
 
     def _expire_loop(self) -> None:
         while not self._stop.wait(EXPIRE_INTERVAL_S):

@@ -59,7 +59,7 @@ class SimBridge(RobotBridge):
         self._ready = False
         self._seen: tuple[float, list[Percept]] = (-1.0, [])
         self._unsubscribe = None
-        self._clock = FollowingClock(lambda: self.world.time)
+        self._clock = FollowingClock(lambda: self.world.time, alive=self._stepping)
 
     @classmethod
     def for_team(cls, robots: list[str], **options: object) -> "dict[str, SimBridge]":
@@ -115,6 +115,11 @@ class SimBridge(RobotBridge):
     def clock(self) -> float:
         """Simulated time (the world's), running on at wall pace if the world stops stepping."""
         return self._clock()
+
+    def _stepping(self) -> bool:
+        """Whether this bridge's runner steps the world (however slowly): its clock is then the world's."""
+        runner = self._runner
+        return runner is not None and runner.running and runner.error is None
 
     def _on_frame(self, frame: CameraFrame) -> None:
         """A new camera frame: detect robots in its pixels, as a real camera's frame would be. A frame in

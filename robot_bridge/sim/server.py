@@ -4,8 +4,8 @@ Each robot is a ``SimBridge`` in this process; agents reach it through ``robot_b
 (keys and wire format are documented there). Percept snapshots go out when they change (checked every
 ``interval`` seconds of wall time) and at least every ``refresh`` seconds, and always just before an
 action's status, so an agent that sees ``move`` completed also perceives where the robot ended up. The
-world's simulated time goes out every ``interval`` while it advances (the clock key: the agents' waits
-follow it, see ``robot_bridge.clock``).
+world's simulated time goes out every ``interval`` (the clock key: the agents' waits follow it, see
+``robot_bridge.clock``).
 A malformed request is answered with ``bad_args`` when it has an id, else dropped with a log line.
 """
 from __future__ import annotations
@@ -40,7 +40,6 @@ class SimServer:
         self._thread: threading.Thread | None = None
         self.requests = 0
         self._clock_publisher: Any = None
-        self._clock_sent: float | None = None
 
     def start(self) -> "SimServer":
         self._clock_publisher = self.session.declare_publisher(clock_key(self.mas))
@@ -83,11 +82,10 @@ class SimServer:
             self._publishers[name][1].put(text)
 
     def publish_clock(self) -> None:
-        """Send the world's simulated time if it advanced since the last time sent."""
-        now = next(iter(self.bridges.values())).world.time if self.bridges else None
-        if now is not None and now != self._clock_sent:
-            self._clock_sent = now
-            self._clock_publisher.put(repr(now))
+        """Send the world's simulated time (every ``interval``, changed or not: the ticks also say the server
+        is there, so a paused world's time stands while a dead server's runs on, see ``robot_bridge.clock``)."""
+        if self.bridges:
+            self._clock_publisher.put(repr(next(iter(self.bridges.values())).world.time))
 
     def _loop(self) -> None:
         while not self._stop.wait(self.interval):

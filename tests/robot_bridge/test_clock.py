@@ -72,3 +72,18 @@ def test_following_says_whether_the_source_ticks():
     assert clock.following
     wall.value = 6.0
     assert not clock.following
+
+
+def test_a_source_said_alive_keeps_the_clock_standing_however_long_a_step_takes():
+    """A starved simulator (its runner thread alive) or a paused one: time stands; once it is gone, the
+    clock runs on at wall pace, counted from when it was last seen alive (no jump)."""
+    sim, wall, alive = Manual(1.0), Manual(0.0), [True]
+    clock = FollowingClock(sim, stale=5.0, wall=wall, alive=lambda: alive[0])
+    start = clock()
+    wall.value = 60.0
+    assert clock() == start and clock.following
+    alive[0] = False
+    wall.value = 62.0
+    assert clock() == start                         # gone for 2 s only
+    wall.value = 67.0
+    assert clock() - start == approx(2.0) and not clock.following
