@@ -8,7 +8,7 @@ PURE_PYTHON := FAULTMAS_PURE_PYTHON=1
 
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: run test test-install bench install speedups browser clean jason-tests campaign soak eval-teams
+.PHONY: run test test-slow test-install bench install speedups browser clean jason-tests campaign soak eval-teams
 
 # constraints.txt: the exact versions (pyproject.toml publishes ranges; issue 23). Installs go through it.
 # Each step says what it does in one line (the commands and pip's progress stay out of the way; errors still show).
@@ -46,9 +46,14 @@ $(CHROMIUM):
 	apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
 
 test: speedups browser
-	$(PY) -m pytest -q -p no:cacheprovider
+	$(PY) -m pytest -q -p no:cacheprovider -m "not slow"
 	# the language suite again on the interpreter run from source (what runs without a C compiler)
 	$(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider tests/agentspeak
+
+# The end-to-end tests marked `slow` (minutes each, each covered in shorter form by `make test`), kept out of
+# `make test`'s ~10 min budget
+test-slow: speedups browser
+	$(PY) -m pytest -q -p no:cacheprovider -m slow
 
 # The reliability campaign (docs/reliability.md): every input boundary fuzzed for FUZZ_MINUTES (compiled,
 # tests/hardening/fuzz_campaign.py), then with FAULTMAS_FUZZ_EXAMPLES inputs each (default 20,000; `make test`

@@ -20,6 +20,7 @@ import statistics
 import sys
 
 from agents.cooperative import EXPECTED, FAULTS, STEP_NAMES
+from agents.environment import add_bridge_arguments
 
 EVAL_FAULTS = ("none", "encoders", "both_actuators", "left_actuator", "right_actuator")
 EVAL_TEAMS = (2, 4, 8, 12)
@@ -49,13 +50,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      help="a team of N robots (2-12) at random places over the whole arena, instead of the pair")
     run.add_argument("--faulty", type=int, default=None, metavar="K",
                      help="with --robots: K of them faulty (default 1)")
-    run.add_argument("--bridge", default="sim", metavar="NAME",
-                     help="the robots: sim (the embedded simulator, default), ros2 (ROS 2 nodes started for the "
-                          "run), or any other installed bridge (`faultmas sim bridges`), e.g. zenoh for a "
-                          "`faultmas sim serve` of MAS coop, whose robots have the fault --fault names")
-    run.add_argument("--bridge-option", action="append", default=[], metavar="KEY=VALUE",
-                     help="with a bridge other than sim and ros2: an option for it (repeatable; an option it "
-                          "does not take is an error that lists the ones it does)")
+    add_bridge_arguments(run, default="sim", timeout=False, bridge_help=(
+        "the robots: sim (the embedded simulator, default), ros2 (ROS 2 nodes started for the run), or any other "
+        "installed bridge (`faultmas sim bridges`), e.g. zenoh for a `faultmas sim serve` of MAS coop, whose "
+        "robots have the fault --fault names"),
+        option_help=("with a bridge other than sim and ros2: an option for it (repeatable; an option it does not "
+                     "take is an error that lists the ones it does)"))
     run.add_argument("--in-process", action="store_true", help="all agents in this process (no Zenoh)")
     run.add_argument("--json", action="store_true", help="print one JSON object (agents' lines go to stderr)")
     run.add_argument("--plot", metavar="PNG", help="draw ground-truth and believed trajectories to this file")

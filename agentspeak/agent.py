@@ -41,6 +41,11 @@ _JAG_SLEEPING = Literal("jag_sleeping")
 _JAG_AWAKING = Literal("jag_awaking")
 _seq = itertools.count()
 
+TIMER_STEP = 0.001
+"""How far past its timers a busy agent's clock moves in one reasoning cycle (seconds), see ``sense``."""
+TIMER_MAX_LAG = 1.0
+"""... and how far behind the real clock it may fall at most."""
+
 
 
 
@@ -64,6 +69,7 @@ class Agent:
         self.mailbox: deque = deque()          # appended from any thread
         self.feedback: deque = deque()         # callables run in the sense phase (thread-safe append)
         self.timers: list = []                 # heap of (when, seq, callback)
+        self.timer_clock = 0.0                 # up to when timers have been run (see sense)
         self.event_waiters: list = []          # (trigger pattern, intention, suspend)
         self.condition_waiters: list = []      # (intention, suspend)
         self.pending_futures = 0               # actions / awaited results in flight
@@ -94,6 +100,7 @@ class Agent:
             now, then = old(), clock()
             self.timers = [(then + (when - now), seq, callback) for when, seq, callback in self.timers]
             heapq.heapify(self.timers)
+            self.timer_clock = then + (self.timer_clock - now)
         self.clock = clock
         """Seconds, the agent's time: its timers (``.wait``, ``.at``, answer and action timeouts) count in
         it. Wall time (``time.monotonic``), as in Jason, unless the environment has a clock of its own (a
@@ -163,8 +170,8 @@ class Agent:
         self._notify_waiters(trigger)
         if self.plans.has_meta and trigger.kind == ACHIEVE and trigger.op == ADD:
             self.goal_state(trigger, "pending")
-        if force or self.plans.relevant(trigger):
-            self.events.append(Event(trigger))
+        if force or self.plans.relevant(trigger) or self.plans.has_update_sub_plans:
+            self.events.append(Event(trigger))  # (a sub-plan of an intention may be relevant)
         elif trigger.kind != BEL:
             self.events.append(Event(trigger))  # a goal without plan still fails visibly
 
@@ -268,7 +275,7 @@ class Agent:
                 if solve_first(self, gc, dict(im.b)):
                     del stack[idx + 1:]
                     im.frames[:] = [im.frames[0]]
-                    im.frames[0].pc = len(im.frames[0].body)
+                    im.frames[0].pc = len(im.frames[0].body) + 1  # achieved (not only its body done)
                     intention.waiting = None
                     intention.suspended = None
                     self.suspended.pop(intention.id, None)
@@ -321,12 +328,30 @@ class Agent:
         while self.feedback:
             self.feedback.popleft()()
             did = True
-        if self.timers and self.timers[0][0] <= self.clock():
-            now = self.clock()
-            while self.timers and self.timers[0][0] <= now:
-                _, _, callback = heapq.heappop(self.timers)
-                callback()
-            did = True
+        timers = self.timers
+        if timers:
+            # The timers run in the order of their deadlines, and a busy agent (events or intentions to
+            # run) moves its timer clock at most TIMER_STEP per cycle: when the process got no CPU for a
+            # while, what an agent on a thread of its own does in a few cycles after one deadline still
+            # happens before the next (.wait(50) then 20 formulas, before another intention's .wait(150)
+            # ends), as in Jason on a machine with time to spare. An idle agent's clock is the real one.
+            now = self.clock()   # the agent's time: its environment's clock, if it has one
+            if self.running or self.events:
+                clock = self.timer_clock + TIMER_STEP
+                if clock > now:
+                    clock = now
+                elif clock < now - TIMER_MAX_LAG:
+                    clock = now - TIMER_MAX_LAG
+            else:
+                clock = now
+            self.timer_clock = clock
+            if timers[0][0] <= clock:
+                due = []
+                while timers and timers[0][0] <= clock:
+                    due.append(heapq.heappop(timers)[2])
+                for callback in due:  # a callback may set a timer due at once: it runs next cycle
+                    callback()
+                did = True
         if self.mailbox:
             receive_message(self, self.mailbox.popleft())
             did = True
@@ -372,6 +397,13 @@ class Agent:
         if intention is not None and intention.dropped:
             return True
         self.current_intention = intention  # what .intention(..., current) means in a plan context
+        if intention is not None:
+            if intention.stack:
+                top_plan = intention.stack[-1].plan
+                if top_plan.sub_library is not None or top_plan.scope is not None:
+                    return self._deliberate_in_scope(ev)
+        elif self.plans.has_update_sub_plans and trigger.kind == BEL and trigger.op != META:
+            self._branch_for_update(trigger)
         lit = trigger.literal
         if type(lit) is Literal:
             # PlanLibrary.relevant, inlined; every plan listed under the key has the event's
@@ -429,9 +461,10 @@ class Agent:
                 f.body, f.pc, f.kind, f.loop, f.solutions, f.index, f.reset = plan.body, 0, "body", None, None, 0, ()
                 im = IntendedMeans.__new__(IntendedMeans)
                 im.plan, im.b, im.frames, im.result, im.handles, im.event_literal = plan, b, [f], lit, None, lit
+                im.trigger_b = None if plan.sub_library is None else dict(b)
                 new = Intention.__new__(Intention)
                 new.id, new.stack, new.suspended, new.atomic = next(_intention_ids), [im], None, 0
-                new.waiting, new.fork, new.dropped = None, None, False
+                new.waiting, new.fork, new.dropped, new.branch = None, None, False, None
                 self.running.append(new)
             else:
                 self.push_im(ev, plan, b)
@@ -443,6 +476,77 @@ class Agent:
             return True
         self._no_plan(ev, "no_applicable", f"found a goal for which there is no applicable plan: {trigger}")
         return True
+
+    # ------------------------------------------------------------------ Jason(ER) sub-plans
+    def _deliberate_in_scope(self, ev: Event) -> bool:
+        """An event of an intention whose top plan has sub-plans, or is one: its plans are looked for
+        in the top plan's sub-plans (or the library it lives in), then up the fathers to the agent's
+        library; the first applicable plan is taken (Jason's applyRelApplPlRule1 with scopes)."""
+        trigger, intention = ev.trigger, ev.intention
+        top_plan = intention.stack[-1].plan
+        library = top_plan.sub_library if top_plan.sub_library is not None else top_plan.scope
+        error = "no_relevant"
+        while library is not None:
+            for plan in library.relevant(trigger):
+                error = "no_applicable"
+                b = self._option(plan, trigger.literal, self._scope_bindings(intention, plan))
+                if b is not None:
+                    self.push_im(ev, plan, b)
+                    if trigger.op == ADD and trigger.kind == ACHIEVE and self.plans.has_meta:
+                        self.goal_state(trigger, "executing")
+                    return True
+            library = library.father
+        kind = "relevant" if error == "no_relevant" else "applicable"
+        self._no_plan(ev, error, f"found a goal for which there is no {kind} plan: {trigger}")
+        return True
+
+    def _option(self, plan: Plan, lit: Term, start: dict | None) -> dict | None:
+        """The bindings with which ``plan`` is applicable to the event literal ``lit`` (None if it is not)."""
+        b = dict(start) if start else {}
+        if not unify(plan.trigger.literal, lit, b, []):
+            return None
+        context = (plan.matcher or plan_matcher(plan))[1]
+        if context is None:
+            return b
+        try:
+            return b if context(self, b, [], _true_k) else None
+        except (SolveError, ArithmeticError_, RecursionError, TypeError, ValueError, AttributeError) as exc:
+            log.warning("[%s] error in the context of the plan at %s:%s: %s", self.name,
+                        plan.source_file, plan.line, getattr(exc, "message", exc))
+            return None
+
+    @staticmethod
+    def _scope_bindings(intention: Intention, plan: Plan) -> dict | None:
+        """A sub-plan starts from the bindings its plan's intended means had when it was selected."""
+        if plan.scope is None:
+            return None
+        for owner in (intention, intention.branch[0] if intention.branch else None):
+            for im in reversed(owner.stack if owner is not None else ()):
+                if im.plan.sub_library is plan.scope:
+                    return im.trigger_b
+        return None
+
+    def _branch_for_update(self, trigger: Trigger) -> None:
+        """Jason(ER): an external +b/-b for which a sub-plan of an intended means is applicable runs that
+        sub-plan on a branch of its intention (the intention itself stays where it is), with the
+        intended means' current bindings; the nearest such intended means of each intention."""
+        for intention in self.intentions():
+            if intention.branch is not None:
+                continue
+            for im in reversed(intention.stack):
+                library = im.plan.sub_library
+                if library is None:
+                    continue
+                b = None
+                for plan in library.relevant(trigger):
+                    b = self._option(plan, trigger.literal, im.b)
+                    if b is not None:
+                        branch = Intention(IntendedMeans(plan, b, trigger.literal))
+                        branch.branch = (intention, im)
+                        self.running.append(branch)
+                        break
+                if b is not None:
+                    break
 
     def _no_plan(self, ev: Event, error: str, message: str) -> None:
         trigger = ev.trigger
@@ -518,6 +622,7 @@ class Agent:
                 top.plan = plan
                 top.b = b
                 top.event_literal = trigger.literal
+                top.trigger_b = None if plan.sub_library is None else dict(b)
                 f0 = frames[0]
                 f0.body = plan.body
                 f0.pc = 0
@@ -590,7 +695,7 @@ class Agent:
                             if f0.pc < len(f0.body):
                                 self.running.append(intention)
                                 return
-                            if len(stack) == 1 and top.handles is None:
+                            if len(stack) == 1 and top.handles is None and top.plan.goal_condition is None:
                                 stack.pop()
                                 if top.plan.atomic:
                                     intention.atomic -= 1
@@ -628,6 +733,12 @@ class Agent:
             while len(frames) > 1 and frames[-1].pc >= len(frames[-1].body) and frames[-1].kind == "body":
                 frames.pop()
             if len(frames) != 1 or frames[0].pc < len(frames[0].body):  # not im.is_finished()
+                return
+            if im.plan.goal_condition is not None and frames[0].pc == len(frames[0].body):
+                # Jason(ER): a body done is not a goal achieved; the intention waits until the goal
+                # condition holds, or .done/.succeed_goal finishes it (those set pc past the end)
+                self.running_remove(intention)
+                self._suspend(intention, "wait_goal_condition")
                 return
             stack.pop()
             if im.plan.atomic:
@@ -795,6 +906,12 @@ class Agent:
             if done[0] or intention.dropped:
                 return
             done[0] = True
+            # ended otherwise (timeout, future): its waiter must go, or a later matching event would
+            # "resume" an intention that has moved on or finished (an IndexError that killed the agent)
+            if susp.event is not None:
+                self.event_waiters = [w for w in self.event_waiters if w[2] is not susp]
+            if susp.until is not None:
+                self.condition_waiters = [w for w in self.condition_waiters if w[1] is not susp]
             held = intention.waiting
             if held is not susp:
                 if held is not None and getattr(held, "inner", None) is susp:
@@ -849,8 +966,15 @@ class Agent:
                 self.arch.wake(self)
             susp.future.add_done_callback(on_done)
         if susp.timeout is not None:
+            # answers are stamped in wall time; on an environment's clock the timeout's wall time is when it fires
+            deadline = time.monotonic() + susp.timeout if self.clock is time.monotonic else None
+
             def on_timeout() -> None:
                 if done[0]:
+                    return
+                if susp.answer_waiting is not None and \
+                        susp.answer_waiting(deadline if deadline is not None else time.monotonic()):
+                    self.add_timer(0.0, on_timeout)  # again once the answer in the mailbox is read
                     return
                 if susp.on_timeout is not None:
                     try:
@@ -886,7 +1010,10 @@ class Agent:
                 self._resume(intention, True, susp)
 
     def add_timer(self, seconds: float, callback: Callable[[], None]) -> None:
-        heapq.heappush(self.timers, (self.clock() + max(0.0, seconds), next(_seq), callback))
+        now = self.clock()
+        if not self.timers:
+            self.timer_clock = now
+        heapq.heappush(self.timers, (now + max(0.0, seconds), next(_seq), callback))
         self.arch.wake(self)
 
     def post_feedback(self, callback: Callable[[], None]) -> None:

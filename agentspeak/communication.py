@@ -12,6 +12,7 @@ from __future__ import annotations
 import itertools
 import logging
 import os
+import time
 import uuid
 from typing import Any
 
@@ -40,7 +41,7 @@ class Message:
     (``tell``, ``achieve``) never need one, and making it is a good part of an in-process send.
     ``.send`` builds messages without ``__init__`` (see ``agentspeak.agent._new``)."""
 
-    __slots__ = ("sender", "receiver", "performative", "content", "_msg_id", "in_reply_to")
+    __slots__ = ("sender", "receiver", "performative", "content", "_msg_id", "in_reply_to", "sent_at")
 
     def __init__(self, sender: str, receiver: str, performative: str, content: Term,
                  msg_id: str | None = None, in_reply_to: str | None = None) -> None:
@@ -50,6 +51,7 @@ class Message:
         self.content = content
         self._msg_id = msg_id
         self.in_reply_to = in_reply_to
+        self.sent_at = None  # monotonic time a reply to an ask was sent (in this process), see .send
 
     @property
     def msg_id(self) -> str:
@@ -268,6 +270,7 @@ def _signal(agent, msg: Message, sender: Term) -> None:
 
 def _answer(agent, msg: Message, performative: str, content: Term) -> None:
     reply = Message(agent.name, msg.sender, performative, content, in_reply_to=msg.msg_id)
+    reply.sent_at = time.monotonic()  # an answer sent before the asker's timeout counts (see .send)
     agent.arch.send(agent, reply)
 
 

@@ -5,7 +5,7 @@ instruction keeps the source line it came from so failures can say ``code_line``
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 from agentspeak.terms import (
@@ -314,12 +314,23 @@ class Plan:
     all_unifs: bool = field(init=False, default=False)
     goal_condition: Term | None = field(init=False, default=None)
     """Jason 3.2's ``+!g <: C <- body``: the goal is achieved as soon as C holds."""
+    sub_plans: tuple = field(init=False, default=())
+    """Jason(ER)'s ``+!g <- body. { sub-plans }``: plans relevant only while this plan's intended
+    means is on an intention; their variables of the same name are this plan's (the parser maps them)."""
+    sub_library: object = field(init=False, default=None, repr=False)
+    """The ``PlanLibrary`` of ``sub_plans`` once the plan is in an agent's library (its father is that
+    library); ``scope`` is the library a sub-plan lives in."""
+    scope: object = field(init=False, default=None, repr=False)
     matcher: tuple | None = field(init=False, default=None, repr=False)
     """(trigger variables, compiled context, tail-call key) for deliberation, made on first use
     (``plan_matcher``); shared by every agent whose plan has the same terms."""
 
     def __post_init__(self) -> None:
         self.refresh_label_flags()
+
+    def __getstate__(self) -> dict:
+        # without the matcher: it holds compiled closures, made again on first use (agentspeak/parse_cache.py)
+        return {**self.__dict__, "matcher": None}
 
     def refresh_label_flags(self) -> None:
         annots = self.label.annots if type(self.label) is Literal and self.label.annots else ()
@@ -335,6 +346,13 @@ class Plan:
             annots = self.label.annots if self.label is not None else None
             self.label = Literal(f"p__{_plan_counter[0]}", (), annots)
         return self.label
+
+    def copy(self) -> "Plan":
+        """A new Plan object over the same terms (each agent's library holds its own plans)."""
+        q = Plan(self.trigger, self.context, self.body, self.label, self.source_file, self.line)
+        q.goal_condition = self.goal_condition
+        q.sub_plans = self.sub_plans
+        return q
 
     def renamed(self) -> "Plan":
         """A copy with fresh variables (used when a plan is stored as a term)."""
@@ -363,9 +381,47 @@ class Plan:
         text += str(self.trigger)
         if self.context is not None:
             text += " : " + to_str(self.context)
+        if self.goal_condition is not None:
+            text += " <: " + to_str(self.goal_condition)
         if self.body:
             text += " <- " + body_str(self.body)
         return text
+
+    def source_text(self, indent: str = "") -> str:
+        """The plan as AgentSpeak source, its sub-plans in a block after it (``.save_agent``)."""
+        text = indent + str(self) + "."
+        if self.sub_plans:
+            inner = "\n".join(p.source_text(indent + "   ") for p in self.sub_plans)
+            text += " {\n" + inner + "\n" + indent + "}"
+        return text
+
+
+def plan_variables(plan: Plan) -> list:
+    """The variables of a plan: label, trigger, context, goal condition and body."""
+    out: list = []
+    for t in (plan.label, plan.trigger.literal, plan.context, plan.goal_condition):
+        if t is not None:
+            variables(t, out)
+    return body_variables(plan.body, out)
+
+
+def with_sub_plans(plan: Plan, subs: list) -> Plan:
+    """``plan`` with Jason(ER) sub-plans attached. A sub-plan's variable named as one of the plan's is
+    that variable (Jason's unifiers go by name: the sub-plan starts from the bindings the plan had when
+    it was selected), at any depth of nesting."""
+    names = {v.name: v for v in plan_variables(plan) if v.name != "_"}
+    q = plan.copy()
+    q.sub_plans = plan.sub_plans + tuple(_share_variables(sp, names) for sp in subs)
+    return q
+
+
+def _share_variables(sub: Plan, names: dict) -> Plan:
+    mapping = {v: names[v.name] for v in plan_variables(sub) if v.name in names and names[v.name] is not v}
+    r = sub.resolved(mapping) if mapping else sub.copy()
+    inner = dict(names)
+    inner.update((v.name, v) for v in plan_variables(r) if v.name != "_")
+    r.sub_plans = tuple(_share_variables(s, inner) for s in sub.sub_plans)
+    return r
 
 
 def plan_matcher(plan: Plan) -> tuple:
@@ -454,14 +510,29 @@ class PlanTerm:
         return Plan(trig) if trig is not None else None
 
     def resolve(self, b: Bindings) -> "PlanTerm":
+        if self.body is not None:
+            # Jason's PlanBodyImpl.capply: a body term gets the bindings, and the arithmetic and functions
+            # of its formulas are computed (`{ !assert_equals(1, .count(b(_))) }` stored in a belief
+            # holds the count of that moment, so two such beliefs can be equal: Jason's own test manager
+            # counts its asserts that way). Conditions of if/while/for stay code.
+            if not self._bound_in(b) and not self._has_calls():
+                return self
+            return PlanTerm(body=tuple([_capply_instr(i, b) for i in self.body]), bare=self.bare)
         if not self._bound_in(b):
             return self
         if self.plan is not None:
             return PlanTerm(plan=self.plan.resolved(b))
-        if self.body is not None:
-            return PlanTerm(body=map_body(self.body, lambda t: substitute(t, b)), bare=self.bare)
         r = self.rule
         return PlanTerm(rule=Rule(substitute(r.head, b), substitute(r.body, b), r.source_file, r.line))
+
+    def _has_calls(self) -> bool:
+        """Does a simple formula of this body term hold arithmetic or a function call?"""
+        for instr in self.body:
+            if not isinstance(instr, (If, While, For, Fork)):
+                for t in instr.terms():
+                    if _holds_call(t):
+                        return True
+        return False
 
     def rename(self, mapping: dict) -> "PlanTerm":
         if self.plan is not None:
@@ -548,6 +619,40 @@ class PlanTerm:
 
 
 _TRUE = Literal("true")
+
+
+def _holds_call(t: Term) -> bool:
+    tt = type(t)
+    if tt is Func or tt is Arith:
+        return True
+    if tt is Literal:
+        return any(_holds_call(x) for x in t.args) or bool(t.annots) and any(_holds_call(x) for x in t.annots)
+    if tt is Cons:
+        while type(t) is Cons:
+            if _holds_call(t.head):
+                return True
+            t = t.tail
+        return False
+    if tt is Rel or tt is And or tt is Or:
+        return _holds_call(t.left) or _holds_call(t.right)
+    if tt is Not:
+        return _holds_call(t.arg)
+    return False
+
+
+def _capply_instr(instr: "Instr", b: Bindings) -> "Instr":
+    if isinstance(instr, (If, While, For, Fork)):
+        return instr.map_terms(lambda t: substitute(t, b))
+    return instr.map_terms(lambda t: _capply(t, b))
+
+
+def _capply(t: Term, b: Bindings) -> Term:
+    """``resolve`` (bindings applied, ground arithmetic and functions computed); a term that cannot be
+    computed now is kept as it is, with the bindings applied (Jason logs it and keeps the term)."""
+    try:
+        return resolve(t, b)
+    except Exception:  # noqa: BLE001 - an expression that fails now stays code, as in Jason
+        return substitute(t, b)
 
 
 def substitute(t: Term, b: Bindings) -> Term:
@@ -658,6 +763,18 @@ class Program:
     plans: list = field(default_factory=list)         # Plan
     source_file: str = ""
     warnings: list = field(default_factory=list)
+
+
+def copy_program(program: Program) -> Program:
+    """A program of new Plan and Rule objects over the same (immutable) terms and instructions: what each
+    agent of a shared source gets (plans hold per-agent labels and flags)."""
+    return Program(
+        beliefs=list(program.beliefs),
+        rules=[replace(r) for r in program.rules],
+        goals=list(program.goals),
+        plans=[p.copy() for p in program.plans],
+        source_file=program.source_file,
+        warnings=list(program.warnings))
 
 
 def is_var(t: Term) -> bool:

@@ -68,6 +68,9 @@ class Suspend:
     on_event: Callable[[Any, Any], bool] | None = None
     term: Any = None
     """Why, as a term (``.suspended(G, R)`` gives it; Jason's ``wait(W)[time(T)]`` for ``.wait``)."""
+    answer_waiting: Callable[[float], bool] | None = None
+    """For an ask: is an answer sent by this (monotonic) deadline still unread in the mailbox? Then the
+    timeout waits for it to be read."""
 
 
 @dataclass(frozen=True)
@@ -180,6 +183,17 @@ class FunctionSpec:
     def accepts(self, arity: int) -> bool:
         return self.arities is None or arity in self.arities
 
+    def __reduce__(self) -> tuple:
+        # Pickled by name (agentspeak/parse_cache.py): a registered function is the registry's own object
+        # again on load (its Python function may be a closure, which pickle cannot write); a rule function
+        # (``register_function``) is made again from its name, arity and predicate.
+        remake = getattr(self.function, "remake", None)     # (callable, args) set by the maker of a closure
+        if remake is not None:
+            return remake
+        if FUNCTIONS.functions.get(self.name) is self:
+            return (registered_function, (self.name,))
+        return (FunctionSpec, (self.name, self.function, self.arities, self.unground_ok, self.needs_agent, self.doc))
+
     def evaluate(self, args: tuple) -> int | float | None:
         """The value for resolved ``args``; a failure names the call and why. None when the
         function needs an agent and none runs in this thread (a belief being parsed)."""
@@ -238,4 +252,9 @@ class FunctionRegistry:
 
 
 FUNCTIONS = FunctionRegistry()
+
+
+def registered_function(name: str) -> FunctionSpec:
+    """The function registered under ``name`` (KeyError if none: a pickle naming it is then unusable)."""
+    return FUNCTIONS.functions[name]
 arith_function = FUNCTIONS.arith_function

@@ -1,7 +1,9 @@
 """A short real run with the agents (``faultmas experiment perfbugs --generate --agents``): the ROS 2 team,
-the workload, and Faulty's and Helper's AgentSpeak agents in their own processes over Zenoh. The
-recorder must make each agent a component, with its process's counters, its ROS 2 bridge topics and the
-Zenoh keys it sends and receives on, and leave the ROS 2 channels' columns as in runs without agents."""
+the workload, and Faulty's and Helper's AgentSpeak agents in their own processes over Zenoh, with a memory
+leak injected into Helper's agent process for part of the run. The recorder must make each agent a
+component, with its process's counters, its ROS 2 bridge topics and the Zenoh keys it sends and receives
+on, and leave the ROS 2 channels' columns as in runs without agents; the leak must show in that agent's
+process only, and only while the ground truth says it is on."""
 from __future__ import annotations
 
 import json
@@ -22,10 +24,10 @@ def agents_run(tmp_path_factory):
     from experiments.perfbugs_agents import CooperativeAgents
 
     out = tmp_path_factory.mktemp("agents-run")
-    profile = Profile("agents-test", fault_free_runs=1, faulty_runs=0, duration_s=20.0, camera=False,
-                      fault_length_s=(5.0, 10.0))
-    entry = record_run({"id": 0, "seed": 3, "kind": None}, profile, out, lambda text: None,
-                       agents=CooperativeAgents(), domain_id=DOMAIN)
+    profile = Profile("agents-test", fault_free_runs=0, faulty_runs=1, duration_s=20.0, camera=False,
+                      fault_length_s=(6.0, 8.0))              # the leak: from 8-9 s for 6-8 s
+    entry = record_run({"id": 100, "seed": 3, "kind": "memory_leak", "component": "helper_agent"}, profile, out,
+                       lambda text: None, agents=CooperativeAgents(), domain_id=DOMAIN)
     manifest = {"format": 1, "profile": {"name": profile.name}, "agents": True, "runs": [entry]}
     (out / "manifest.json").write_text(json.dumps(manifest))
     return out, entry
@@ -51,6 +53,26 @@ def test_the_agents_are_components_with_their_processes_topics_and_zenoh_keys(ag
         assert counters.shape[1] == 8 and len(counters) >= 15 and np.isfinite(counters).all()
         assert counters[-1, 0] > counters[0, 0]                 # the agent's process did use CPU
         assert len(arrays["events/faultmas/coop/control/x"]) > 0
+
+
+def test_a_memory_leak_injected_into_an_agent_shows_in_its_process_only_while_on(agents_run):
+    from detection.learned.counters import COUNTER_NAMES, targets_from_counters
+    from robot_bridge.ros2.perfbugs import LEAK_BYTES_PER_S
+
+    out, entry = agents_run
+    [bug] = entry["faults"]
+    assert (bug["component"], bug["kind"]) == ("helper_agent", "memory_leak")
+    rss = COUNTER_NAMES.index("rss_mb")
+    with np.load(out / entry["file"]) as arrays:
+        ticks = arrays["ticks"][1:]
+        on = (ticks >= bug["start"] + 1.0) & (ticks < bug["end"])            # whole seconds of the leak
+        off = (ticks < bug["start"]) | (ticks >= bug["end"] + 1.0)
+        growth = {a: targets_from_counters(arrays[f"counters/{a}_agent"])[:, rss] for a in ("faulty", "helper")}
+    leak_mb = LEAK_BYTES_PER_S / 2**20
+    assert on.sum() >= 4 and off.sum() >= 6
+    assert np.median(growth["helper"][on]) > 0.7 * leak_mb, growth["helper"]       # 2 MiB/s while on
+    assert np.median(growth["helper"][off]) < 0.1 * leak_mb, growth["helper"]      # given back, then quiet
+    assert np.median(growth["faulty"][on]) < 0.1 * leak_mb, growth["faulty"]       # the other agent: untouched
 
 
 def test_ros_channels_keep_the_columns_of_runs_without_agents(agents_run):
