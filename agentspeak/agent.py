@@ -90,10 +90,23 @@ class Agent:
 
     def _see_arch(self, arch: Any) -> None:
         """A new architecture (set at start, or by a bridge): the default ``perceive`` never returns
-        percepts, so the sense phase skips calling it."""
+        percepts, so the sense phase skips calling it. Its environment's clock becomes the agent's
+        (``AgentArch.environment_clock``); timers already set keep the time they had left."""
         from agentspeak.arch import AgentArch
         self._arch_seen = arch
         self._perceive = None if type(arch).perceive is AgentArch.perceive else arch.perceive
+        clock = getattr(arch, "environment_clock", None)
+        clock = (clock() if clock is not None else None) or time.monotonic
+        old = getattr(self, "clock", None)
+        if old is not None and old is not clock and self.timers:
+            now, then = old(), clock()
+            self.timers = [(then + (when + self.timer_lag - now), seq, callback) for when, seq, callback in self.timers]
+            self.timer_lag = 0.0   # deadlines now on the new clock itself
+            heapq.heapify(self.timers)
+        self.clock = clock
+        """Seconds, the agent's time: its timers (``.wait``, ``.at``, answer and action timeouts) count in
+        it. Wall time (``time.monotonic``), as in Jason, unless the environment has a clock of its own (a
+        simulated robot's: see ``robot_bridge.clock``)."""
 
     # ------------------------------------------------------------------ loading
     def load(self, program: Program) -> None:
@@ -303,7 +316,7 @@ class Agent:
         return not (self.has_work() or self.timers or self.pending_futures)
 
     def next_timer(self) -> float | None:
-        """The real time the next timer is due at the earliest."""
+        """When the next timer is due at the earliest, on the agent's clock (``self.clock``)."""
         return self.timers[0][0] + self.timer_lag if self.timers else None
 
     # -- sense
@@ -327,7 +340,7 @@ class Agent:
             # then 20 formulas, before another intention's .wait(150) ends; six .wait(50) in a row end
             # before a .wait(500) begun with them), as Jason on a machine with time to spare. The clock
             # falls at most TIMER_MAX_LAG behind, and no timer ends before its time on the real clock.
-            now = time.monotonic()
+            now = self.clock()   # the agent's time: its environment's clock, if it has one
             busy = bool(self.running or self.events)
             if busy and self.timer_busy:
                 slow = now - self.timer_seen - TIMER_STEP
@@ -1020,12 +1033,14 @@ class Agent:
                 self.arch.wake(self)
             susp.future.add_done_callback(on_done)
         if susp.timeout is not None:
-            deadline = time.monotonic() + susp.timeout
+            # answers are stamped in wall time; on an environment's clock the timeout's wall time is when it fires
+            deadline = time.monotonic() + susp.timeout if self.clock is time.monotonic else None
 
             def on_timeout() -> None:
                 if done[0]:
                     return
-                if susp.answer_waiting is not None and susp.answer_waiting(deadline):
+                if susp.answer_waiting is not None and \
+                        susp.answer_waiting(deadline if deadline is not None else time.monotonic()):
                     self.add_timer(0.0, on_timeout)  # again once the answer in the mailbox is read
                     return
                 if susp.on_timeout is not None:
@@ -1062,7 +1077,7 @@ class Agent:
                 self._resume(intention, True, susp)
 
     def add_timer(self, seconds: float, callback: Callable[[], None]) -> None:
-        now = time.monotonic()
+        now = self.clock()   # the agent's time: its environment's clock, if it has one
         if not self.timers:  # (set in a cycle of this agent: the time to its next cycle is busy if it is then)
             self.timer_lag, self.timer_seen, self.timer_busy = 0.0, now, True
         # on the timer clock: ``timers[0][0] + timer_lag`` is the real time it is due at the earliest

@@ -28,6 +28,8 @@ CYCLES_PER_TURN = 64
 """Reasoning cycles an agent runs before the next ready agent gets its turn (fairness)."""
 TURN_SECONDS = 0.005
 """... or fewer, when its cycles are slow: with many busy agents a round stays short."""
+CLOCK_POLL_S = 0.02
+"""How often an idle loop looks at timers that count in an environment's clock (one simulator step)."""
 
 
 def _when(entry: tuple) -> float:
@@ -308,12 +310,11 @@ class LocalRuntime:
                 return "timeout"
             # timers that are due make their agents ready (only agents that have timers are looked at)
             if timed:
-                now = monotonic()
                 due = []
                 for agent in list(timed):
                     if not agent.timers:
                         timed.discard(agent)
-                    elif agent.timers[0][0] + agent.timer_lag <= now and not (agent.running or agent.events) \
+                    elif agent.timers[0][0] + agent.timer_lag <= agent.clock() and not (agent.running or agent.events) \
                             and (not ready or ready[0] is not agent):
                         # (a busy agent runs its timers by its own clock, in its turns: Agent.sense)
                         due.append((agent.timers[0][0] + agent.timer_lag, agent))
@@ -364,18 +365,19 @@ class LocalRuntime:
                     if agent.name not in ready_set:  # (unless woken meanwhile)
                         ready_set.add(agent.name)
                         busy.append(agent)
-                elif agent.timers and agent.timers[0][0] + agent.timer_lag <= monotonic():
+                elif agent.timers and agent.timers[0][0] + agent.timer_lag <= agent.clock():
                     self.wake(agent)
                 continue
             if stop_when_idle and self.idle() and not self._external_pending():
                 return "idle"
             # nothing ready: sleep until the next timer, a wake-up, or the deadline
-            waits = [a.timers[0][0] + a.timer_lag for a in timed if a.timers]
+            now = monotonic()
+            waits = [_timer_wait(a, now) for a in timed if a.timers]
             if self._stop_at is not None:
-                waits.append(self._stop_at)
+                waits.append(self._stop_at - now)
             if deadline is not None:
-                waits.append(deadline)
-            wait = max(0.0, min(waits) - monotonic()) if waits else 0.5
+                waits.append(deadline - now)
+            wait = max(0.0, min(waits)) if waits else 0.5
             with self._cond:
                 if not self.ready:
                     self._sleepers += 1
@@ -387,3 +389,13 @@ class LocalRuntime:
     def _external_pending(self) -> bool:
         hook = getattr(self, "external_pending", None)
         return bool(hook()) if hook else False
+
+
+def _timer_wait(agent: Agent, now: float) -> float:
+    """Wall seconds to sleep before ``agent``'s next timer may be due. On an environment's clock (a
+    simulator's, which may run slower or faster than wall time) it is looked at again every
+    ``CLOCK_POLL_S``: the comparison costs nothing, the agent runs only once its timer is due."""
+    clock = agent.clock
+    if clock is time.monotonic:
+        return agent.timers[0][0] + agent.timer_lag - now
+    return min(agent.timers[0][0] + agent.timer_lag - clock(), CLOCK_POLL_S)
