@@ -47,7 +47,7 @@ def build_local_mas(project, printer=None, bridges: dict | None = None):
     ``bridges`` (agent -> set-up ``RobotBridge``) drives that robot (``agents.robot_arch.RobotArch``)."""
     from pathlib import Path
 
-    from agentspeak.parser import parse_program
+    from agentspeak.parse_cache import cached_program
     from agentspeak.runtime import LocalRuntime
     from agentspeak.source_text import read_source
 
@@ -68,8 +68,7 @@ def build_local_mas(project, printer=None, bridges: dict | None = None):
         goals = option_literals(decl.options.get("goals"), project.file)
         for name in decl.instance_names():
             # each instance gets its own parse: plans hold per-agent labels and state
-            program = parse_program(programs[decl.source], decl.source,
-                                    source_path=tuple(project.source_dirs))
+            program = cached_program(programs[decl.source], decl.source, tuple(project.source_dirs))
             arch = None
             if bridges and name in bridges:
                 from agents.robot_arch import RobotArch

@@ -18,7 +18,7 @@ from typing import Callable, Iterable
 from agentspeak.agent import Agent
 from agentspeak.arch import AgentArch
 from agentspeak.communication import Message
-from agentspeak.parser import parse_program
+from agentspeak.parse_cache import cached_program   # not the parser: a file parsed before skips Lark
 from agentspeak.stdlib.registry import CURRENT
 from agentspeak.terms import Literal
 
@@ -28,6 +28,8 @@ CYCLES_PER_TURN = 64
 """Reasoning cycles an agent runs before the next ready agent gets its turn (fairness)."""
 TURN_SECONDS = 0.005
 """... or fewer, when its cycles are slow: with many busy agents a round stays short."""
+CLOCK_POLL_S = 0.02
+"""How often an idle loop looks at timers that count in an environment's clock (one simulator step)."""
 
 
 def _when(entry: tuple) -> float:
@@ -111,7 +113,7 @@ class LocalRuntime:
         if name in self.agents:
             raise ValueError(f"an agent named {name!r} already exists")
         if program is None:
-            program = parse_program(source or "", source_file)
+            program = cached_program(source or "", source_file)
         agent = Agent(name, arch=arch or LocalArch(self), source_file=source_file)
         for lit in extra_beliefs:
             agent.add_initial_belief(lit)
@@ -143,7 +145,7 @@ class LocalRuntime:
         try:
             with open(path, encoding="utf-8") as f:
                 text = f.read()
-            program = parse_program(text, path, source_path=tuple(self.source_dirs))
+            program = cached_program(text, path, tuple(self.source_dirs))
         except OSError as exc:
             raise IAError("ia_failed", f".create_agent: cannot read {path}: {exc.strerror or exc}") from None
         except AslSyntaxError as exc:
@@ -247,6 +249,14 @@ class LocalRuntime:
         log.warning("message %s to unknown agent '%s' dropped", message.msg_id, message.receiver)
 
     def stop(self, delay: float = 0.0) -> None:
+        """Stop the MAS ``delay`` seconds from now; with a delay, every agent first gets the event
+        ``+jag_shutting_down(MS)`` to prepare itself (Jason's ``RunLocalMAS.stopAgs``)."""
+        if delay > 0 and get_ident() == self._loop_thread:
+            from agentspeak.program import ADD, BEL, Trigger
+            ms = round(delay * 1000)
+            for agent in list(self.agents.values()):
+                agent.post_external(Trigger(ADD, BEL, Literal("jag_shutting_down", (ms,))), force=True)
+                self.wake(agent)
         with self._cond:
             self._stop_at = time.monotonic() + delay
             self._cond.notify()
@@ -300,15 +310,14 @@ class LocalRuntime:
                 return "timeout"
             # timers that are due make their agents ready (only agents that have timers are looked at)
             if timed:
-                now = monotonic()
                 due = []
                 for agent in list(timed):
                     if not agent.timers:
                         timed.discard(agent)
-                    elif agent.timers[0][0] <= now and not (agent.running or agent.events) \
+                    elif agent.timers[0][0] + agent.timer_lag <= agent.clock() and not (agent.running or agent.events) \
                             and (not ready or ready[0] is not agent):
                         # (a busy agent runs its timers by its own clock, in its turns: Agent.sense)
-                        due.append((agent.timers[0][0], agent))
+                        due.append((agent.timers[0][0] + agent.timer_lag, agent))
                 if due:
                     # first in line, the earliest first, even if already queued: a .wait or .at that is
                     # due goes on at once, as an agent on a thread of its own would (Jason), not after a
@@ -356,18 +365,19 @@ class LocalRuntime:
                     if agent.name not in ready_set:  # (unless woken meanwhile)
                         ready_set.add(agent.name)
                         busy.append(agent)
-                elif agent.timers and agent.timers[0][0] <= monotonic():
+                elif agent.timers and agent.timers[0][0] + agent.timer_lag <= agent.clock():
                     self.wake(agent)
                 continue
             if stop_when_idle and self.idle() and not self._external_pending():
                 return "idle"
             # nothing ready: sleep until the next timer, a wake-up, or the deadline
-            waits = [a.timers[0][0] for a in timed if a.timers]
+            now = monotonic()
+            waits = [_timer_wait(a, now) for a in timed if a.timers]
             if self._stop_at is not None:
-                waits.append(self._stop_at)
+                waits.append(self._stop_at - now)
             if deadline is not None:
-                waits.append(deadline)
-            wait = max(0.0, min(waits) - monotonic()) if waits else 0.5
+                waits.append(deadline - now)
+            wait = max(0.0, min(waits)) if waits else 0.5
             with self._cond:
                 if not self.ready:
                     self._sleepers += 1
@@ -379,3 +389,13 @@ class LocalRuntime:
     def _external_pending(self) -> bool:
         hook = getattr(self, "external_pending", None)
         return bool(hook()) if hook else False
+
+
+def _timer_wait(agent: Agent, now: float) -> float:
+    """Wall seconds to sleep before ``agent``'s next timer may be due. On an environment's clock (a
+    simulator's, which may run slower or faster than wall time) it is looked at again every
+    ``CLOCK_POLL_S``: the comparison costs nothing, the agent runs only once its timer is due."""
+    clock = agent.clock
+    if clock is time.monotonic:
+        return agent.timers[0][0] + agent.timer_lag - now
+    return min(agent.timers[0][0] + agent.timer_lag - clock(), CLOCK_POLL_S)
