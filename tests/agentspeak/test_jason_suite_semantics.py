@@ -44,8 +44,9 @@ class _Clock:
 
     def __init__(self) -> None:
         self.now = 1000.0
+        self.monotonic = self._monotonic  # one callable, as time.monotonic is (the agent's clock is it)
 
-    def monotonic(self) -> float:
+    def _monotonic(self) -> float:
         return self.now
 
 
