@@ -154,12 +154,34 @@ def test_a_camera_standing_still_reuses_its_static_layers_with_the_same_pixels()
     for robots in (sample.robots, sample.robots, moved):    # the second frame keeps the layers, the third uses them
         rgb, depth = render(sample.rig, sample.camera_pose, robots, sample.scene, np.random.default_rng(9))
     kept = _renderer(sample.rig, sample.scene.depth)._static
-    assert any(pose == sample.camera_pose and entry[0] is sample.scene for (pose, _), entry in kept.items())
+    assert any(pose == sample.camera_pose and entry[0]() is sample.scene for (pose, _), entry in kept.items())
     # an equal scene that is another object is drawn from scratch: the pixels must not differ
     fresh = render(sample.rig, sample.camera_pose, moved, replace(sample.scene), np.random.default_rng(9))
     assert np.array_equal(rgb, fresh[0]) and np.array_equal(depth, fresh[1])
     before = render(sample.rig, sample.camera_pose, sample.robots, replace(sample.scene), np.random.default_rng(9))
     assert not np.array_equal(rgb, before[0])                    # the robot was redrawn where it moved to
+
+
+def test_static_layers_of_a_scene_go_with_the_scene():
+    # found by the soak (issue 22): a process running world after world kept the layers of 32 standing
+    # cameras of worlds long gone (2 MiB each) and their scenes; they must go when the scene does
+    import gc
+    import weakref
+    from dataclasses import replace
+
+    from robot_bridge.sim.camera import _renderer
+
+    sample = random_scene(6)
+    scene = replace(sample.scene)                   # this test's own scene object
+    for _ in range(2):                              # a camera standing still: its layers are kept
+        render(sample.rig, sample.camera_pose, sample.robots, scene, np.random.default_rng(1))
+    kept = _renderer(sample.rig, sample.scene.depth)._static
+    gone, scene_id = weakref.ref(scene), id(scene)
+    assert any(key[1] == scene_id for key in kept)
+    del scene
+    gc.collect()
+    assert gone() is None, "the renderer keeps a scene alive"
+    assert not any(key[1] == scene_id for key in kept), "the layers of a scene that is gone are still kept"
 
 
 def test_bare_floor_rows_from_the_noise_banks_read_like_measured_ones():

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import threading
+import weakref
 from collections import OrderedDict
 from functools import lru_cache
 
@@ -78,8 +79,9 @@ class _Renderer:
         self._height_cache: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
         self._cap_blocks: dict[tuple, np.ndarray] = {}
         self._static: OrderedDict[tuple, tuple] = OrderedDict()     # static layers of cameras standing still
+        self._scenes_watched: set[int] = set()      # ids of live scenes whose layers go when they do
         self._poses_seen: OrderedDict[tuple, None] = OrderedDict()
-        self._static_lock = threading.Lock()
+        self._static_lock = threading.RLock()       # re-entrant: a scene may die (and _forget run) in a GC pass here
         self._local = threading.local()
         self.extra = extra
 
@@ -183,7 +185,7 @@ class _Renderer:
         key = (pose, id(scene))
         with self._static_lock:
             kept = self._static.get(key)
-            if kept is not None and kept[0] is scene:
+            if kept is not None and kept[0]() is scene:
                 self._static.move_to_end(key)
             else:
                 kept = None
@@ -199,11 +201,28 @@ class _Renderer:
         shadows, floor_from, wall_readable = _static_layers(self, pose, scene, canvas, disparity, props=again)
         if again:
             with self._static_lock:
-                self._static[key] = (scene, canvas.copy(), disparity.copy(), tuple(shadows), floor_from,
-                                     wall_readable)
+                self._watch(scene)
+                self._static[key] = (weakref.ref(scene), canvas.copy(), disparity.copy(), tuple(shadows),
+                                     floor_from, wall_readable)
                 if len(self._static) > 32:
                     self._static.popitem(last=False)
         return shadows, floor_from, wall_readable, again
+
+    def _watch(self, scene: Scene) -> None:
+        """Drop ``scene``'s static layers once the scene is gone (its world ended): a process that runs
+        world after world (``faultmas eval``, the soak) kept up to 32 layers of worlds long gone, 2 MiB
+        each, and their scenes with them (issue 22's soak). Called with ``_static_lock`` held."""
+        if id(scene) not in self._scenes_watched:
+            self._scenes_watched.add(id(scene))
+            weakref.finalize(scene, _forget_scene, weakref.ref(self), id(scene))
+
+    def _forget(self, scene_id: int) -> None:
+        with self._static_lock:
+            self._scenes_watched.discard(scene_id)
+            for key in [k for k in self._static if k[1] == scene_id]:
+                del self._static[key]
+            for key in [k for k in self._poses_seen if k[1] == scene_id]:
+                del self._poses_seen[key]
 
     def scratch(self) -> tuple[np.ndarray, np.ndarray]:
         """This thread's colour and depth buffers (re-used frame after frame)."""
@@ -212,6 +231,13 @@ class _Renderer:
             h, w = self.cam.height, self.cam.width
             bufs = self._local.bufs = (np.empty((h, w, 3), np.uint8), np.empty((h, w), np.float32))
         return bufs
+
+
+def _forget_scene(renderer: "weakref.ref[_Renderer]", scene_id: int) -> None:
+    """A scene died: its renderer (if it still exists) drops what it kept of it."""
+    alive = renderer()
+    if alive is not None:
+        alive._forget(scene_id)
 
 
 @lru_cache(maxsize=32)
