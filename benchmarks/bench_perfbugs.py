@@ -100,7 +100,8 @@ def _live_share(models, seconds: float, camera: bool, observers: tuple[str, ...]
     domain = 201 + os.getpid() % 30
     with tempfile.TemporaryDirectory() as tmp:
         for name, model in models.items():
-            model.save(Path(tmp) / f"{name}.npz")
+            if not name.endswith("_agent"):        # the agents are not launched here: their models would
+                model.save(Path(tmp) / f"{name}.npz")   # wait for them and refuse (the nodes' models do not)
         supervisor = Supervisor(plan(list(ROBOTS), camera=camera), domain)
         supervisor.start()
         try:
