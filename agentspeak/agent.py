@@ -168,7 +168,10 @@ class Agent:
             return
         for entry in list(self.event_waiters):
             pattern, intention, susp = entry
-            b = dict(intention.stack[-1].b) if intention.stack else {}
+            if not intention.stack:    # ended without its wait finishing: nothing to resume
+                self.event_waiters.remove(entry)
+                continue
+            b = dict(intention.stack[-1].b)
             trail: list = []
             if pattern.op == trigger.op and pattern.kind == trigger.kind and unify(pattern.literal, trigger.literal, b, trail):
                 self.event_waiters.remove(entry)
@@ -783,6 +786,9 @@ class Agent:
             if done[0] or intention.dropped:
                 return
             done[0] = True
+            if self.event_waiters:   # a wait that timed out must not match a later event (issue 22's soak:
+                # the intention had ended meanwhile, and the agent died of an IndexError when the event came)
+                self.event_waiters = [w for w in self.event_waiters if w[2] is not susp]
             held = intention.waiting
             if held is not susp:
                 if held is not None and getattr(held, "inner", None) is susp:
