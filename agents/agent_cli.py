@@ -13,6 +13,8 @@ import logging
 import signal
 import sys
 
+from agents.environment import add_bridge_arguments
+
 log = logging.getLogger("faultmas.agents")
 
 EXIT_TIMEOUT = 124
@@ -44,15 +46,10 @@ def add_agent_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--wait-for-peers", type=float, default=0.0, metavar="S",
                      help="with --project: wait up to S seconds until every project agent is reachable")
     run.add_argument("--timeout", type=float, default=None, metavar="S", help="stop after S seconds")
-    run.add_argument("--bridge", default=None, metavar="NAME",
-                     help="drive a robot through this bridge (any installed one, see `faultmas sim bridges`: e.g. "
-                          "zenoh for a simulator served by `faultmas sim serve`, or ros2); the robot has the agent's "
-                          "name; default: the --project's environment, if it names a bridge")
-    run.add_argument("--bridge-option", action="append", default=[], metavar="KEY=VALUE",
-                     help="an option for the bridge (repeatable; numbers and true/false are converted; an option "
-                          "the bridge does not take is an error that lists the ones it does)")
-    run.add_argument("--bridge-timeout", type=float, default=30.0, metavar="S",
-                     help="seconds the robot gets to answer at start (default %(default)s)")
+    add_bridge_arguments(run, default=None, bridge_help=(
+        "drive a robot through this bridge (any installed one, see `faultmas sim bridges`: e.g. zenoh for a "
+        "simulator served by `faultmas sim serve`, or ros2); the robot has the agent's name; default: the "
+        "--project's environment, if it names a bridge"))
     run.add_argument("--allow-pause", action="store_true",
                      help="let `faultmas inspect` pause and step this agent (read-only otherwise)")
     run.set_defaults(func=cmd_agent_run)

@@ -20,10 +20,14 @@ import statistics
 import sys
 
 from agents.cooperative import EXPECTED, FAULTS, STEP_NAMES
+from agents.environment import add_bridge_arguments
 
 EVAL_FAULTS = ("none", "encoders", "both_actuators", "left_actuator", "right_actuator")
 EVAL_TEAMS = (2, 4, 8, 12)
 """Team sizes ``faultmas eval`` runs by default (robots start anywhere in the arena, often out of sight)."""
+EVAL_SIM_TIMEOUT = 600.0
+"""Simulated seconds an evaluation run may take: more than the plans' own time-outs add up to (a run ends
+with their verdict, diagnosed or undiagnosed, before), so only a run that hangs reaches it."""
 STEP_LABELS = {"started": "started its task", "fault_detected": "fault detected", "ambiguous": "ambiguous alone",
                "help_requested": "asks for help", "helper_found": "helper chosen", "searching": "searching for",
                "robot_found": "robot detected:", "found_by": "found by", "lost_sight": "lost sight of",
@@ -46,13 +50,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      help="a team of N robots (2-12) at random places over the whole arena, instead of the pair")
     run.add_argument("--faulty", type=int, default=None, metavar="K",
                      help="with --robots: K of them faulty (default 1)")
-    run.add_argument("--bridge", default="sim", metavar="NAME",
-                     help="the robots: sim (the embedded simulator, default), ros2 (ROS 2 nodes started for the "
-                          "run), or any other installed bridge (`faultmas sim bridges`), e.g. zenoh for a "
-                          "`faultmas sim serve` of MAS coop, whose robots have the fault --fault names")
-    run.add_argument("--bridge-option", action="append", default=[], metavar="KEY=VALUE",
-                     help="with a bridge other than sim and ros2: an option for it (repeatable; an option it "
-                          "does not take is an error that lists the ones it does)")
+    add_bridge_arguments(run, default="sim", timeout=False, bridge_help=(
+        "the robots: sim (the embedded simulator, default), ros2 (ROS 2 nodes started for the run), or any other "
+        "installed bridge (`faultmas sim bridges`), e.g. zenoh for a `faultmas sim serve` of MAS coop, whose "
+        "robots have the fault --fault names"),
+        option_help=("with a bridge other than sim and ros2: an option for it (repeatable; an option it does not "
+                     "take is an error that lists the ones it does)"))
     run.add_argument("--in-process", action="store_true", help="all agents in this process (no Zenoh)")
     run.add_argument("--json", action="store_true", help="print one JSON object (agents' lines go to stderr)")
     run.add_argument("--plot", metavar="PNG", help="draw ground-truth and believed trajectories to this file")
@@ -83,9 +86,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                          "'none' for pairs only")
     ev.add_argument("--jobs", type=int, default=2, help="worker processes (default %(default)s)")
     ev.add_argument("--json", action="store_true", help="print one JSON object: every run and the table")
-    ev.add_argument("--timeout", type=float, default=150.0,
-                    help="wall seconds per run before it counts as failed; a team of N gets N/2 times as much "
-                         "(default %(default)s)")
+    ev.add_argument("--sim-timeout", type=float, default=EVAL_SIM_TIMEOUT, metavar="S",
+                    help="simulated seconds a run may take before it counts as failed: what the robots did, "
+                         "whatever the machine's load (default %(default)s)")
+    ev.add_argument("--timeout", type=float, default=600.0,
+                    help="wall seconds per run before it counts as failed, a guard against a hung run; a team of N "
+                         "gets N/2 times as much, as every camera slows the simulator (default %(default)s)")
     ev.set_defaults(func=cmd_eval)
 
 
@@ -253,13 +259,13 @@ def eval_scenario(name: str, seed: int):
     return random_pair_scenario(name, seed)
 
 
-def _one_run(job: tuple[str, int, float]) -> dict:
+def _one_run(job: tuple[str, int, float, float]) -> dict:
     """One evaluation run; a team's steps are the means over its faulty robots."""
     from agents.cooperative import run_scenario
 
-    name, seed, timeout = job
+    name, seed, timeout, sim_timeout = job
     logging.disable(logging.WARNING)
-    result = run_scenario(eval_scenario(name, seed), processes=False, timeout=timeout)
+    result = run_scenario(eval_scenario(name, seed), processes=False, timeout=timeout, sim_timeout=sim_timeout)
     tested = [r for r in result.robots if r.fault != "none"] or result.robots[:1]
 
     def mean(clock: str) -> dict:
@@ -288,7 +294,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
         return 2
     faults += [team_label(s) for s in sizes]
     # a team's run gets more wall time: its cameras cost the simulator in proportion to the robots
-    jobs = [(f, args.seed * 100_000 + i, args.timeout * max(1.0, _team_size(f) / 2))
+    jobs = [(f, args.seed * 100_000 + i, args.timeout * max(1.0, _team_size(f) / 2), args.sim_timeout)
             for f in faults for i in range(args.runs)]
     runs: list[dict] = []
     from tqdm import tqdm

@@ -29,6 +29,21 @@ class BridgeChoice:
         return ["--bridge", self.name, *(arg for text in self.texts for arg in ("--bridge-option", text))]
 
 
+_OPTION_HELP = ("an option for the bridge (repeatable; numbers and true/false are converted; an option the bridge "
+                "does not take is an error that lists the ones it does)")
+
+
+def add_bridge_arguments(parser, *, default: str | None, bridge_help: str, option_help: str = _OPTION_HELP,
+                         timeout: bool = True) -> None:
+    """The ``--bridge``/``--bridge-option``/``--bridge-timeout`` options, declared once for every command that
+    drives robots (``mas run``, ``agent run``, ``run``); only what the robots are differs, so only the help does."""
+    parser.add_argument("--bridge", default=default, metavar="NAME", help=bridge_help)
+    parser.add_argument("--bridge-option", action="append", default=[], metavar="KEY=VALUE", help=option_help)
+    if timeout:
+        parser.add_argument("--bridge-timeout", type=float, default=30.0, metavar="S",
+                            help="seconds the robots get to answer at start (default %(default)s)")
+
+
 def choose_bridge(project=None, name: str | None = None, option_texts: list[str] | tuple[str, ...] = ()) \
         -> BridgeChoice | None:
     """The bridge of ``project`` (a ``MasProject``, or None) unless ``name`` (``--bridge``) overrides it;

@@ -11,6 +11,7 @@ import logging
 import sys
 
 from agents.agent_cli import add_agent_parser, option_literals
+from agents.environment import add_bridge_arguments
 from agents.keys_cli import add_keys_parser
 from agents.router import add_router_parser
 
@@ -26,15 +27,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                      help="in one process: also be reachable over Zenoh here (agents elsewhere may join)")
     run.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
                      help="in one process: also talk over Zenoh to agents reached through ENDPOINT")
-    run.add_argument("--bridge", default=None, metavar="NAME",
-                     help="give every agent a robot through this bridge (any installed one, see `faultmas sim "
-                          "bridges`; default: the project's `environment:` if it names one); each agent drives the "
-                          "robot of its own name, and sim puts them all into one world")
-    run.add_argument("--bridge-option", action="append", default=[], metavar="KEY=VALUE",
-                     help="an option for the bridge (repeatable; added to the project's environment arguments; "
-                          "an option the bridge does not take is an error that lists the ones it does)")
-    run.add_argument("--bridge-timeout", type=float, default=30.0, metavar="S",
-                     help="seconds the robots get to answer at start (default %(default)s)")
+    add_bridge_arguments(run, default=None, bridge_help=(
+        "give every agent a robot through this bridge (any installed one, see `faultmas sim bridges`; default: "
+        "the project's `environment:` if it names one); each agent drives the robot of its own name, and sim "
+        "puts them all into one world"))
     run.set_defaults(func=cmd_mas_run)
     mas.set_defaults(func=lambda args: (mas.print_help(), 2)[1])
     add_agent_parser(sub)
@@ -51,7 +47,7 @@ def build_local_mas(project, printer=None, bridges: dict | None = None):
     ``bridges`` (agent -> set-up ``RobotBridge``) drives that robot (``agents.robot_arch.RobotArch``)."""
     from pathlib import Path
 
-    from agentspeak.parser import parse_program
+    from agentspeak.parse_cache import cached_program
     from agentspeak.runtime import LocalRuntime
     from agentspeak.source_text import read_source
 
@@ -72,8 +68,7 @@ def build_local_mas(project, printer=None, bridges: dict | None = None):
         goals = option_literals(decl.options.get("goals"), project.file)
         for name in decl.instance_names():
             # each instance gets its own parse: plans hold per-agent labels and state
-            program = parse_program(programs[decl.source], decl.source,
-                                    source_path=tuple(project.source_dirs))
+            program = cached_program(programs[decl.source], decl.source, tuple(project.source_dirs))
             arch = None
             if bridges and name in bridges:
                 from agents.robot_arch import RobotArch

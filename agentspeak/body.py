@@ -94,12 +94,18 @@ def _belief_literal(term: Term, b: dict) -> Literal:
     return lit
 
 
+def _in_scope(intention: Intention) -> bool:
+    """The intention's top plan has sub-plans or is one (a sub-plan may react to its +b/-b)."""
+    plan = intention.stack[-1].plan if intention.stack else None
+    return plan is not None and (plan.sub_library is not None or plan.scope is not None)
+
+
 def _post_belief_event(ag: Agent, trigger: Trigger, intention: Intention, new_focus: bool) -> None:
     """A +b/-b from a plan body: on the same intention (it waits for the event) when a plan is
     relevant, a new intention for ``++b``/``--b``; with no relevant plan the intention just goes on."""
     if new_focus:
         ag.post_external(trigger)
-    elif ag.plans.relevant(trigger):
+    elif ag.plans.relevant(trigger) or (ag.plans.has_update_sub_plans and _in_scope(intention)):
         ag.post_internal(trigger, intention)
     else:
         ag._notify_waiters(trigger)

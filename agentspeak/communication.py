@@ -12,7 +12,7 @@ from __future__ import annotations
 import itertools
 import logging
 import os
-import uuid
+import time
 from typing import Any
 
 from agentspeak.beliefs import SELF, SOURCE_SELF, source
@@ -27,7 +27,7 @@ PERFORMATIVES = ("tell", "untell", "achieve", "unachieve", "askOne", "askAll", "
                  "untellHow", "askHow", "signal")
 
 _ids = itertools.count(1)
-_prefix = f"{os.getpid():x}{uuid.uuid4().hex[:6]}"
+_prefix = f"{os.getpid():x}{os.urandom(3).hex()}"   # not uuid: its import (platform) costs start-up
 
 
 def new_message_id() -> str:
@@ -40,7 +40,7 @@ class Message:
     (``tell``, ``achieve``) never need one, and making it is a good part of an in-process send.
     ``.send`` builds messages without ``__init__`` (see ``agentspeak.agent._new``)."""
 
-    __slots__ = ("sender", "receiver", "performative", "content", "_msg_id", "in_reply_to")
+    __slots__ = ("sender", "receiver", "performative", "content", "_msg_id", "in_reply_to", "sent_at")
 
     def __init__(self, sender: str, receiver: str, performative: str, content: Term,
                  msg_id: str | None = None, in_reply_to: str | None = None) -> None:
@@ -50,6 +50,7 @@ class Message:
         self.content = content
         self._msg_id = msg_id
         self.in_reply_to = in_reply_to
+        self.sent_at = None  # monotonic time a reply to an ask was sent (in this process), see .send
 
     @property
     def msg_id(self) -> str:
@@ -268,6 +269,7 @@ def _signal(agent, msg: Message, sender: Term) -> None:
 
 def _answer(agent, msg: Message, performative: str, content: Term) -> None:
     reply = Message(agent.name, msg.sender, performative, content, in_reply_to=msg.msg_id)
+    reply.sent_at = time.monotonic()  # an answer sent before the asker's timeout counts (see .send)
     agent.arch.send(agent, reply)
 
 

@@ -10,8 +10,8 @@ cdef class Frame:
     cdef public object pc, index
 
 cdef class IntendedMeans:
-    cdef public object plan, b, frames, result, handles, event_literal
+    cdef public object plan, b, frames, result, handles, event_literal, trigger_b
 
 cdef class Intention:
-    cdef public object id, stack, suspended, atomic, waiting, fork, dropped
+    cdef public object id, stack, suspended, atomic, waiting, fork, dropped, branch
     cdef object __weakref__

@@ -51,7 +51,7 @@ class Frame:
 
 
 class IntendedMeans:
-    __slots__ = ("plan", "b", "frames", "result", "handles", "event_literal")
+    __slots__ = ("plan", "b", "frames", "result", "handles", "event_literal", "trigger_b")
 
     def __init__(self, plan: Plan, b: dict, event_literal: Term) -> None:
         self.plan = plan
@@ -62,6 +62,8 @@ class IntendedMeans:
         self.result = event_literal
         self.handles: IntendedMeans | None = None
         self.event_literal = event_literal
+        # Jason(ER): the bindings when the plan was selected, where its sub-plans start from
+        self.trigger_b = dict(b) if plan.sub_library is not None else None
 
     @property
     def trigger(self) -> Trigger:
@@ -85,7 +87,7 @@ class IntendedMeans:
 
 
 class Intention:
-    __slots__ = ("id", "stack", "suspended", "atomic", "waiting", "fork", "dropped", "__weakref__")
+    __slots__ = ("id", "stack", "suspended", "atomic", "waiting", "fork", "dropped", "branch", "__weakref__")
 
     def __init__(self, im: IntendedMeans | None = None) -> None:
         self.id = next(_intention_ids)
@@ -95,6 +97,9 @@ class Intention:
         self.waiting = None                 # the Suspend (or event) it waits for
         self.fork = None                    # ForkGroup it belongs to, for |&| and |||
         self.dropped = False
+        # Jason(ER): a branch runs a sub-plan for a belief update on behalf of another intention;
+        # (that intention, the intended means whose sub-plan it runs)
+        self.branch: tuple | None = None
 
     def __repr__(self) -> str:
         return f"intention {self.id}: " + " / ".join(repr(im) for im in reversed(self.stack))
@@ -128,6 +133,9 @@ class PlanLibrary:
         self.has_goal_conditions = False  # a `+!g <: C` plan exists: C is checked every cycle
         self.has_extras = False     # either of the two above: the end of a cycle checks them
         self.has_jag = False        # a +jag_sleeping/+jag_awaking plan exists: the agent posts them
+        self.has_update_sub_plans = False  # a sub-plan reacts to +b/-b: such events may branch intentions
+        self.has_sub_plans = False  # some plan has sub-plans (failure plans are looked for in them too)
+        self.father: PlanLibrary | None = None  # a library of sub-plans: the library of their plan
 
     def add(self, plan: Plan, at_end: bool = True) -> None:
         plan.ensure_label()
@@ -140,11 +148,33 @@ class PlanLibrary:
         if getattr(lit, "functor", None) in ("jag_sleeping", "jag_awaking"):
             self.has_jag = True
             self.has_extras = True
+        if plan.sub_plans:
+            self._add_sub_library(plan)
         if at_end:
             self.plans.append(plan)
         else:
             self.plans.insert(0, plan)
         self._index = None
+
+    def _add_sub_library(self, plan: Plan) -> None:
+        """Jason(ER): the plan's sub-plans get a library of their own whose father is this one (an
+        event of the plan's intention looks there first, then up the fathers); the flags that make
+        the agent check goal conditions and branch on belief updates go up to the root library."""
+        sub = PlanLibrary()
+        sub.father = self
+        plan.sub_library = sub
+        for sp in plan.sub_plans:
+            q = sp.copy()
+            q.scope = sub
+            sub.add(q)
+        root = self
+        while root is not None:
+            root.has_sub_plans = True
+            if sub.has_goal_conditions:
+                root.has_goal_conditions = root.has_extras = True
+            if sub.has_update_sub_plans or any(p.trigger.kind == BEL and p.trigger.op != "^" for p in sub.plans):
+                root.has_update_sub_plans = True
+            root = root.father
 
     def remove(self, label: Literal, source: Term = None) -> list[Plan]:
         """Remove the plans of this label (with a source: only those whose label says that source,

@@ -12,17 +12,16 @@ refuses that at import time with the one-line fix (``WrongLarkError``), which ``
 """
 from __future__ import annotations
 
-import os
 import re
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from agentspeak.user_cache import CACHE_ENV, cache_dir  # noqa: F401  (CACHE_ENV: named here by tests and docs)
+
 if TYPE_CHECKING:
     from lark import Lark
 
-CACHE_ENV = "FAULTMAS_CACHE_DIR"
-"""Where the built tables go (default: ``$XDG_CACHE_HOME/faultmas`` or ``~/.cache/faultmas``)."""
 LARK_REQUIREMENT = "lark>=1.2,<2"
 
 
@@ -65,15 +64,6 @@ def require_lark_1() -> None:
 
 
 require_lark_1()      # at import: the modules that parse import this one before ``lark``
-
-
-def cache_dir() -> Path:
-    """The directory for built parser tables (not created here)."""
-    configured = os.environ.get(CACHE_ENV)
-    if configured:
-        return Path(configured)
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "faultmas"
 
 
 def lalr_parser(grammar_file: Path, **options: Any) -> Lark:

@@ -12,12 +12,15 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from agentspeak.lark_loader import lalr_parser  # first: it refuses lark-parser 0.12 with the fix
-from lark import Lark, Token, Tree
-from lark.exceptions import UnexpectedInput
+from typing import TYPE_CHECKING
 
 from agentspeak.errors import AslSyntaxError
 from agentspeak.source_text import read_source
+
+if TYPE_CHECKING:
+    from lark import Lark, Tree
+
+# Lark is imported where a file is parsed: a project parsed before comes from agentspeak.parse_cache.
 
 #: The most instances one declaration may ask for (``robot #N``): a typo such as ``#99999999999999999999``
 #: must be a located error, not a list of names growing to gigabytes.
@@ -63,6 +66,7 @@ class MasProject:
 def _parser() -> Lark:
     global _PARSER
     if _PARSER is None:
+        from agentspeak.lark_loader import lalr_parser  # first: it refuses lark-parser 0.12 with the fix
         _PARSER = lalr_parser(_GRAMMAR, maybe_placeholders=True)
     return _PARSER
 
@@ -83,6 +87,21 @@ def _in_words(terminal: str) -> str:
 
 
 def parse_mas2j(text: str, file: str = "<mas2j>") -> MasProject:
+    """The project declared by ``text`` (the content of ``file``), its agents' sources found along its source
+    path; ``AslSyntaxError`` names the place of a mistake."""
+    from agentspeak.parse_cache import cached
+    project = cached("mas2j", text, file, (), lambda: _declarations(text, file))
+    base = os.path.dirname(file) if file and not file.startswith("<") else "."
+    project.source_dirs = source_dirs(project.source_paths, base)   # the file system now, not as it was
+    for decl in project.agents:
+        decl.source = _find_source(decl.source, project.source_dirs)
+    return project
+
+
+def _declarations(text: str, file: str) -> MasProject:
+    """The project as written (sources not yet looked up): what agentspeak.parse_cache keeps."""
+    from lark import Tree
+    from lark.exceptions import UnexpectedInput
     try:
         tree = _parser().parse(text)
     except UnexpectedInput as exc:
@@ -96,7 +115,6 @@ def parse_mas2j(text: str, file: str = "<mas2j>") -> MasProject:
             msg += "; expected " + (expected[0] if len(expected) == 1 else
                                     ", ".join(expected[:-1][:7]) + " or " + expected[-1])
         raise AslSyntaxError(msg, file, line, col, lines[line - 1] if 0 < line <= len(lines) else None) from None
-    base = os.path.dirname(file) if file and not file.startswith("<") else "."
     name = str(tree.children[0])
     project = MasProject(name, [], file=file)
     for section in tree.children[1:]:
@@ -114,9 +132,8 @@ def parse_mas2j(text: str, file: str = "<mas2j>") -> MasProject:
         elif section.data == "source_path":
             project.source_paths = [str(s)[1:-1] for s in section.children]
     _check_unique_names(project, file, text)
-    project.source_dirs = source_dirs(project.source_paths, base)
     for decl in project.agents:
-        decl.source = _find_source(decl.source, project.source_dirs)
+        decl.token = None    # only the check above needs it, and a kept Lark token would need Lark to load
     return project
 
 
@@ -153,6 +170,7 @@ def source_dirs(entries: list[str], base: str) -> list[str]:
 
 
 def _agent(tree: Tree, file: str = "<mas2j>", text: str = "") -> AgentDecl:
+    from lark import Token, Tree
     name = str(tree.children[0])
     file_part, options_part = tree.children[1], tree.children[2]
     source = f"{name}.asl"
@@ -205,6 +223,7 @@ def _class_text(tree: Tree) -> str:
 
 
 def _class_args(tree: Tree) -> list[str]:
+    from lark import Token
     """A class definition's arguments as text (a string's quotes and escapes removed)."""
     return [_unescape(str(arg)[1:-1]) if isinstance(arg, Token) and arg.type == "STRING" else str(arg)
             for arg in tree.children[1:] if arg is not None]

@@ -6,7 +6,6 @@ column, and saying what was expected. ``parse_program_all_errors`` keeps going a
 """
 from __future__ import annotations
 
-import dataclasses
 import os
 import re
 import threading
@@ -23,8 +22,10 @@ from agentspeak.nesting import MAX_NESTING, first_too_deep_bracket, nesting_dept
 from agentspeak.program import (
     ACHIEVE, ADD, BEL, DEL, META, TEST, Achieve, AchieveNew, Action, AddBel, AddBelEnd, AddBelNew,
     AddPlan, Constraint, DelBel, DelBelNew, ExecVar, Fork, If, InternalAction, Plan, PlanTerm,
-    Instr, Program, RemovePlan, Rule, Test, Trigger, TriggerInstr, UpdBel, While, For,
+    Instr, Program, RemovePlan, Rule, Test, Trigger, TriggerInstr, UpdBel, While, For, copy_program,
+    with_sub_plans,
 )
+from agentspeak.patterns import PATTERNS, PatternError, apply_pattern
 from agentspeak.stdlib.functions import FUNCTIONS, check_function_name, rule_function
 from agentspeak.stdlib.registry import set_program_reader
 from agentspeak.terms import (
@@ -153,10 +154,10 @@ class _ToProgram(Transformer):
 
     def directive_begin(self, c):
         self._end_clause()
-        return ("begin", c[1], self.line)
+        return ("begin", c[1], getattr(c[0], "line", self.line))
 
     def directive_end(self, c):
-        return ("end", None, self.line)
+        return ("end", None, getattr(c[0], "line", self.line))
 
     def plan(self, c):
         label, trigger, context, _gc, goal_condition, _arrow, body = c
@@ -165,6 +166,18 @@ class _ToProgram(Transformer):
         plan.goal_condition = goal_condition
         self._end_clause()
         return ("plan", plan, plan.line)
+
+    def sub_plans(self, c):
+        """``{ plans }`` after a plan: the plans (each with its own block attached)."""
+        plans: list = []
+        for kind, value, line in c:
+            if kind == "plan":
+                plans.append(value)
+            elif not plans:
+                raise _BadInput("a block of sub-plans must follow a plan")
+            else:
+                plans[-1] = with_sub_plans(plans[-1], value)
+        return ("sub_plans", plans, c[0][2] if c else self.line)
 
     def label_named(self, c):
         return _not_function(c[0])
@@ -532,7 +545,7 @@ def parse_program(text: str, source_file: str = "<string>", base_dir: str | None
     key = (text, source_file, len(FUNCTIONS.functions))
     cached = _PARSED.get(key) or _PARSED.get(key + (tuple(source_path),))
     if cached is not None:
-        return _copy_program(cached)
+        return copy_program(cached)
     program, errors = _parse(text, source_file, stop_at_first=True)
     if errors:
         raise errors[0]
@@ -547,29 +560,12 @@ def parse_program(text: str, source_file: str = "<string>", base_dir: str | None
         except (KeyError, RuntimeError, StopIteration):  # another thread got there first
             pass
     _PARSED[key] = program
-    return _copy_program(program)
+    return copy_program(program)
 
 
 _PARSED: dict[tuple, Program] = {}
 """(text, file) -> the program as parsed (never handed out: callers get copies)."""
 _PARSED_MAX = 32
-
-
-def _copy_program(program: Program) -> Program:
-    """A program of new Plan and Rule objects over the same (immutable) terms and instructions."""
-    return Program(
-        beliefs=list(program.beliefs),
-        rules=[dataclasses.replace(r) for r in program.rules],
-        goals=list(program.goals),
-        plans=[_copy_plan(p) for p in program.plans],
-        source_file=program.source_file,
-        warnings=list(program.warnings))
-
-
-def _copy_plan(p: Plan) -> Plan:
-    q = Plan(p.trigger, p.context, p.body, p.label, p.source_file, p.line)
-    q.goal_condition = p.goal_condition
-    return q
 
 
 def parse_program_all_errors(text: str, source_file: str = "<string>") -> tuple[Program, list[AslSyntaxError]]:
@@ -676,7 +672,18 @@ def _parse_items(text: str, source_file: str) -> list:
 
 
 def _collect(items, program: Program, offset_line: int) -> None:
+    previous = None
+    target = program  # inside `{ begin pattern(...) } ... { end }`: the block's own program
+    blocks: list = []  # (directive, line, the program around the block)
     for kind, value, line in items:
+        if kind == "sub_plans":  # Jason(ER): the block belongs to the plan just before it
+            if previous != "plan":
+                raise _BadInputAt("a block of sub-plans '{ +!g <- ... }' must follow a plan", line)
+            for sp in value:
+                _shift_lines(sp, offset_line)
+            target.plans[-1] = with_sub_plans(target.plans[-1], value)
+            continue
+        previous = kind
         depth = nesting_depth(value)
         if depth > MAX_NESTING:  # before anything walks it (agentspeak/nesting.py says why)
             raise _BadInputAt(too_deep_message(), line)
@@ -686,27 +693,67 @@ def _collect(items, program: Program, offset_line: int) -> None:
                 raise _BadInputAt(f"a belief must be a literal, not '{lit}'", line)
             if is_ground(lit):
                 try:
-                    program.beliefs.append(resolve(lit, {}))
+                    target.beliefs.append(resolve(lit, {}))
                 except ArithmeticError_ as exc:  # p(math.abs(a)).
                     raise _BadInputAt(f"in the belief {lit}: {exc}", line) from None
             else:
-                program.rules.append(Rule(lit, Literal("true"), program.source_file, line + offset_line))
+                target.rules.append(Rule(lit, Literal("true"), target.source_file, line + offset_line))
         elif kind == "rule":
             value.line += offset_line
-            program.rules.append(value)
+            target.rules.append(value)
         elif kind == "goal":
-            program.goals.append(value)
+            target.goals.append(value)
         elif kind == "plan":
             value.line += offset_line
-            program.plans.append(value)
+            target.plans.append(value)
         elif kind == "directive":
-            program_directive(program, value, line + offset_line)
+            program_directive(target, value, line + offset_line)
         elif kind == "register_function":
             if value is not None:
-                program.warnings.append(f"{program.source_file}:{line + offset_line}: {value}")
-        elif kind in ("begin", "end"):
-            program.warnings.append(
-                f"{program.source_file}:{line + offset_line}: directive '{{ {kind} ... }}' is not supported; its content is loaded as usual")
+                target.warnings.append(f"{program.source_file}:{line + offset_line}: {value}")
+        elif kind == "begin":
+            if not (isinstance(value, Literal) and value.functor in PATTERNS):
+                raise _BadInputAt(_unknown_begin(value), line)
+            blocks.append((value, line, target))
+            target = Program(source_file=program.source_file)
+        elif kind == "end":
+            if not blocks:
+                raise _BadInputAt("'{ end }' without a '{ begin ... }' before it", line)
+            target = _end_block(blocks.pop(), target, offset_line)
+    if blocks:
+        directive, line, _ = blocks[-1]
+        raise _BadInputAt(f"'{{ begin {directive} }}' has no '{{ end }}'", line)
+
+
+def _unknown_begin(value) -> str:
+    if isinstance(value, Literal) and value.functor == "namespace":
+        return ("'{ begin namespace(...) }' (Jason's modules) is not supported yet; "
+                "write the name space in each literal (ns::lit)")
+    return f"unknown directive '{{ begin {value} }}'; expected one of {', '.join(PATTERNS)} (Jason's goal patterns)"
+
+
+def _end_block(block: tuple, inner: Program, offset_line: int) -> Program:
+    """``{ end }``: the pattern rewrites the block's clauses into the program around it."""
+    directive, line, outer = block
+    if inner.__dict__.get("includes"):
+        raise _BadInputAt("an include inside '{ begin ... }' is not supported; include the file before it", line)
+    try:
+        made = apply_pattern(directive, inner, lambda text: _parse(text, inner.source_file, True)[0],
+                             line + offset_line)
+    except PatternError as exc:
+        raise _BadInputAt(str(exc), line) from None
+    outer.beliefs.extend(made.beliefs)
+    outer.rules.extend(made.rules)
+    outer.goals.extend(made.goals)
+    outer.plans.extend(made.plans)
+    outer.warnings.extend(made.warnings)
+    return outer
+
+
+def _shift_lines(plan: Plan, offset_line: int) -> None:
+    plan.line += offset_line
+    for sp in plan.sub_plans:
+        _shift_lines(sp, offset_line)
 
 
 def program_directive(program: Program, lit: Literal, line: int) -> None:

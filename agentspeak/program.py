@@ -5,7 +5,6 @@ instruction keeps the source line it came from so failures can say ``code_line``
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Callable
 
 from agentspeak.terms import (
@@ -300,26 +299,42 @@ def body_variables(body: tuple, out: list | None = None) -> list:
 _plan_counter = [0]
 
 
-@dataclass(eq=False)
 class Plan:
-    """``@label trigger : context <- body.``"""
+    """``@label trigger : context <- body.``
 
-    trigger: Trigger
-    context: Term | None = None
-    body: tuple = ()
-    label: Literal | None = None
-    source_file: str = ""
-    line: int = 0
-    atomic: bool = field(init=False, default=False)
-    all_unifs: bool = field(init=False, default=False)
-    goal_condition: Term | None = field(init=False, default=None)
-    """Jason 3.2's ``+!g <: C <- body``: the goal is achieved as soon as C holds."""
-    matcher: tuple | None = field(init=False, default=None, repr=False)
-    """(trigger variables, compiled context, tail-call key) for deliberation, made on first use
-    (``plan_matcher``); shared by every agent whose plan has the same terms."""
+    Attributes beside the constructor's: ``atomic`` and ``all_unifs`` (from the label's annotations),
+    ``goal_condition`` (Jason 3.2's ``+!g <: C <- body``: the goal is achieved as soon as C holds) and
+    ``matcher`` ((trigger variables, compiled context, tail-call key) for deliberation, made on first use
+    by ``plan_matcher``; shared by every agent whose plan has the same terms); ``sub_plans`` (Jason(ER)'s
+    ``+!g <- body. { sub-plans }``: plans relevant only while this plan's intended means is on an intention;
+    their variables of the same name are this plan's, the parser maps them); ``sub_library`` (the
+    ``PlanLibrary`` of ``sub_plans`` once the plan is in an agent's library, its father that library) and
+    ``scope`` (the library a sub-plan lives in). A plain class, not a dataclass: importing ``dataclasses``
+    is a noticeable part of a hello world's start (issue 23)."""
 
-    def __post_init__(self) -> None:
-        self.refresh_label_flags()
+    def __init__(self, trigger: Trigger, context: Term | None = None, body: tuple = (), label: Literal | None = None,
+                 source_file: str = "", line: int = 0) -> None:
+        self.trigger = trigger
+        self.context = context
+        self.body = body
+        self.label = label
+        self.source_file = source_file
+        self.line = line
+        self.goal_condition: Term | None = None
+        self.sub_plans: tuple = ()
+        self.sub_library: object = None
+        self.scope: object = None
+        self.refresh_label_flags()         # atomic, all_unifs, matcher
+
+    def __repr__(self) -> str:
+        return (f"Plan(trigger={self.trigger!r}, context={self.context!r}, body={self.body!r}, label={self.label!r}, "
+                f"source_file={self.source_file!r}, line={self.line!r}, atomic={self.atomic!r}, "
+                f"all_unifs={self.all_unifs!r}, goal_condition={self.goal_condition!r}, sub_plans={self.sub_plans!r})")
+
+    def __getstate__(self) -> dict:
+        # as parsed (agentspeak/parse_cache.py): without the matcher (compiled closures, made again on first use)
+        # and without the libraries an agent's copy is put in
+        return {**self.__dict__, "matcher": None, "sub_library": None, "scope": None}
 
     def refresh_label_flags(self) -> None:
         annots = self.label.annots if type(self.label) is Literal and self.label.annots else ()
@@ -335,6 +350,13 @@ class Plan:
             annots = self.label.annots if self.label is not None else None
             self.label = Literal(f"p__{_plan_counter[0]}", (), annots)
         return self.label
+
+    def copy(self) -> "Plan":
+        """A new Plan object over the same terms (each agent's library holds its own plans)."""
+        q = Plan(self.trigger, self.context, self.body, self.label, self.source_file, self.line)
+        q.goal_condition = self.goal_condition
+        q.sub_plans = self.sub_plans
+        return q
 
     def renamed(self) -> "Plan":
         """A copy with fresh variables (used when a plan is stored as a term)."""
@@ -363,9 +385,47 @@ class Plan:
         text += str(self.trigger)
         if self.context is not None:
             text += " : " + to_str(self.context)
+        if self.goal_condition is not None:
+            text += " <: " + to_str(self.goal_condition)
         if self.body:
             text += " <- " + body_str(self.body)
         return text
+
+    def source_text(self, indent: str = "") -> str:
+        """The plan as AgentSpeak source, its sub-plans in a block after it (``.save_agent``)."""
+        text = indent + str(self) + "."
+        if self.sub_plans:
+            inner = "\n".join(p.source_text(indent + "   ") for p in self.sub_plans)
+            text += " {\n" + inner + "\n" + indent + "}"
+        return text
+
+
+def plan_variables(plan: Plan) -> list:
+    """The variables of a plan: label, trigger, context, goal condition and body."""
+    out: list = []
+    for t in (plan.label, plan.trigger.literal, plan.context, plan.goal_condition):
+        if t is not None:
+            variables(t, out)
+    return body_variables(plan.body, out)
+
+
+def with_sub_plans(plan: Plan, subs: list) -> Plan:
+    """``plan`` with Jason(ER) sub-plans attached. A sub-plan's variable named as one of the plan's is
+    that variable (Jason's unifiers go by name: the sub-plan starts from the bindings the plan had when
+    it was selected), at any depth of nesting."""
+    names = {v.name: v for v in plan_variables(plan) if v.name != "_"}
+    q = plan.copy()
+    q.sub_plans = plan.sub_plans + tuple(_share_variables(sp, names) for sp in subs)
+    return q
+
+
+def _share_variables(sub: Plan, names: dict) -> Plan:
+    mapping = {v: names[v.name] for v in plan_variables(sub) if v.name in names and names[v.name] is not v}
+    r = sub.resolved(mapping) if mapping else sub.copy()
+    inner = dict(names)
+    inner.update((v.name, v) for v in plan_variables(r) if v.name != "_")
+    r.sub_plans = tuple(_share_variables(s, inner) for s in sub.sub_plans)
+    return r
 
 
 def plan_matcher(plan: Plan) -> tuple:
@@ -391,15 +451,18 @@ def plan_matcher(plan: Plan) -> tuple:
     return plan.matcher
 
 
-@dataclass(eq=False)
 class Rule:
     """``head :- body.`` (a non-ground initial belief ``b(X).`` becomes ``b(X) :- true``)."""
 
-    head: Literal
-    body: Term
-    source_file: str = ""
-    line: int = 0
-    nvars: int = 0
+    def __init__(self, head: Literal, body: Term, source_file: str = "", line: int = 0, nvars: int = 0) -> None:
+        self.head, self.body, self.source_file, self.line, self.nvars = head, body, source_file, line, nvars
+
+    def copy(self) -> "Rule":
+        return Rule(self.head, self.body, self.source_file, self.line, self.nvars)
+
+    def __repr__(self) -> str:
+        return (f"Rule(head={self.head!r}, body={self.body!r}, source_file={self.source_file!r}, line={self.line!r}, "
+                f"nvars={self.nvars!r})")
 
     def __str__(self) -> str:
         return f"{to_str(self.head)} :- {to_str(self.body)}"
@@ -454,14 +517,29 @@ class PlanTerm:
         return Plan(trig) if trig is not None else None
 
     def resolve(self, b: Bindings) -> "PlanTerm":
+        if self.body is not None:
+            # Jason's PlanBodyImpl.capply: a body term gets the bindings, and the arithmetic and functions
+            # of its formulas are computed (`{ !assert_equals(1, .count(b(_))) }` stored in a belief
+            # holds the count of that moment, so two such beliefs can be equal: Jason's own test manager
+            # counts its asserts that way). Conditions of if/while/for stay code.
+            if not self._bound_in(b) and not self._has_calls():
+                return self
+            return PlanTerm(body=tuple([_capply_instr(i, b) for i in self.body]), bare=self.bare)
         if not self._bound_in(b):
             return self
         if self.plan is not None:
             return PlanTerm(plan=self.plan.resolved(b))
-        if self.body is not None:
-            return PlanTerm(body=map_body(self.body, lambda t: substitute(t, b)), bare=self.bare)
         r = self.rule
         return PlanTerm(rule=Rule(substitute(r.head, b), substitute(r.body, b), r.source_file, r.line))
+
+    def _has_calls(self) -> bool:
+        """Does a simple formula of this body term hold arithmetic or a function call?"""
+        for instr in self.body:
+            if not isinstance(instr, (If, While, For, Fork)):
+                for t in instr.terms():
+                    if _holds_call(t):
+                        return True
+        return False
 
     def rename(self, mapping: dict) -> "PlanTerm":
         if self.plan is not None:
@@ -548,6 +626,40 @@ class PlanTerm:
 
 
 _TRUE = Literal("true")
+
+
+def _holds_call(t: Term) -> bool:
+    tt = type(t)
+    if tt is Func or tt is Arith:
+        return True
+    if tt is Literal:
+        return any(_holds_call(x) for x in t.args) or bool(t.annots) and any(_holds_call(x) for x in t.annots)
+    if tt is Cons:
+        while type(t) is Cons:
+            if _holds_call(t.head):
+                return True
+            t = t.tail
+        return False
+    if tt is Rel or tt is And or tt is Or:
+        return _holds_call(t.left) or _holds_call(t.right)
+    if tt is Not:
+        return _holds_call(t.arg)
+    return False
+
+
+def _capply_instr(instr: "Instr", b: Bindings) -> "Instr":
+    if isinstance(instr, (If, While, For, Fork)):
+        return instr.map_terms(lambda t: substitute(t, b))
+    return instr.map_terms(lambda t: _capply(t, b))
+
+
+def _capply(t: Term, b: Bindings) -> Term:
+    """``resolve`` (bindings applied, ground arithmetic and functions computed); a term that cannot be
+    computed now is kept as it is, with the bindings applied (Jason logs it and keeps the term)."""
+    try:
+        return resolve(t, b)
+    except Exception:  # noqa: BLE001 - an expression that fails now stays code, as in Jason
+        return substitute(t, b)
 
 
 def substitute(t: Term, b: Bindings) -> Term:
@@ -648,16 +760,42 @@ class TriggerInstr(Instr):
         return str(self.trigger)
 
 
-@dataclass
 class Program:
-    """Everything one .asl file (and its includes) declares, in source order."""
+    """Everything one .asl file (and its includes) declares, in source order: ``beliefs`` (ground literals),
+    ``rules`` (Rule), ``goals`` (literals of initial goals), ``plans`` (Plan)."""
 
-    beliefs: list = field(default_factory=list)       # ground literals
-    rules: list = field(default_factory=list)         # Rule
-    goals: list = field(default_factory=list)         # literals of initial goals
-    plans: list = field(default_factory=list)         # Plan
-    source_file: str = ""
-    warnings: list = field(default_factory=list)
+    _FIELDS = ("beliefs", "rules", "goals", "plans", "source_file", "warnings")
+
+    def __init__(self, beliefs: list | None = None, rules: list | None = None, goals: list | None = None,
+                 plans: list | None = None, source_file: str = "", warnings: list | None = None) -> None:
+        self.beliefs = [] if beliefs is None else beliefs
+        self.rules = [] if rules is None else rules
+        self.goals = [] if goals is None else goals
+        self.plans = [] if plans is None else plans
+        self.source_file = source_file
+        self.warnings = [] if warnings is None else warnings
+
+    def __eq__(self, other: object) -> bool:
+        if type(other) is not Program:
+            return NotImplemented
+        return all(getattr(self, f) == getattr(other, f) for f in self._FIELDS)
+
+    __hash__ = None  # type: ignore[assignment]  (mutable, compared by value)
+
+    def __repr__(self) -> str:
+        return "Program(" + ", ".join(f"{f}={getattr(self, f)!r}" for f in self._FIELDS) + ")"
+
+
+def copy_program(program: Program) -> Program:
+    """A program of new Plan and Rule objects over the same (immutable) terms and instructions: what each
+    agent of a shared source gets (plans hold per-agent labels and flags)."""
+    return Program(
+        beliefs=list(program.beliefs),
+        rules=[r.copy() for r in program.rules],
+        goals=list(program.goals),
+        plans=[p.copy() for p in program.plans],
+        source_file=program.source_file,
+        warnings=list(program.warnings))
 
 
 def is_var(t: Term) -> bool:

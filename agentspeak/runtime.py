@@ -18,7 +18,7 @@ from typing import Callable, Iterable
 from agentspeak.agent import Agent
 from agentspeak.arch import AgentArch
 from agentspeak.communication import Message
-from agentspeak.parser import parse_program
+from agentspeak.parse_cache import cached_program   # not the parser: a file parsed before skips Lark
 from agentspeak.stdlib.registry import CURRENT
 from agentspeak.terms import Literal
 
@@ -28,6 +28,12 @@ CYCLES_PER_TURN = 64
 """Reasoning cycles an agent runs before the next ready agent gets its turn (fairness)."""
 TURN_SECONDS = 0.005
 """... or fewer, when its cycles are slow: with many busy agents a round stays short."""
+CLOCK_POLL_S = 0.02
+"""How often an idle loop looks at timers that count in an environment's clock (one simulator step)."""
+
+
+def _when(entry: tuple) -> float:
+    return entry[0]
 
 
 class LocalArch(AgentArch):
@@ -77,7 +83,13 @@ class LocalRuntime:
     def __init__(self, printer: Callable[[str, str], None] | None = None,
                  environment: Callable[[Agent, Literal], object] | None = None) -> None:
         self.agents: dict[str, Agent] = {}
+        # Two queues, so that an agent that waited (for a message, a timer, its start) answers within a
+        # turn or two, as an agent on a thread of its own does (Jason), while agents that stay busy turn
+        # after turn share what is left: `ready` holds agents woken up, `busy` those whose turn ended
+        # with work left. With 50 busy agents a round of every agent takes seconds on a loaded machine;
+        # Jason's own tests expect a tell answered, or an .at run, within 200-500 ms.
         self.ready: deque[Agent] = deque()
+        self.busy: deque[Agent] = deque()
         self._timed: set[Agent] = set()      # agents that had timers at the end of their last turn
         self._ready_set: set[str] = set()
         self._cond = threading.Condition()
@@ -101,7 +113,7 @@ class LocalRuntime:
         if name in self.agents:
             raise ValueError(f"an agent named {name!r} already exists")
         if program is None:
-            program = parse_program(source or "", source_file)
+            program = cached_program(source or "", source_file)
         agent = Agent(name, arch=arch or LocalArch(self), source_file=source_file)
         for lit in extra_beliefs:
             agent.add_initial_belief(lit)
@@ -133,7 +145,7 @@ class LocalRuntime:
         try:
             with open(path, encoding="utf-8") as f:
                 text = f.read()
-            program = parse_program(text, path, source_path=tuple(self.source_dirs))
+            program = cached_program(text, path, tuple(self.source_dirs))
         except OSError as exc:
             raise IAError("ia_failed", f".create_agent: cannot read {path}: {exc.strerror or exc}") from None
         except AslSyntaxError as exc:
@@ -169,17 +181,17 @@ class LocalRuntime:
         self.wake(clone)
         return unique
 
-    def _run_next(self, first: Agent, then: Agent) -> None:
-        """Put ``first`` then ``then`` at the head of the ready queue (a new agent starts at once, and
-        its creator goes on right after it, as if each had a thread of its own)."""
-        for agent in (then, first):
-            if agent.name in self._ready_set:
+    def _run_first(self, agent: Agent) -> None:
+        """Put ``agent`` at the head of the ready queue (moved there if it is already queued)."""
+        if agent.name in self._ready_set:
+            for queue in (self.ready, self.busy):
                 try:
-                    self.ready.remove(agent)
+                    queue.remove(agent)
+                    break
                 except ValueError:
                     pass
-            self._ready_set.add(agent.name)
-            self.ready.appendleft(agent)
+        self._ready_set.add(agent.name)
+        self.ready.appendleft(agent)
 
     def kill_agent(self, name: str) -> bool:
         """Remove an agent (Jason's ``.kill_agent``): its intentions stop, later messages to it are
@@ -237,6 +249,14 @@ class LocalRuntime:
         log.warning("message %s to unknown agent '%s' dropped", message.msg_id, message.receiver)
 
     def stop(self, delay: float = 0.0) -> None:
+        """Stop the MAS ``delay`` seconds from now; with a delay, every agent first gets the event
+        ``+jag_shutting_down(MS)`` to prepare itself (Jason's ``RunLocalMAS.stopAgs``)."""
+        if delay > 0 and get_ident() == self._loop_thread:
+            from agentspeak.program import ADD, BEL, Trigger
+            ms = round(delay * 1000)
+            for agent in list(self.agents.values()):
+                agent.post_external(Trigger(ADD, BEL, Literal("jag_shutting_down", (ms,))), force=True)
+                self.wake(agent)
         with self._cond:
             self._stop_at = time.monotonic() + delay
             self._cond.notify()
@@ -247,7 +267,8 @@ class LocalRuntime:
         with self._cond:
             self._sleepers += 1
             try:
-                return self._cond.wait_for(lambda: bool(self.ready) or self._stop_at is not None, timeout)
+                return self._cond.wait_for(lambda: bool(self.ready) or bool(self.busy) or self._stop_at is not None,
+                                           timeout)
             finally:
                 self._sleepers -= 1
 
@@ -259,7 +280,7 @@ class LocalRuntime:
 
     # -- the loop
     def idle(self) -> bool:
-        return not self.ready and all(a.is_idle() for a in self.agents.values())
+        return not self.ready and not self.busy and all(a.is_idle() for a in self.agents.values())
 
     def run(self, timeout: float | None = None, stop_when_idle: bool = True) -> str:
         """Run until ``.stopMAS``, until idle (if asked) or until ``timeout`` seconds. Returns why."""
@@ -273,7 +294,9 @@ class LocalRuntime:
     def _run(self, timeout: float | None, stop_when_idle: bool) -> str:
         deadline = None if timeout is None else time.monotonic() + timeout
         ready = self.ready
+        busy = self.busy
         ready_set = self._ready_set
+        woken_turns = 0  # turns given to woken agents in a row
         timed = self._timed
         timed.update([a for a in self.agents.values() if a.timers])  # a list: a generator is a closure, which
         # the compiled (cpdef, see runtime.pxd) loop cannot hold
@@ -287,19 +310,35 @@ class LocalRuntime:
                 return "timeout"
             # timers that are due make their agents ready (only agents that have timers are looked at)
             if timed:
-                now = monotonic()
+                due = []
                 for agent in list(timed):
                     if not agent.timers:
                         timed.discard(agent)
-                    elif agent.timers[0][0] <= now and agent.name not in ready_set:
-                        # first in line: a .wait or .at that is due goes on at once, as an agent on a
-                        # thread of its own would (Jason), not after a round of every busy agent
-                        ready_set.add(agent.name)
-                        ready.appendleft(agent)
-            if ready:
+                    elif agent.timers[0][0] + agent.timer_lag <= agent.clock() and not (agent.running or agent.events) \
+                            and (not ready or ready[0] is not agent):
+                        # (a busy agent runs its timers by its own clock, in its turns: Agent.sense)
+                        due.append((agent.timers[0][0] + agent.timer_lag, agent))
+                if due:
+                    # first in line, the earliest first, even if already queued: a .wait or .at that is
+                    # due goes on at once, as an agent on a thread of its own would (Jason), not after a
+                    # round of every busy agent (with 50 busy agents that round takes seconds)
+                    due.sort(key=_when)
+                    for _, agent in reversed(due):
+                        self._run_first(agent)
+            if ready or busy:
                 # no lock: a wake from another thread in between either finds the agent still marked
-                # ready (and the has_work() check after its turn sees the news) or queues it again
-                agent = ready.popleft()
+                # ready (and the has_work() check after its turn sees the news) or queues it again.
+                # Woken agents first, but a busy one gets every fourth turn (none starves).
+                if ready:
+                    if busy and woken_turns >= 3:
+                        agent = busy.popleft()
+                        woken_turns = 0
+                    else:
+                        agent = ready.popleft()
+                        woken_turns += 1
+                else:
+                    agent = busy.popleft()
+                    woken_turns = 0
                 ready_set.discard(agent.name)
                 CURRENT.agent = agent  # whose beliefs functions such as .count(Q) read
                 started = 0.0
@@ -316,25 +355,29 @@ class LocalRuntime:
                         elif monotonic() - started > TURN_SECONDS:
                             break  # slow cycles: the others get their turn (timers stay timely)
                 if self._yield_to is not None:
-                    self._run_next(self._yield_to, agent)
+                    # the new agent starts at once; its creator takes its turn in the rotation like every
+                    # other agent (a creator that loops must not hold the others back, nor be held back)
+                    self._run_first(self._yield_to)
                     self._yield_to = None
                 if agent.timers:
                     timed.add(agent)  # timers are only set by the agent itself, during its turn
-                    if agent.timers[0][0] <= monotonic():
-                        self.wake(agent)
-                        continue
                 if agent.events or agent.running or agent.mailbox or agent.feedback:  # has_work()
+                    if agent.name not in ready_set:  # (unless woken meanwhile)
+                        ready_set.add(agent.name)
+                        busy.append(agent)
+                elif agent.timers and agent.timers[0][0] + agent.timer_lag <= agent.clock():
                     self.wake(agent)
                 continue
             if stop_when_idle and self.idle() and not self._external_pending():
                 return "idle"
             # nothing ready: sleep until the next timer, a wake-up, or the deadline
-            waits = [a.timers[0][0] for a in timed if a.timers]
+            now = monotonic()
+            waits = [_timer_wait(a, now) for a in timed if a.timers]
             if self._stop_at is not None:
-                waits.append(self._stop_at)
+                waits.append(self._stop_at - now)
             if deadline is not None:
-                waits.append(deadline)
-            wait = max(0.0, min(waits) - monotonic()) if waits else 0.5
+                waits.append(deadline - now)
+            wait = max(0.0, min(waits)) if waits else 0.5
             with self._cond:
                 if not self.ready:
                     self._sleepers += 1
@@ -346,3 +389,13 @@ class LocalRuntime:
     def _external_pending(self) -> bool:
         hook = getattr(self, "external_pending", None)
         return bool(hook()) if hook else False
+
+
+def _timer_wait(agent: Agent, now: float) -> float:
+    """Wall seconds to sleep before ``agent``'s next timer may be due. On an environment's clock (a
+    simulator's, which may run slower or faster than wall time) it is looked at again every
+    ``CLOCK_POLL_S``: the comparison costs nothing, the agent runs only once its timer is due."""
+    clock = agent.clock
+    if clock == time.monotonic:
+        return agent.timers[0][0] + agent.timer_lag - now
+    return min(agent.timers[0][0] + agent.timer_lag - clock(), CLOCK_POLL_S)

@@ -145,6 +145,11 @@ class Literal:
             h = self._hash = hash((self.functor, self.neg, self.args, self.annots))
         return h
 
+    def __reduce__(self) -> tuple:
+        # Pickled without ``_hash``: string hashes differ between processes (PYTHONHASHSEED), so a
+        # cached hash written by one process is wrong in the next (agentspeak/parse_cache.py).
+        return (_literal, (self.functor, self.args, self.annots, self.neg, self.annot_tail))
+
     def __lt__(self, other: object) -> bool:
         return compare(self, other) < 0
 
@@ -248,8 +253,18 @@ class _Nil:
     def __hash__(self) -> int:
         return 0x5EED
 
+    def __reduce__(self) -> str:
+        return "NIL"      # unpickled as this module's NIL: code tests ``t is NIL``
+
 
 NIL = _Nil()
+
+
+def _literal(functor: str, args: tuple, annots: tuple | None, neg: bool, annot_tail: Var | None) -> Literal:
+    """A literal from its pickled fields (already normal: ``__init__``'s annotation sort is skipped)."""
+    lit = Literal.__new__(Literal)
+    lit.functor, lit.args, lit.annots, lit.neg, lit.annot_tail, lit._hash = functor, args, annots, neg, annot_tail, None
+    return lit
 
 
 def make_list(items, tail: Term = None) -> Term:

@@ -10,6 +10,7 @@ the missing runs of the profile first (real ROS 2 nodes; smoke: ~23 min, paper: 
     faultmas experiment perfbugs --profile paper --generate       # makes the paper's data set once
     faultmas experiment perfbugs --json --plot roc.png --save-models models/
     faultmas experiment perfbugs --profile smoke --generate --agents --data runs-with-agents/
+    faultmas experiment perfbugs --profile paper --generate --agents --jobs 2 --data paper-agents/
 """
 from __future__ import annotations
 
@@ -41,6 +42,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --generate: also run the team's AgentSpeak agents (faulty, helper) over Zenoh, "
                         "as 'faultmas run --bridge ros2' does, and record them as components (their processes, "
                         "ROS 2 topics and Zenoh keys); use another --data directory than the profile's")
+    parser.add_argument("--jobs", type=int, default=1, metavar="N",
+                        help="with --generate: record N runs at a time, each in its own process and ROS domain "
+                        "(default 1; each run must keep real time, so N above the cores' worth skews the data)")
     parser.add_argument("--target-fpr", type=float, default=0.005, help="target false-positive rate (default 0.005)")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
     parser.add_argument("--plot", metavar="OUT.png", help="draw the ROC curves into this file")
@@ -62,8 +66,11 @@ def main(args: argparse.Namespace) -> int:
     if not 0.0 < args.target_fpr < 0.5:
         print(f"error: --target-fpr must be between 0 and 0.5, got {args.target_fpr}", file=sys.stderr)
         return 2
-    if args.agents and not args.generate:
-        print("error: --agents goes with --generate (it says what to record)", file=sys.stderr)
+    if (args.agents or args.jobs != 1) and not args.generate:
+        print("error: --agents and --jobs go with --generate (they say how to record)", file=sys.stderr)
+        return 2
+    if args.jobs < 1:
+        print(f"error: --jobs must be at least 1, got {args.jobs}", file=sys.stderr)
         return 2
     if args.generate:
         from detection.learned.scenario import generate
@@ -72,10 +79,13 @@ def main(args: argparse.Namespace) -> int:
             from experiments.perfbugs_agents import CooperativeAgents
             agents = CooperativeAgents()
         try:
-            generate(directory, args.profile, out=sys.stderr, agents=agents)
+            generate(directory, args.profile, out=sys.stderr, agents=agents, jobs=args.jobs)
         except ValueError as exc:                    # e.g. runs with and without agents in one directory
             print(f"error: {exc}", file=sys.stderr)
             return 2
+        except RuntimeError as exc:                  # runs that failed: the data set is not complete
+            print(f"error: {exc}", file=sys.stderr)
+            return 1
     try:
         dataset = load(directory, progress)
         result = evaluate(dataset, args.target_fpr, progress=progress)

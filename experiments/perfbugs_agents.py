@@ -48,7 +48,9 @@ class CooperativeAgents:
         from agents.cooperative import TEAM_FAULTS
         return random.Random(seed).choice(TEAM_FAULTS)
 
-    def start(self, domain_id: int, seed: int) -> RunningTeam:
+    def start(self, domain_id: int, seed: int, env: dict[str, str] | None = None) -> RunningTeam:
+        """``env`` goes into the agents' processes' environment (e.g. ``FAULTMAS_PERFBUGS``: the run's
+        perf-bug schedule, which the agent's ROS 2 bridge installs; ``robot_bridge.ros2.perfbugs``)."""
         from agents.cooperative import paper_scenario, write_project
         from agents.distributed import Launcher
         from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
@@ -58,6 +60,7 @@ class CooperativeAgents:
         fault = self.robot_fault(seed)
         scenario = paper_scenario(fault, seed)
         os.environ.update(loopback_env())                  # the agent processes inherit it (as run_on_ros2)
+        os.environ.update(env or {})                       # one run at a time per process: no one else reads it
         tmp = tempfile.TemporaryDirectory(prefix="faultmas-perfbugs-agents-")
         hub = ZenohTransport(scenario.mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
         quiet = open(os.devnull, "w")                      # the agents' lines; their errors go to stderr

@@ -33,8 +33,13 @@ def _goal_ims(intention: Intention, goal: Literal):
             yield i
 
 
-def _matching(agent, goal: Literal):
-    for intention in agent.intentions():
+def _matching(agent, goal: Literal, current=None):
+    """(intention, index) of the top intended means for +!goal, in each intention; ``current`` (the
+    intention running the formula, in no queue while it runs) is one of them."""
+    intentions = agent.intentions()
+    if current is not None and not current.dropped and current not in intentions:
+        intentions.append(current)
+    for intention in intentions:
         idx = next(_goal_ims(intention, goal), None)
         if idx is not None:
             yield intention, idx
@@ -45,18 +50,24 @@ def succeed_goal(ctx, goal):
     """Finish goal ``goal`` as if its plan had succeeded (the caller goes on after its ``!goal``)."""
     agent = ctx.agent
     _drop_events(agent, goal, "achieved")
-    for intention, idx in list(_matching(agent, goal)):
-        del intention.stack[idx + 1:]
-        intention.waiting = None  # a wait in progress is abandoned
-        im = intention.stack[idx]
-        im.frames[:] = [im.frames[0]]
-        im.frames[0].pc = len(im.frames[0].body)
-        if intention is not ctx.intention:
-            agent._requeue(intention)
-        agent.clr_int(intention)
+    for intention, idx in list(_matching(agent, goal, ctx.intention)):
+        finish_at(agent, intention, idx, ctx.intention)
     if ctx.intention is not None and ctx.intention.dropped:
         return Suspend(reason="finished")  # the calling intention itself was finished
     return True
+
+
+def finish_at(agent, intention, idx: int, current) -> None:
+    """The intended means at ``idx`` of ``intention`` is achieved: what it called is dropped and its
+    caller goes on (a plan waiting for its goal condition too: pc past the end says achieved)."""
+    del intention.stack[idx + 1:]
+    intention.waiting = None  # a wait in progress is abandoned
+    im = intention.stack[idx]
+    im.frames[:] = [im.frames[0]]
+    im.frames[0].pc = len(im.frames[0].body) + 1
+    if intention is not current:
+        agent._requeue(intention)
+    agent.clr_int(intention)
 
 
 @internal_action(".fail_goal", args=1)
@@ -71,6 +82,7 @@ def fail_goal(ctx, goal):
         if intention is current:
             affected_current = True
             continue
+        intention.waiting = None  # a wait in progress is abandoned (its timer must not resume it)
         agent._requeue(intention)
         agent._fail(intention, "ia_failed", f".fail_goal({goal})")
     if affected_current:

@@ -39,7 +39,7 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
         # the usual send: one receiver named by an atom, no answer awaited (the checks below pass)
         msg = Message.__new__(Message)  # Message(agent.name, receiver.functor, performative.functor, content)
         msg.sender, msg.receiver, msg.performative = agent.name, receiver.functor, performative.functor
-        msg.content, msg._msg_id, msg.in_reply_to = content, None, None
+        msg.content, msg._msg_id, msg.in_reply_to, msg.sent_at = content, None, None, None
         agent.arch.send(agent, msg)
         return True
     if not isinstance(performative, Literal) or performative.args:
@@ -59,8 +59,10 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
         return True
     # a synchronous ask: wait for the replies
     futures = []
+    asks = set()  # the ids of the messages this ask sent
     for name in names:
         msg = Message(sender, name, perf, content)
+        asks.add(msg.msg_id)
         fut: Future = Future()
         futures.append(fut)
 
@@ -86,8 +88,17 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
         if not isinstance(timeout, (int, float)):
             raise wrong_arguments(".send: the timeout is a number of milliseconds")
         seconds = timeout / 1000.0
+
+    def answer_waiting(deadline: float) -> bool:
+        # an answer sent in time but not read yet (this agent got no CPU meanwhile) is not a timeout
+        for m in agent.mailbox:
+            sent = getattr(m, "sent_at", None)
+            if m.in_reply_to in asks and sent is not None and sent <= deadline:
+                return True
+        return False
     return Suspend(future=waiting, on_result=on_result, timeout=seconds,
-                   on_timeout=on_timeout if seconds is not None else None, reason="ask")
+                   on_timeout=on_timeout if seconds is not None else None, reason="ask",
+                   answer_waiting=answer_waiting if seconds is not None else None)
 
 
 def _is_list(t) -> bool:

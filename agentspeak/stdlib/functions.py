@@ -248,6 +248,7 @@ def rule_function(name: str, arity: int, predicate: str) -> FunctionSpec:
             raise FunctionError(f"the result of {to_str(resolve(query, b))} is not a number")
         raise FunctionError(f"no solution for {to_str(query)}")
     function.__doc__ = f"{name}/{arity} answered by {predicate}/{arity + 1}"
+    function.remake = (rule_function, (name, arity, predicate))   # how FunctionSpec pickles it (not a closure)
     return FunctionSpec(name, function, (arity,), unground_ok=True, needs_agent=True, doc=function.__doc__)
 
 

@@ -7,9 +7,10 @@ import os
 import re
 
 from agentspeak.program import ACHIEVE, ADD, PlanTerm, Plan, Trigger, body_variables, substitute
-from agentspeak.stdlib.registry import IAError, internal_action, wrong_arguments
-from agentspeak.terms import Literal, Var, make_list, resolve, to_print_str
-from agentspeak.unify import undo
+from agentspeak.stdlib.registry import IAError, Suspend, internal_action, wrong_arguments
+from agentspeak.beliefs import SOURCE_SELF
+from agentspeak.terms import NIL, Literal, Var, is_list, list_items, make_list, resolve, to_print_str, to_str
+from agentspeak.unify import undo, unifies
 
 
 def _text(t) -> str:
@@ -140,6 +141,51 @@ def _types(x) -> list[str]:
     if isinstance(x, Var):
         out.append("free")
     return out
+
+
+@internal_action(".save_agent", args=(1, 2))
+def save_agent(ctx, file, goals=None):
+    """``.save_agent(File[, Goals])``: write the agent's beliefs (without ``source(self)``), rules,
+    the given initial goals and its plans as an AgentSpeak file (Jason's layout), relative to the
+    working directory; a file that cannot be written fails the formula with the reason."""
+    agent = ctx.agent
+    name = file if isinstance(file, str) else to_print_str(file)
+    if goals is not None and not is_list(goals):
+        raise wrong_arguments(".save_agent: the initial goals are a list")
+    lines = ["// beliefs and rules"]
+    for lit in agent.bb.literals():
+        annots = tuple(a for a in lit.annots or () if a != SOURCE_SELF) or None
+        lines.append(to_str(Literal(lit.functor, lit.args, annots, lit.neg)) + ".")
+    lines.extend(str(r) + "." for r in agent.bb.rules())
+    lines += ["", "", "// initial goals"]
+    lines.extend("!" + to_str(g) + "." for g in list_items(goals or NIL))
+    lines += ["", "", "// plans"]
+    lines.extend(p.source_text() for p in agent.plans)
+    try:
+        with open(name, "w", encoding="utf-8") as out:
+            out.write("\n".join(lines) + "\n")
+    except OSError as exc:
+        raise IAError("ia_failed", f".save_agent: cannot write {name}: {exc.strerror or exc}") from None
+    return True
+
+
+@internal_action(".get_src_info", args=2)
+def get_src_info(ctx, term, result):
+    """``.get_src_info(T, L)``: L is the literal T with ``code_src`` and ``code_line`` annotations (Jason's
+    test library reports where an assertion is). Terms here carry no source position, so it is the
+    position of this formula, which is where T was written when it is written in the call."""
+    if not isinstance(term, Literal):
+        return False
+    from agentspeak.agent import source_url
+    im = ctx.im
+    instr = im.current() if im is not None else None
+    lit = term
+    if not any(isinstance(a, Literal) and a.functor == "code_src" for a in lit.annots or ()):
+        src = source_url(im.plan.source_file) if im is not None else "nocode"
+        lit = lit.add_annot(Literal("code_src", (src,)))
+    if not any(isinstance(a, Literal) and a.functor == "code_line" for a in lit.annots or ()):
+        lit = lit.add_annot(Literal("code_line", (getattr(instr, "line", 0) or (im.plan.line if im else 0),)))
+    return ctx.unify(result, lit)
 
 
 @internal_action(".type", args=2)
@@ -496,11 +542,34 @@ def signal(ctx, event):
     ctx.agent.post_external(Trigger(trigger.op, trigger.kind, ctx.resolve(trigger.literal)), force=True)
 
 
-@internal_action(".done", args=1)
-def done(ctx, goal):
-    """``.done(G)``: as ``.succeed_goal(G)`` (Jason's alias)."""
-    from agentspeak.stdlib.bdi import succeed_goal
-    return succeed_goal(ctx, goal)
+@internal_action(".done", args=(0, 1))
+def done(ctx, goal=None):
+    """Jason(ER)'s ``.done`` / ``.done(G)``: the goal is achieved. Without G, the goal of the running
+    plan; in a sub-plan run for a belief update (a branch), the goal whose sub-plan it is, and the
+    branch ends. Only the calling intention (and the one it branched from) is affected."""
+    from agentspeak.stdlib.bdi import finish_at
+    agent, current = ctx.agent, ctx.intention
+    owner = current.branch[0] if current.branch is not None else current
+    if goal is None:
+        target = current.branch[1] if current.branch is not None else current.stack[-1]
+        idx = next((k for k, im in enumerate(owner.stack) if im is target), None)
+    else:
+        idx = next((k for k in range(len(owner.stack) - 1, -1, -1)
+                    if owner.stack[k].plan.trigger.kind == ACHIEVE
+                    and unifies(goal, resolve(owner.stack[k].event_literal, owner.stack[k].b), {})), None)
+    if current.branch is not None:
+        agent.drop_intention(current)
+        if idx is not None and not owner.dropped:
+            finish_at(agent, owner, idx, None)
+        return Suspend(reason="finished")
+    for other in agent.intentions():  # the branches of this intention stop with it (as Jason's)
+        if other.branch is not None and other.branch[0] is current:
+            agent.drop_intention(other)
+    if idx is not None:
+        finish_at(agent, current, idx, current)
+    if current.dropped:
+        return Suspend(reason="finished")
+    return True
 
 
 @internal_action(".drop_future_intention", args=1)

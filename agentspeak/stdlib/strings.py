@@ -47,6 +47,13 @@ def ground(ctx, x):
     return is_ground(x)
 
 
+@internal_action(".internal_action", args=1)
+def internal_action_(ctx, x):
+    """Is ``x`` an internal action term (``.print(a)``, ``kk.tt(1)``: a functor with a dot)? A
+    registered arithmetic function (``math.abs(1)``) is not, as in Jason."""
+    return isinstance(x, Literal) and "." in x.functor and not x.functor.startswith("'")
+
+
 @internal_action(".substring", args=(2, 4))
 def substring(ctx, sub, text, pos=None, end=None):
     """Is ``sub`` in ``text``? With a third argument, backtracks over the positions (and a fourth, the

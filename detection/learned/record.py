@@ -97,6 +97,8 @@ class RunRecorder:
             row = {}
             for name, process in self.processes.items():
                 try:
+                    if process.status() == psutil.STATUS_ZOMBIE:     # ended, not yet reaped: its counters
+                        raise psutil.ZombieProcess(process.pid)      # read 0, which is no measurement
                     row[name] = read_counters(process)
                 except psutil.Error:
                     row[name] = np.full(len(COUNTER_NAMES), np.nan)

@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable, Protocol, TextIO
 
-from robot_bridge.ros2.perfbugs import ENV_VAR, KINDS, PerfBug, component_name, write_schedule
+from robot_bridge.ros2.perfbugs import ENV_VAR, KINDS, PerfBug, agent_component, component_name, write_schedule
 
 ROBOTS = ("faulty", "helper")
 WARMUP_S = 8.0
@@ -71,8 +71,15 @@ FAULTY_IDS = 100
 and the runs already recorded keep their ids."""
 
 
-def run_plan(profile: Profile, seed: int = 0) -> list[dict]:
-    """Which runs to make: id, seed, and for a faulty run its (component node, kind); reproducible."""
+AGENT_SHARE = 3
+"""With the agents, every third faulty run has its bug in an agent's process (``faulty_agent`` or
+``helper_agent``): with 21 faulty runs, each of the 7 kinds once in an agent (j = 2, 5, ... 20 walk
+through all kinds mod 7), the rest in the robots' nodes as without agents."""
+
+
+def run_plan(profile: Profile, seed: int = 0, agents: bool = False) -> list[dict]:
+    """Which runs to make: id, seed, and for a faulty run its (component node, kind); reproducible.
+    ``agents``: the agents run too, and every ``AGENT_SHARE``-th faulty run's bug is in an agent."""
     rng = random.Random(seed)
     runs = [{"id": i, "seed": seed * 1000 + i, "kind": None} for i in range(profile.fault_free_runs)]
     nodes = ["kobuki_sim", "fault_injector", "motion_decomposer"] + (
@@ -82,6 +89,8 @@ def run_plan(profile: Profile, seed: int = 0) -> list[dict]:
             kind, component = profile.faults[j % len(profile.faults)]
         else:
             kind, component = profile.kinds[j % len(profile.kinds)], component_name(rng.choice(ROBOTS), rng.choice(nodes))
+        if agents and j % AGENT_SHARE == AGENT_SHARE - 1:
+            component = agent_component(ROBOTS[(j // AGENT_SHARE) % len(ROBOTS)])
         runs.append({"id": FAULTY_IDS + j, "seed": seed * 1000 + FAULTY_IDS + j, "kind": kind, "component": component})
     return runs
 
@@ -145,11 +154,12 @@ class AgentTeam(Protocol):
     def robot_fault(self, seed: int) -> str:
         """The fault of the first robot's ``fault_injector`` in the run with ``seed`` (the agents' scenario)."""
 
-    def start(self, domain_id: int, seed: int) -> RunningAgents: ...
+    def start(self, domain_id: int, seed: int, env: dict[str, str] | None = None) -> RunningAgents:
+        """``env``: added to the agents' processes' environment (the run's perf-bug schedule)."""
 
 
 def _domain_id(seed: int) -> int:
-    return 101 + (seed + int(time.time())) % 100        # 101..200: clear of the tests' and run's ids
+    return 100 + (seed + int(time.time())) % 100        # 100..199 (DOMAINS): clear of the tests' ids
 
 
 DISCOVERY_S = 60.0
@@ -207,7 +217,7 @@ def record_run(run: dict, profile: Profile, out_dir: Path, progress: Callable[[s
                 raise RuntimeError(f"run {run['id']}: nodes did not come up (missing {sorted(missing)})")
             pids = {component_name(s.robot, s.node): p.pid for s, p in zip(supervisor.specs, supervisor.processes)}
             if agents is not None:
-                team = agents.start(domain, run["seed"])
+                team = agents.start(domain, run["seed"], env={ENV_VAR: str(schedule)})
             with RosContext(domain_id=domain) as ros:
                 import rclpy
                 probe = ros.add(rclpy.create_node("faultmas_perfbugs_recorder", context=ros.context))
@@ -235,6 +245,8 @@ def record_run(run: dict, profile: Profile, out_dir: Path, progress: Callable[[s
                 while time.time() < end:
                     if supervisor.dead():
                         raise RuntimeError(f"run {run['id']}: a node died: {supervisor.dead()}")
+                    if recorder.lost:    # an agent's process too: its counters would be missing, not healthy
+                        raise RuntimeError(f"run {run['id']}: a process ended during the run: {', '.join(recorder.lost)}")
                     time.sleep(min(5.0, max(0.0, end - time.time())))
                     progress(f"run {run['id']}: {time.time() - began:4.0f}/{profile.duration_s:.0f} s, "
                              f"{tap.received} messages" + (f", {zenoh_tap.received} on Zenoh" if zenoh_tap else ""))
@@ -271,30 +283,144 @@ def _wait_for_bridge_nodes(probe, team: RunningAgents, run_id: int, timeout: flo
         raise RuntimeError(f"run {run_id}: the agents' ROS 2 nodes did not come up within {timeout:.0f} s")
 
 
+DOMAINS = range(100, 200)
+"""The ROS domain ids the generation takes (one per run being recorded); tests use others."""
+LOCKS = Path(tempfile.gettempdir())
+
+
+def allocate_domain(start: int = 0) -> tuple[int, object]:
+    """A ROS domain id of ``DOMAINS`` no other run on this host records in, and the open lock file that
+    holds it (close it when the run is over). Runs recorded at once must not share a domain: each would
+    see the other's nodes. A lock (``flock``), not a random pick, so two workers never collide."""
+    import fcntl
+    for k in range(len(DOMAINS)):
+        domain = DOMAINS[(start + k) % len(DOMAINS)]
+        handle = open(LOCKS / f"faultmas-perfbugs-domain-{domain}.lock", "w")
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return domain, handle
+        except OSError:
+            handle.close()
+    raise RuntimeError(f"every ROS domain id of {DOMAINS.start}..{DOMAINS.stop - 1} is in use by a recording")
+
+
+def _interleaved(runs: list[dict]) -> list[dict]:
+    """Fault-free and faulty runs in an even mix, so that a generation cut short leaves both kinds."""
+    groups = [[r for r in runs if not r["kind"]], [r for r in runs if r["kind"]]]
+    return sorted(runs, key=lambda r: next((i + 0.5) / len(g) for g in groups if r in g for i in [g.index(r)]))
+
+
+def _lock_dir(out_dir: Path) -> Path:
+    """Where the workers of one data set claim runs (in the temp directory: the data set stays clean)."""
+    import hashlib
+    folder = LOCKS / f"faultmas-perfbugs-{hashlib.sha1(str(out_dir.resolve()).encode()).hexdigest()[:12]}"
+    folder.mkdir(exist_ok=True)
+    return folder
+
+
+def _read_manifest(path: Path, profile: Profile, seed: int) -> dict:
+    return json.loads(path.read_text()) if path.exists() else \
+        {"format": 1, "profile": asdict(profile), "seed": seed, "runs": []}
+
+
 def generate(out_dir: str | Path, profile_name: str, seed: int = 0, out: TextIO = sys.stderr,
-             only: list[int] | None = None, agents: AgentTeam | None = None) -> Path:
+             only: list[int] | None = None, agents: AgentTeam | None = None, jobs: int = 1) -> Path:
     """Make (or complete) the data set of ``profile_name`` in ``out_dir``; runs already there are kept.
-    ``agents``: the team's agents run (and are recorded) too; see ``record_run``."""
+    ``agents``: the team's agents run (and are recorded) too; see ``record_run``. ``jobs``: runs
+    recorded at once, each by its own process in its own ROS domain (``allocate_domain``); any number
+    of generations may share ``out_dir``: each run is claimed by a lock file and the manifest is
+    merged under a lock after every run. A run that fails is reported and left for the next
+    generation; ``RuntimeError`` at the end lists them."""
+    import fcntl
+    import signal
+
     profile = PROFILES[profile_name]
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     manifest_path = out_dir / "manifest.json"
-    manifest = json.loads(manifest_path.read_text()) if manifest_path.exists() else \
-        {"format": 1, "profile": asdict(profile), "seed": seed, "runs": []}
-    import signal
+    manifest = _read_manifest(manifest_path, profile, seed)
     if threading.current_thread() is threading.main_thread():      # SIGTERM stops the nodes too
         signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     if manifest["runs"] and bool(manifest.get("agents")) != (agents is not None):
         raise ValueError(f"{manifest_path}: its runs were recorded {'with' if manifest.get('agents') else 'without'} "
                          "the agents; record the other kind into another directory (--data)")
-    if agents is not None:
-        manifest["agents"] = True          # only then: manifests without agents keep their keys
+    workers = []
+    if jobs > 1:                       # the others in processes of their own (a run's recorder keeps real time)
+        import multiprocessing
+        spawn = multiprocessing.get_context("spawn")
+        workers = [spawn.Process(target=_worker, args=(out_dir, profile_name, seed, only, agents, f"w{k}"),
+                                 daemon=True, name=f"perfbugs-generate-{k}") for k in range(2, jobs + 1)]
+        for worker in workers:
+            worker.start()
+            time.sleep(20.0)           # staggered: two teams starting at once starve each other's discovery
+    locks = _lock_dir(out_dir)
     done = {r["id"] for r in manifest["runs"]}
-    todo = [r for r in run_plan(profile, seed) if r["id"] not in done and (only is None or r["id"] in only)]
+    todo = _interleaved([r for r in run_plan(profile, seed, agents is not None)
+                         if r["id"] not in done and (only is None or r["id"] in only)])
+    failed: list[str] = []
     for n, run in enumerate(todo, 1):
-        what = f"{run['kind']} in {run['component']}" if run["kind"] else "fault-free"
-        print(f"[{n}/{len(todo)}] run {run['id']} ({what})", file=out, flush=True)
-        entry = record_run(run, profile, out_dir, lambda text: print(f"  {text}", file=out, flush=True), agents)
-        manifest["runs"] = sorted([*manifest["runs"], entry], key=lambda r: r["id"])
-        manifest_path.write_text(json.dumps(manifest, indent=1))     # after every run: an interrupted
-    return out_dir                                                     # generation resumes where it was
+        claim = open(locks / f"run-{run['id']:03d}.lock", "w")
+        try:
+            fcntl.flock(claim, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            claim.close()
+            continue                   # another worker records it
+        try:
+            if run["id"] in {r["id"] for r in _read_manifest(manifest_path, profile, seed)["runs"]}:
+                continue               # recorded meanwhile by another worker
+            what = f"{run['kind']} in {run['component']}" if run["kind"] else "fault-free"
+            print(f"[{n}/{len(todo)}] run {run['id']} ({what})", file=out, flush=True)
+            domain, domain_lock = allocate_domain(run["seed"])
+            try:
+                entry = record_run(run, profile, out_dir, lambda text: print(f"  {text}", file=out, flush=True),
+                                   agents, domain_id=domain)
+            except (RuntimeError, TimeoutError, OSError) as exc:
+                print(f"  run {run['id']} failed, left for the next generation: {exc}", file=out, flush=True)
+                failed.append(f"run {run['id']}: {exc}")
+                continue
+            finally:
+                domain_lock.close()
+            with open(locks / "manifest.lock", "w") as lock:        # merged: other workers write it too
+                fcntl.flock(lock, fcntl.LOCK_EX)
+                manifest = _read_manifest(manifest_path, profile, seed)
+                if agents is not None:
+                    manifest["agents"] = True          # only then: manifests without agents keep their keys
+                manifest["runs"] = sorted([*[r for r in manifest["runs"] if r["id"] != entry["id"]], entry],
+                                          key=lambda r: r["id"])
+                partial = manifest_path.with_suffix(".json.part")
+                partial.write_text(json.dumps(manifest, indent=1))
+                partial.replace(manifest_path)    # after every run: an interrupted generation resumes where it was
+        finally:
+            claim.close()
+    for worker in workers:
+        worker.join()
+        if worker.exitcode:
+            failed.append(f"worker {worker.name} ended with exit code {worker.exitcode}")
+    if failed:
+        raise RuntimeError(f"{len(failed)} run(s) not recorded ({'; '.join(failed)}); "
+                           "run the generation again to record them")
+    return out_dir
+
+
+def _worker(out_dir: Path, profile_name: str, seed: int, only, agents, label: str) -> None:
+    """One more recording process of ``generate(jobs=N)``: takes the runs nobody has claimed."""
+    out = _Prefixed(sys.stderr, label)
+    try:
+        generate(out_dir, profile_name, seed, out, only, agents)
+    except RuntimeError as exc:
+        print(f"error: {exc}", file=out, flush=True)
+        sys.exit(1)
+
+
+class _Prefixed:
+    """A text stream that marks each line with the worker's label (two workers print to one terminal)."""
+
+    def __init__(self, stream: TextIO, label: str) -> None:
+        self.stream, self.label = stream, label
+
+    def write(self, text: str) -> int:
+        return self.stream.write("".join(f"[{self.label}] {line}" if line.strip() else line
+                                         for line in text.splitlines(keepends=True)))
+
+    def flush(self) -> None:
+        self.stream.flush()

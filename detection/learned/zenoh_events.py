@@ -23,19 +23,13 @@ from typing import Any, Callable, Iterable, Sequence
 
 from detection.learned.encoding import EncodingError, decode_json_lines, flatten_json, vector_of
 from detection.learned.ros_tap import Component
-from robot_bridge.ros2.perfbugs import component_name
+from robot_bridge.ros2.perfbugs import AGENT_NODE, agent_component
 
 log = logging.getLogger("faultmas.detection")
 
 KEY_PREFIX = "faultmas/**"
-AGENT_NODE = "agent"
 CHANNEL_TYPE = "zenoh/json"
 """What the manifest says a Zenoh channel carries (ROS 2 channels give their message type)."""
-
-
-def agent_component(agent: str) -> str:
-    """``helper`` → ``helper_agent``."""
-    return component_name(agent, AGENT_NODE)
 
 
 def is_zenoh_channel(channel: str) -> bool:

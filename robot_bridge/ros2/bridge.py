@@ -68,6 +68,7 @@ class Ros2Bridge(RobotBridge):
         self._node = None
         self._publishers: dict[str, Any] = {}
         self._clients: dict[str, Any] = {}
+        self._perfbugs = None
 
     # --- life cycle --------------------------------------------------------------------------
     def setup(self, timeout: float = 5.0) -> None:
@@ -96,6 +97,10 @@ class Ros2Bridge(RobotBridge):
             node.create_subscription(mapping.message_class(), mapping.name,
                                      lambda msg, m=mapping: self._on_mapped(m, msg), 10)
         node.create_timer(0.05, self._expire)
+        from robot_bridge.ros2.perfbugs import agent_component, install_from_env
+        # the perf-bug experiments (FAULTMAS_PERFBUGS) reach an agent's process through its bridge node:
+        # its callbacks and publishers are the agent's ROS side, the resource bugs act on the whole process
+        self._perfbugs = install_from_env(node, self.robot, component=agent_component(self.agent_name))
         self._ros.add(node)
         self._ros.start()
         if self.options.get("wait_for_robot", True):
@@ -114,6 +119,9 @@ class Ros2Bridge(RobotBridge):
 
     def shutdown(self) -> None:
         self._pending.fail_all("shutdown")
+        if self._perfbugs is not None:
+            self._perfbugs.stop()
+            self._perfbugs = None
         if self._ros is not None:
             self._ros.close()
             self._ros = None

@@ -71,6 +71,14 @@ def component_name(robot: str, node: str) -> str:
     return f"{robot}_{node}" if robot else node
 
 
+AGENT_NODE = "agent"
+
+
+def agent_component(agent: str) -> str:
+    """An agent's component (its whole process): ``helper`` → ``helper_agent``, beside its robot's nodes."""
+    return component_name(agent, AGENT_NODE)
+
+
 def load_schedule(path: str | Path) -> list[PerfBug]:
     """The schedule's fault instances; raises ``ScheduleError`` naming the file and the bad entry."""
     try:
@@ -226,10 +234,13 @@ def _wrap_callback(runner: BugRunner, callback: Callable) -> Callable:
     return wrapped
 
 
-def install(node: Any, robot: str, bugs: list[PerfBug] = (), path: Path | None = None) -> BugRunner:
+def install(node: Any, robot: str, bugs: list[PerfBug] = (), path: Path | None = None,
+            component: str | None = None) -> BugRunner:
     """Wrap ``node``'s callbacks and publishers; the bugs of its component (from ``bugs``, and from the
-    schedule file ``path``, re-read whenever it changes) switch on and off at their times."""
-    runner = BugRunner(component_name(robot, node.get_name()), list(bugs), path)
+    schedule file ``path``, re-read whenever it changes) switch on and off at their times.
+    ``component``: the name in the schedule (default ``<robot>_<node name>``; an agent's bridge node
+    is its agent's component, ``helper_agent``, since the bugs act on the whole process)."""
+    runner = BugRunner(component or component_name(robot, node.get_name()), list(bugs), path)
     for entity in [*node.subscriptions, *node.timers]:
         entity.callback = _wrap_callback(runner, entity.callback)
     for publisher in node.publishers:
@@ -239,8 +250,9 @@ def install(node: Any, robot: str, bugs: list[PerfBug] = (), path: Path | None =
     return runner
 
 
-def install_from_env(node: Any, robot: str) -> BugRunner | None:
-    """The hook :func:`robot_bridge.ros2.runtime.run_node` calls: a no-op unless ``FAULTMAS_PERFBUGS`` is set.
+def install_from_env(node: Any, robot: str, component: str | None = None) -> BugRunner | None:
+    """The hook :func:`robot_bridge.ros2.runtime.run_node` (every node) and ``Ros2Bridge.setup`` (an
+    agent's process, as ``component`` ``<agent>_agent``) call: a no-op unless ``FAULTMAS_PERFBUGS`` is set.
 
     The schedule may be empty or even missing at start: an experiment writes the times once it knows
     when its recording began."""
@@ -248,4 +260,4 @@ def install_from_env(node: Any, robot: str) -> BugRunner | None:
     if not path:
         return None
     node.get_logger().info(f"perf-bug hook installed; schedule {path}")
-    return install(node, robot, path=Path(path))
+    return install(node, robot, path=Path(path), component=component)

@@ -92,6 +92,8 @@ class _Robot:
     camera_listeners: list[Callable[[CameraFrame], None]] = field(default_factory=list)
     pixel_readers: int = 0
     """How many of ``camera_listeners`` read every frame's pixels (their frames are rendered in parallel)."""
+    robot_readers: int = 0
+    """How many of those read only frames that may show a robot (``DeferredFrame.may_show_robots``)."""
     last_frame: float = -math.inf
     over_current_at: list[float] = field(default_factory=lambda: [-math.inf, -math.inf])
     """When each motor last drew over-current (simulated seconds)."""
@@ -437,12 +439,14 @@ class World:
 
     # ------------------------------------------------------------------ cameras
     def subscribe_camera(self, name: str, listener: Callable[[CameraFrame], None],
-                         reads_pixels: bool = False) -> Callable[[], None]:
+                         reads_pixels: bool = False, robots_only: bool = False) -> Callable[[], None]:
         """Call ``listener`` with each frame robot ``name``'s camera takes at its rate; returns unsubscribe.
 
         Frames render their pixels when first read. A listener that reads every frame (a detector)
         says so with ``reads_pixels``: then the frames due at the same step are rendered side by side
         on the cores before the listeners are called, instead of one after the other in the listeners.
+        ``robots_only`` (with ``reads_pixels``): it reads only the frames that may show a robot (a robot
+        detector checks ``DeferredFrame.may_show_robots`` first), so the others are not rendered for it.
         """
         with self._lock:
             robot = self._robot(name)
@@ -450,12 +454,14 @@ class World:
                 raise ValueError(f"robot {name!r} has no camera (add it with camera=True)")
             robot.camera_listeners.append(listener)
             robot.pixel_readers += bool(reads_pixels)
+            robot.robot_readers += bool(reads_pixels and robots_only)
 
         def unsubscribe() -> None:
             with self._lock:
                 if listener in robot.camera_listeners:
                     robot.camera_listeners.remove(listener)
                     robot.pixel_readers -= bool(reads_pixels)
+                    robot.robot_readers -= bool(reads_pixels and robots_only)
         return unsubscribe
 
     def camera_frame(self, name: str) -> CameraFrame:
@@ -474,7 +480,10 @@ class World:
             if robot.camera_listeners:
                 every = max(1, round(1.0 / (robot.camera.rate_hz * self.dt)))
                 if self._steps % every == 0:
-                    frames.append((list(robot.camera_listeners), self._render(robot), robot.pixel_readers > 0))
+                    frame = self._render(robot)
+                    read = robot.pixel_readers > robot.robot_readers or \
+                        (robot.robot_readers > 0 and frame.may_show_robots)
+                    frames.append((list(robot.camera_listeners), frame, read))
         return frames
 
     def _render(self, robot: _Robot) -> CameraFrame:

@@ -1,7 +1,7 @@
 """Failure handling: -!g plans with error annotations, cascade, unhandled failures, goal control IAs."""
 from __future__ import annotations
 
-from tests.agentspeak.harness import run_asl, run_asl_logged, run_mas
+from tests.agentspeak.harness import run_asl, run_asl_logged
 
 
 def test_recovery_plan_gets_error_annotations_and_caller_continues():
@@ -108,16 +108,3 @@ def test_drop_desire_and_intend():
 -!ctl <- .print(no_more_desire).
 """
     assert run_asl(src) == ["intends", "dropped", "no_more_desire"]
-
-
-def test_an_event_after_its_wait_timed_out_is_an_ordinary_event():
-    # found by issue 22's soak: `.wait({+e}, T)` timed out, the intention went on and ended; when `e` came
-    # later (told by another agent), the stale waiter resumed an intention that had no plan left and the
-    # agent died (IndexError)
-    alice = """!start.
-+!start <- .wait({+go}, 100).
--!start <- .print(timed_out).
-+go[source(bob)] <- .print(go_handled).
-"""
-    bob = "!later.\n+!later <- .wait(600); .send(alice, tell, go).\n"
-    assert run_mas({"alice": alice, "bob": bob}, timeout=10) == ["[alice] timed_out", "[alice] go_handled"]

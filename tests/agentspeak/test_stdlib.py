@@ -69,6 +69,18 @@ def test_wait_forms():
     assert run_asl(src) == ["w1", "gone", "w2", "flagged", "three_arg_continues", "two_arg_fails"]
 
 
+def test_an_event_after_a_wait_timed_out_resumes_nothing():
+    """A ``.wait({+go}, T)`` that timed out must stop waiting: a later ``+go`` once "resumed" the finished
+    intention (an IndexError that killed an agent process when the event came in a message)."""
+    src = """!main. !other. !later.
++!main <- .wait({+go}, 30, E); .print(continued).
++!other <- .wait({+go}, 30); .print(never).
+-!other <- .print(timed_out).
++!later <- .wait(200); +go; .print(still_running).
+"""
+    assert sorted(run_asl(src)) == ["continued", "still_running", "timed_out"]
+
+
 def test_wait_milliseconds():
     assert body(".wait(20); .print(after)") == ["after"]
 
@@ -97,3 +109,54 @@ def test_remove_plan_term_by_label_and_unlabelled_fails_as_in_jason():
 def test_remove_plan_action_takes_a_plan_term_or_a_label_string():
     assert body('+{ @q1 +!k <- true }; +{ @q2 +!k <- true }; .remove_plan({ @q1 +!k <- true }); '
                 '.remove_plan("@q2"); .relevant_plans({+!k}, L); .print(L)') == ["[]"]
+
+
+# -- Jason 3.3.2 actions added for the remaining stdlib (jason.stdlib.save_agent, get_src_info,
+#    internal_action; their Javadoc is the reference) --------------------------------------------
+def test_save_agent_writes_beliefs_rules_goals_and_plans_that_load_again(tmp_path):
+    path = tmp_path / "saved.asl"
+    out = run_asl(f"""
+        price(tv, 10)[from(shop)].
+        cheap(X) :- price(X, P) & P < 20.
+        !save.
+        +!save <- +seen(1); .save_agent("{path}", [go, say(hello)]); .print(saved).
+        +!go : cheap(tv) & seen(N) <- .print(cheap, N).
+        +!say(W) <- .print(W).
+        +!bids <: false <- .wait(10). {{ +offer(V) <- .done. }}
+    """)
+    assert out == ["saved"]
+    text = path.read_text()
+    assert "price(tv,10)[from(shop)]." in text and "source(self)" not in text.split("// plans")[0]
+    assert "!go.\n!say(hello)." in text and "<: false" in text and "+offer(V)" in text
+    # the saved agent is a program that runs: its beliefs, rules, goals and plans came along
+    assert run_asl(text) == ["cheap1", "hello"]
+
+
+def test_save_agent_to_a_folder_that_does_not_exist_fails_with_the_reason(tmp_path):
+    out = run_asl(f"""
+        !s.
+        +!s <- .save_agent("{tmp_path}/no/such/x.asl").
+        -!s[error_msg(M)] <- .print(M).
+    """)
+    assert len(out) == 1 and "cannot write" in out[0] and "No such file" in out[0]
+
+
+def test_internal_action_tells_internal_action_terms_apart():
+    out = run_asl("""
+        !t.
+        +!t <- for (.member(T, [.print(a), kk.tt(1), print(a), "s", 1, math.abs(1)])) {
+                  if (.internal_action(T)) { .print(yes) } else { .print(no) }
+               }.
+    """)
+    assert out == ["yes", "yes", "no", "no", "no", "no"]
+
+
+def test_get_src_info_annotates_a_literal_with_where_it_is_written():
+    out = run_asl("""
+        !t.
+        +!t <- .get_src_info(p(1), L);
+               .print(L);
+               .get_src_info(q[code_line(7)], M); .print(M).
+    """)
+    # line 3: run_asl's source starts with a newline; annotations sort as Jason sorts them
+    assert out == ['p(1)[code_line(3),code_src("<string>")]', 'q[code_line(7),code_src("<string>")]']

@@ -15,6 +15,7 @@ DOMAIN = 1 + (os.getpid() + 70) % 100
 LEAKING = "helper_motion_decomposer"
 
 
+@pytest.mark.slow        # ~100 s; test_observe_learned.py runs the same chain through `faultmas observe --learned`
 @pytest.mark.timeout(240)
 def test_a_live_leak_makes_the_diagnoser_name_the_leaking_node(smoke_evaluation, tmp_path):
     import rclpy

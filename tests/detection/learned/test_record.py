@@ -28,3 +28,24 @@ def test_quantise_keeps_twelve_significant_bits_and_exact_small_integers():
     assert q[0] == 1.0 and q[1] == 4095.0
     np.testing.assert_allclose(q, values, rtol=4.9e-4)
     assert np.all(np.abs(q) <= np.abs(values))
+
+
+def test_a_process_that_ended_is_lost_not_sampled_as_zeros():
+    """An agent that died mid-run stays a zombie until reaped; psutil then reads RSS 0 without an error.
+    Those zeros would enter the data as a healthy component's counters: it must be reported lost."""
+    import subprocess
+    import sys
+    import time
+
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(1.5)"])   # not reaped until wait()
+    recorder = RunRecorder({"short_lived": child.pid}).start()
+    try:
+        deadline = time.monotonic() + 30
+        while not recorder.lost and time.monotonic() < deadline:
+            time.sleep(0.2)
+    finally:
+        recorder.stop()
+        child.wait()
+    assert recorder.lost == ["short_lived"]
+    counters = np.array(recorder.counters["short_lived"])
+    assert np.isnan(counters[-1]).all() and not (counters[:, 1] == 0).any()

@@ -1,0 +1,117 @@
+"""Jason 3.3.2 behaviours that decide what Jason's own unit-test suite counts and when its timed tests
+run (``make jason-tests``, issue 21); one test each, written from Jason's sources (cited per test)."""
+from __future__ import annotations
+
+import textwrap
+
+from tests.agentspeak.harness import run_asl
+
+
+def asl(text: str) -> str:
+    return textwrap.dedent(text)
+
+
+# -- a body term is "capplied" when stored (asSyntax/PlanBodyImpl.capply -> ArithFunctionTerm.capply) -----
+def test_a_body_term_stored_in_a_belief_holds_its_functions_computed():
+    # PlanBodyImpl.capply applies capply to each formula, and ArithFunctionTerm.capply computes a
+    # function (.count allows unbound arguments): the stored term holds the count of that moment, so an
+    # equal one added later is the same belief and posts no +stored event (Agent.addBel / BeliefBase.add)
+    out = run_asl(asl("""
+        b(1). b(2).
+        !start.
+        +!start <- +stored({ .print(.count(b(_))) }); +stored({ .print(1+1) }); +b(3);
+                   +stored({ .print(.count(b(_)), X) }); .count(stored(_), N); .print(beliefs(N)).
+        +stored(S) <- .print(event(S)).
+    """))
+    assert out == ["event({ .print(2) })", "event({ .print(3,X) })", "beliefs(2)"]
+
+
+def test_a_body_term_keeps_what_cannot_be_computed_yet():
+    # ArithFunctionTerm.capply: a function that does not allow unbound arguments (.length) stays as it is
+    # until they are bound; an if's condition is code (it runs when the body runs)
+    out = run_asl(asl("""
+        !start.
+        +!start <- +stored({ X = .length(L) }); +stored({ if (.length([a]) > 0) { .print(y) } });
+                   .findall(S, stored(S), Ss); .print(Ss).
+    """))
+    assert out == ["[{ if ((.length([a]) > 0)) { .print(y) } },{ (X = .length(L)) }]"]
+
+
+# -- timing on a machine that gives the process little CPU ------------------------------------------------
+class _Clock:
+    """A stand-in for the ``time`` module of the interpreter: a process that gets the CPU seldom (each
+    reasoning cycle of the agent takes ``per_cycle`` seconds of real time)."""
+
+    def __init__(self) -> None:
+        self.now = 1000.0
+
+    def monotonic(self) -> float:
+        return self.now
+
+
+def _agents(monkeypatch, sources: dict[str, str]):
+    from agentspeak import agent as agent_module
+    from agentspeak import communication as communication_module
+    from agentspeak.runtime import LocalRuntime
+    from agentspeak.stdlib.registry import CURRENT
+    clock = _Clock()
+    monkeypatch.setattr(agent_module, "time", clock)
+    monkeypatch.setattr(communication_module, "time", clock)
+    lines: list[str] = []
+    runtime = LocalRuntime(printer=lambda name, text: lines.append(f"{name}: {text}"))
+    agents = {name: runtime.add_agent(name, text) for name, text in sources.items()}
+
+    def cycles(name: str, n: int, per_cycle: float = 0.0, idle: float | None = None) -> None:
+        """``n`` cycles of one agent; each takes ``per_cycle`` s, or ``idle`` s if the agent was idle."""
+        ag = agents[name]
+        CURRENT.agent = ag
+        for _ in range(n):
+            busy = bool(ag.running or ag.events)
+            ag.cycle()
+            clock.now += per_cycle if busy or idle is None else idle
+    return clock, lines, cycles
+
+
+def test_a_busy_agent_whose_cycles_are_slow_runs_its_timers_in_order(monkeypatch):
+    # Jason runs each agent on a thread of its own: after !!go's .wait(50) starts, !check's few formulas
+    # run long before 50 ms pass. A process that gets the CPU every 200 ms must not end the wait first.
+    _, lines, cycles = _agents(monkeypatch, {"ag": asl("""
+        !start.
+        +!start <- !!go; !!check.
+        +!go <- .wait(50); +done; .print(waited).
+        +!check <- .print(a); .print(b); .print(c); .print(d);
+                   if (done) { .print(late) } else { .print(in_time) }.
+    """)})
+    cycles("ag", 40, per_cycle=0.2)
+    assert lines == ["ag: a", "ag: b", "ag: c", "ag: d", "ag: in_time", "ag: waited"]
+
+
+def test_the_time_a_busy_agent_lost_is_not_taken_from_its_later_waits(monkeypatch):
+    # Jason's queueplan pattern: six .wait(50) in a row, each followed by a few formulas, end long before
+    # a .wait(500) begun with them. When each formula takes 50 ms of real time (the process gets the CPU
+    # seldom), the time lost while busy must not shorten the waits that follow.
+    _, lines, cycles = _agents(monkeypatch, {"ag": asl("""
+        !start.
+        +!start <- !!chain(0); .wait(500); .count(step(_), N); .print(steps(N)).
+        +!chain(6).
+        +!chain(I) <- .wait(50); +step(I); .print(I); .print(I); !!chain(I+1).
+    """)})
+    cycles("ag", 1000, per_cycle=0.05, idle=0.001)
+    assert lines[-1] == "ag: steps(6)"
+
+
+def test_an_answer_sent_before_the_askers_timeout_is_taken_though_read_after_it(monkeypatch):
+    # .send(R, askOne, C, A, Timeout): Jason's answer arrives as soon as it is sent; here the asker may
+    # read its mailbox after the deadline passed. An answer sent in time counts, a late one does not.
+    source = {"a": asl("""
+        !start.
+        +!start <- .send(b, askOne, v(X), A, 200); .print(A).
+    """), "b": "v(1).\n"}
+    for answered_after, expected in ((0.1, "a: v(1)[source(b)]"), (0.3, "a: timeout")):
+        clock, lines, cycles = _agents(monkeypatch, source)
+        cycles("a", 3)
+        clock.now += answered_after
+        cycles("b", 5)
+        clock.now += 10.0  # the asker gets the CPU again long after its deadline
+        cycles("a", 5)
+        assert lines == [expected]
