@@ -52,8 +52,8 @@ def _team_state(hub, mas: str) -> dict:
 
 
 def _agent_processes(launched: dict) -> tuple[dict, dict]:
-    """RSS (MiB) and threads of the agent processes still running, by agent name; and the exit status of
-    those that ended (``launched``: name -> pid, as first seen)."""
+    """RSS (MiB) and threads of the agent processes still running, by agent name; and the names of those
+    that ended (``launched``: name -> pid, as first seen; not reaped here: the launcher reports the status)."""
     found = {}
     for child in psutil.Process().children():
         try:
@@ -64,14 +64,7 @@ def _agent_processes(launched: dict) -> tuple[dict, dict]:
                 found[name] = {"rss_mib": round(child.memory_info().rss / 2 ** 20, 1), "threads": child.num_threads()}
         except psutil.Error:
             pass
-    ended = {}
-    for name, pid in launched.items():
-        if name not in found:
-            try:
-                ended[name] = psutil.Process(pid).wait(timeout=0)
-            except (psutil.Error, psutil.TimeoutExpired):
-                ended[name] = None      # reaped already: its status is the run's to report
-    return found, ended
+    return found, {name: pid for name, pid in launched.items() if name not in found}
 
 
 class TaskLog:
@@ -259,7 +252,7 @@ def summarize(rows: list[dict], ended_by: str, died, frozen, started: float) -> 
         "sim_hours": round(rows[-1]["sim_total_s"] / 3600, 3) if rows else 0.0,
         "wall_hours": round((time.monotonic() - started) / 3600, 3),
         "outcomes": {o: sum(r["outcome"] == o for r in rows) for o in ("correct", "wrong", "timeout")},
-        "died": died or sorted({(a, code) for r in rows for a, code in r["ended_agents"].items()}), "frozen": frozen,
+        "died": died, "agents_ended": sorted({a for r in rows for a in r["ended_agents"]}), "frozen": frozen,
         "tasks_with_stuck_intentions": sum(bool(r["stuck"]) for r in rows),
         "max_settle_s": max((r["settle_s"] for r in rows), default=None),
         "soak_rss_mib_first_last": first_last("soak_rss_mib"),
