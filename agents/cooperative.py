@@ -271,7 +271,7 @@ def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float =
                  out: TextIO | None = None, err: TextIO | None = None,
                  echo: Callable[[Mark], None] | None = None,
                  on_mark: Callable[[Mark, Callable[[str], None]], None] | None = None,
-                 inspector=None, sim_timeout: float | None = None) -> RunResult:
+                 inspector=None, sim_timeout: float | None = None, secure: bool = False) -> RunResult:
     """Run ``scenario`` to the end (or ``timeout`` wall seconds, or ``sim_timeout`` simulated seconds);
     agents' lines go to ``out``. A limit in simulated time measures what the robots did, whatever the
     machine's load (the agents wait in simulated time too); the wall limit guards against a hung run.
@@ -287,7 +287,7 @@ def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float =
     try:
         if processes:
             finished = _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark, inspector,
-                                      sim_timeout)
+                                      sim_timeout, secure)
         else:
             finished = _run_in_process(scenario, world, bridges, timeout, out, echo, sim_timeout)
     finally:
@@ -349,7 +349,7 @@ def _run_in_process(scenario, world, bridges, timeout, out, echo, sim_timeout=No
 
 
 def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=None, inspector=None,
-                   sim_timeout=None) -> ProgressLog:
+                   sim_timeout=None, secure=False) -> ProgressLog:
     from robot_bridge.sim.server import SimServer
 
     def serve(hub) -> Callable[[], None]:
@@ -361,16 +361,23 @@ def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=No
     extra = ["--bridge", "zenoh"] + (["--allow-pause"] if inspector is not None and inspector.allow_pause else [])
     return run_agent_processes(scenario, extra, timeout, world=world, out=out, err=err, echo=echo,
                                on_mark=on_mark, serve=serve, hold=inspector.hold if inspector is not None else None,
-                               sim_timeout=sim_timeout)
+                               sim_timeout=sim_timeout, secure=secure)
 
 
-def write_project(scenario: Scenario, directory) -> "Path":
+def write_project(scenario: Scenario, directory, secure: bool = False) -> "Path":
     """The scenario's MAS as a ``.mas2j`` file in ``directory``: one agent per robot, its plans and
-    its launch beliefs (``_beliefs``)."""
+    its launch beliefs (``_beliefs``). ``secure``: the secure profile (docs/reliability.md, "Identity"):
+    a key pair per robot in ``directory/keys`` (made for this run, gone with the directory), listed in the
+    project, so every agent signs what it sends and refuses what no member signed."""
     from pathlib import Path
 
     project_file = Path(directory) / f"{scenario.mas}.mas2j"
-    lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{", ".join(_beliefs(scenario, r))}"];'
+    key = ""
+    if secure:
+        from agents.transport.identity import generate_keys
+        generate_keys(Path(directory) / "keys", [r.name for r in scenario.robots])
+        key = f', key="{Path(directory) / "keys"}"'
+    lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{", ".join(_beliefs(scenario, r))}"{key}];'
              for r in scenario.robots]
     project_file.write_text(f"MAS {scenario.mas} {{\n  agents:\n" + "\n".join(lines) + "\n}\n")
     return project_file
@@ -384,7 +391,7 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
                         hold: Callable[[], None] | None = None,
                         others: Callable[[], list[tuple[str, int]]] | None = None,
                         other_processes: Callable[[], dict] | None = None,
-                        sim_timeout: float | None = None) -> ProgressLog:
+                        sim_timeout: float | None = None, secure: bool = False) -> ProgressLog:
     """One ``faultmas agent run ... EXTRA_ARGS`` process per robot of ``scenario`` over a Zenoh hub on
     loopback; ``serve(hub)`` starts what the robots need on the hub (returns its stop). The progress
     reports the agents publish are recorded until every robot is done, ``on_mark`` says stop, or ``timeout``;
@@ -406,10 +413,13 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
     out = out if out is not None else discard
     err = err or sys.stderr
     with tempfile.TemporaryDirectory(prefix="faultmas-run-") as tmp, discard or contextlib.nullcontext():
-        project_file = write_project(scenario, Path(tmp))
-        hub = ZenohTransport(scenario.mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
+        project_file = write_project(scenario, Path(tmp), secure=secure)
+        project = load_mas2j(str(project_file))
+        from agents.transport.identity import project_identity
+        hub = ZenohTransport(scenario.mas, ZenohOptions(listen=(loopback_endpoint(),)),
+                             identity=project_identity(project)).open()   # None: the default profile
         stop_serving = serve(hub) if serve is not None else None
-        launcher = Launcher(load_mas2j(str(project_file)), hub, out, err, extra_args=extra_args)
+        launcher = Launcher(project, hub, out, err, extra_args=extra_args)
 
         def kill(name: str, signum: int = signal.SIGKILL) -> None:
             """SIGKILL ``name``'s process (an agent, or a robot process of ``other_processes``), or send it

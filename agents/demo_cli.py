@@ -57,6 +57,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         option_help=("with a bridge other than sim and ros2: an option for it (repeatable; an option it does not "
                      "take is an error that lists the ones it does)"))
     run.add_argument("--in-process", action="store_true", help="all agents in this process (no Zenoh)")
+    run.add_argument("--secure", action="store_true",
+                     help="the secure profile: a key pair per robot made for the run, every message signed by its "
+                          "sender and checked by its receiver (docs/reliability.md, \"Identity\"); embedded "
+                          "simulator, agent processes")
     run.add_argument("--json", action="store_true", help="print one JSON object (agents' lines go to stderr)")
     run.add_argument("--plot", metavar="PNG", help="draw ground-truth and believed trajectories to this file")
     run.add_argument("--quiet", action="store_true", help="do not show the agents' own lines")
@@ -105,6 +109,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     _setup_logging()
     if args.faulty is not None and args.robots is None:
         print("faultmas run: --faulty K needs --robots N (the pair has one faulty robot)", file=sys.stderr)
+        return 2
+    if args.secure and (args.in_process or args.bridge != "sim"):
+        print("faultmas run: --secure signs the messages of agent processes on the embedded simulator; "
+              "not with --in-process (no messages travel) nor with --bridge other than sim", file=sys.stderr)
         return 2
     try:
         scenario = team_scenario(args.robots, args.faulty or 1, args.seed, fault=args.fault) if args.robots \
@@ -161,7 +169,7 @@ def cmd_run(args: argparse.Namespace) -> int:
               f"(scored against --fault {scenario.robots[0].fault})", file=show)
         result = run_on_bridge(scenario, choice, timeout=args.timeout, out=agent_lines, echo=lambda m: _echo(m, show))
     else:
-        result = run_scenario(scenario, processes=not args.in_process, timeout=args.timeout,
+        result = run_scenario(scenario, processes=not args.in_process, timeout=args.timeout, secure=args.secure,
                               out=agent_lines, err=sys.stderr, echo=lambda m: _echo(m, show), inspector=inspector)
     if args.plot and result.world is not None:
         from robot_bridge.cli import plot

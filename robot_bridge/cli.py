@@ -193,7 +193,7 @@ def run_script(args: argparse.Namespace) -> int:
     if not names or len(set(names)) != len(names):
         print(f"faultmas sim run: --robots needs distinct names, got {args.robots!r}", file=sys.stderr)
         return 2
-    world = World(seed=args.seed)
+    world = World(seed=args.seed, log_keep=None)       # --csv and --plot show the whole run
     for i, name in enumerate(names):
         world.add_robot(name, x=1.5 * i, y=0.0, yaw_deg=0.0 if i == 0 else 180.0,
                         fault=fault if i == 0 else "none")

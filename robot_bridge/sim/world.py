@@ -15,6 +15,7 @@ import math
 import threading
 import zlib
 from concurrent.futures import Future
+from collections import deque
 from dataclasses import dataclass, field, replace
 from typing import Callable, NamedTuple
 
@@ -50,6 +51,11 @@ class CameraMount:
     rig: object | None = None
     """A ``robot_bridge.sim.camera.CameraRig`` (intrinsics, height, offset); ``None``: the default Kinect."""
 
+
+LOG_KEEP_S = 600.0
+"""Simulated seconds of trajectory a world keeps per robot by default (the oldest points go first): a world
+that runs for hours (the soak of issue 22, a served simulator) logged 20 points a second per robot for ever,
+~20 MiB per robot and simulated hour. ``World(log_keep=None)`` keeps everything (``faultmas sim --csv``)."""
 
 OVER_CURRENT_HOLD_S = 1.0
 """An over-current flag stays up this long (simulated s) after the motor stopped pushing, like a latched
@@ -91,7 +97,7 @@ class _Robot:
     last_frame: float = -math.inf
     over_current_at: list[float] = field(default_factory=lambda: [-math.inf, -math.inf])
     """When each motor last drew over-current (simulated seconds)."""
-    trajectory: list[TrajectoryPoint] = field(default_factory=list)
+    trajectory: "list[TrajectoryPoint] | deque[TrajectoryPoint]" = field(default_factory=list)
     gyro: imu.Gyro = imu.Gyro()
     gyro_rng: np.random.Generator | None = None
     """Separate from ``rng`` so adding the gyro did not change the physics' noise draws."""
@@ -112,7 +118,7 @@ class World:
     def __init__(self, seed: int = 0, dt: float = DEFAULT_DT, arena: tuple[float, float, float, float] =
                  (-5.0, -5.0, 5.0, 5.0), obstacles: tuple[Obstacle, ...] = (), noise: bool = True,
                  log_interval: float = 0.05, lighting: float = 1.0, params: kobuki.BaseParams = kobuki.KOBUKI,
-                 limits: motion.MotionLimits = motion.DEFAULT_LIMITS) -> None:
+                 limits: motion.MotionLimits = motion.DEFAULT_LIMITS, log_keep: float | None = LOG_KEEP_S) -> None:
         if dt <= 0:
             raise ValueError(f"dt must be positive, got {dt!r}")
         xmin, ymin, xmax, ymax = arena
@@ -121,6 +127,7 @@ class World:
         self.seed, self.dt, self.arena, self.obstacles = seed, dt, arena, tuple(obstacles)
         self.noise, self.params, self.limits = noise, params, limits
         self.log_interval, self.lighting = log_interval, lighting
+        self.log_keep = log_keep
         self._scene: object | None = None
         self._robots: dict[str, _Robot] = {}
         self._steps = 0
@@ -148,6 +155,8 @@ class World:
                            odometry.Odometry(ticks=ticks), ticks, camera=mount,
                            gyro=imu.Gyro.draw(gyro_rng) if gyro_rng is not None else imu.Gyro(),
                            gyro_rng=gyro_rng)   # odometry frames start at the origin
+            if log_keep_points := self._log_keep_points():
+                robot.trajectory = deque(maxlen=log_keep_points)
             self._robots[name] = robot
             self._log(robot)
 
@@ -358,6 +367,11 @@ class World:
                     return (dx, dy)
         return None
 
+    def _log_keep_points(self) -> int | None:
+        if self.log_keep is None or self.log_interval <= 0:
+            return None
+        return max(1, math.ceil(self.log_keep / self.log_interval)) + 1
+
     def _log(self, robot: _Robot) -> None:
         b, o = robot.base, robot.odom
         robot.trajectory.append(TrajectoryPoint(
@@ -401,7 +415,8 @@ class World:
             return self._robot(name).ticks
 
     def trajectory(self, name: str) -> list[TrajectoryPoint]:
-        """Ground truth and odometry of ``name``, every ``log_interval`` simulated seconds."""
+        """Ground truth and odometry of ``name``, every ``log_interval`` simulated seconds, the last ``log_keep``
+        simulated seconds of them (all with ``log_keep=None``)."""
         with self._lock:
             return list(self._robot(name).trajectory)
 

@@ -51,18 +51,20 @@ def _team_state(hub, mas: str) -> dict:
     return states
 
 
-def _agent_processes() -> dict:
-    """RSS (MiB) and threads of this process's agent children, by agent name."""
+def _agent_processes(launched: dict) -> tuple[dict, dict]:
+    """RSS (MiB) and threads of the agent processes still running, by agent name; and the names of those
+    that ended (``launched``: name -> pid, as first seen; not reaped here: the launcher reports the status)."""
     found = {}
     for child in psutil.Process().children():
         try:
             argv = child.cmdline()
             if "--name" in argv and child.status() != psutil.STATUS_ZOMBIE:
-                found[argv[argv.index("--name") + 1]] = {"rss_mib": round(child.memory_info().rss / 2 ** 20, 1),
-                                                         "threads": child.num_threads()}
+                name = argv[argv.index("--name") + 1]
+                launched.setdefault(name, child.pid)
+                found[name] = {"rss_mib": round(child.memory_info().rss / 2 ** 20, 1), "threads": child.num_threads()}
         except psutil.Error:
             pass
-    return found
+    return found, {name: pid for name, pid in launched.items() if name not in found}
 
 
 class TaskLog:
@@ -192,6 +194,7 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
         while True:
             done = log.wait_done(n, max(0.0, task_timeout - (time.monotonic() - task_wall)))
             states, waited = _wait_idle(hub, scenario.mas, robots, settle)
+            processes, ended_agents = _agent_processes(launched)
             ended = log.final.get(n, {})
             step, detail = ended.get(faulty[0], (None, None))
             diagnosis = detail if step == "diagnosed" else step
@@ -204,7 +207,7 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
                    "stuck": {a: s for a, s in states.items() if s.get("intentions") or s.get("events")},
                    "missing_agents": sorted(set(robots) - set(states)),
                    "agents": {a: {k: s.get(k) for k in ("intentions", "events", "beliefs")} for a, s in states.items()},
-                   "agent_processes": _agent_processes(),
+                   "agent_processes": processes, "ended_agents": ended_agents,
                    "soak_rss_mib": round(me.memory_info().rss / 2 ** 20, 1), "soak_threads": threading.active_count(),
                    "soak_os_threads": me.num_threads(), "soak_fds": me.num_fds(), "hub_declared": _declared(hub)}
             rows.append(row)
@@ -218,6 +221,7 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
             faulty = _next_task(n, world, bridges, hub, scenario.mas, rng, task_timeout)
 
     hold_state: dict = {}
+    launched: dict = {}
     try:
         run = run_agent_processes(scenario, ["--bridge", "zenoh"], task_timeout, world=world, serve=serve, hold=hold)
     finally:
@@ -248,7 +252,7 @@ def summarize(rows: list[dict], ended_by: str, died, frozen, started: float) -> 
         "sim_hours": round(rows[-1]["sim_total_s"] / 3600, 3) if rows else 0.0,
         "wall_hours": round((time.monotonic() - started) / 3600, 3),
         "outcomes": {o: sum(r["outcome"] == o for r in rows) for o in ("correct", "wrong", "timeout")},
-        "died": died, "frozen": frozen,
+        "died": died, "agents_ended": sorted({a for r in rows for a in r["ended_agents"]}), "frozen": frozen,
         "tasks_with_stuck_intentions": sum(bool(r["stuck"]) for r in rows),
         "max_settle_s": max((r["settle_s"] for r in rows), default=None),
         "soak_rss_mib_first_last": first_last("soak_rss_mib"),

@@ -71,3 +71,19 @@ def test_bad_input_is_named():
         world.camera_frame("a")
     with pytest.raises(ValueError, match="dt"):
         World(dt=0)
+
+
+def test_a_world_that_runs_for_hours_keeps_only_the_last_minutes_of_trajectory():
+    # found by the soak (issue 22): 20 points a second per robot, kept for ever, ~20 MiB per robot and hour
+    from robot_bridge.sim.world import LOG_KEEP_S
+
+    kept = World(seed=1, noise=False, log_keep=1.0)
+    everything = World(seed=1, noise=False, log_keep=None)
+    for world in (kept, everything):
+        world.add_robot("r")
+        world.run(5.0)
+    recent = kept.trajectory("r")
+    assert len(recent) <= 1.0 / kept.log_interval + 1 and recent[-1].time == pytest.approx(5.0)
+    assert recent[0].time >= 4.0 - 0.06                        # the oldest points went first
+    assert everything.trajectory("r")[0].time == 0.0 and len(everything.trajectory("r")) > len(recent)
+    assert World().log_keep == LOG_KEEP_S
