@@ -96,6 +96,27 @@ def test_a_loaded_program_is_the_parsed_one_in_this_process(tmp_path: Path, monk
     assert [len(p.sub_plans) for p in loaded.plans] == [len(p.sub_plans) for p in parsed.plans] == [0, 1, 0]
 
 
+def test_kept_literals_hash_as_the_loading_process_does(tmp_path: Path, monkeypatch) -> None:
+    """String hashes differ between processes: a literal must not bring its hash from the one that kept it."""
+    monkeypatch.setenv("FAULTMAS_CACHE_DIR", str(tmp_path))
+    source = str(tmp_path / "prog.asl")
+    parse_cache._PROGRAMS.clear()
+    {hash(b) for b in parse_program(PROGRAM, source).beliefs}   # hashed here (the parser shares these terms) ...
+    parse_cache.cached_program(PROGRAM, source)                  # ... then kept by this process
+    code = ("import sys\n"
+            "from agentspeak import parse_cache\n"
+            "from agentspeak.parser import parse_program\n"
+            f"text, source = {PROGRAM!r}, {source!r}\n"
+            "parse_cache._parse = None\n"                          # loaded, or this fails
+            "loaded = parse_cache.cached_program(text, source)\n"
+            "fresh = set(parse_program(text, source + '.fresh').beliefs)\n"
+            "print([b in fresh for b in loaded.beliefs])\n")
+    for seed in ("7", "8"):
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                              env={**os.environ, "PYTHONHASHSEED": seed})
+        assert done.stdout.strip() == "[True, True, True]", done.stderr
+
+
 def test_anything_an_entry_depends_on_makes_it_miss(tmp_path: Path, monkeypatch) -> None:
     monkeypatch.setenv("FAULTMAS_CACHE_DIR", str(tmp_path))
     calls = []
