@@ -75,6 +75,12 @@ class BuildWithManifest(build_ext):
             print(f"faultmas: compiling the interpreter ({len(self.extensions) - 1} modules) and the camera's "
                   f"z-buffer loop with Cython and the C compiler, where the sources changed (optional: without "
                   f"it everything runs from source; a few minutes on 2 cores the first time)", flush=True)
+        # each source's digest as it was when the build began: a source edited while the build runs (minutes)
+        # must not be recorded as compiled (its module was made from the earlier text); then it runs from source
+        sources = {ext.name: SPEEDUPS["source_path"](ext.name, HERE / "agentspeak")
+                   for ext in self.extensions if ext.name != ZBUFFER["MODULE"]}
+        before = {name: SPEEDUPS["source_digest"](path) for name, path in sources.items()}
+        stamps_before = {name: SPEEDUPS["source_stamp"](path) for name, path in sources.items()}
         super().run()
         if not self.extensions:
             return
@@ -84,10 +90,9 @@ class BuildWithManifest(build_ext):
             manifest.write_text(json.dumps({"digest": ZBUFFER["source_digest"]()}) + "\n")
         else:
             zbuffer.unlink(missing_ok=True)
-        built = {ext.name: SPEEDUPS["source_digest"](SPEEDUPS["source_path"](ext.name, HERE / "agentspeak"))
-                 for ext in self.extensions if ext.name != ZBUFFER["MODULE"] and ext.name in self.compiled_now}
+        built = {name: digest for name, digest in before.items() if name in self.compiled_now}
         package_dir = Path(self.get_ext_fullpath("agentspeak.terms")).parent   # the tree, or the wheel's
-        stamps = {m: SPEEDUPS["source_stamp"](SPEEDUPS["source_path"](m, HERE / "agentspeak")) for m in built}
+        stamps = {m: stamps_before[m] for m in built}
         record = {**built, SPEEDUPS["STAMPS"]: stamps}    # stamps: the quick check at every start (_speedups.py)
         (package_dir / SPEEDUPS["MANIFEST"]).write_text(json.dumps(record, indent=1, sort_keys=True) + "\n")
         for module, compiled in SPEEDUPS["compiled_files"](package_dir).items():

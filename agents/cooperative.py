@@ -271,8 +271,10 @@ def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float =
                  out: TextIO | None = None, err: TextIO | None = None,
                  echo: Callable[[Mark], None] | None = None,
                  on_mark: Callable[[Mark, Callable[[str], None]], None] | None = None,
-                 inspector=None) -> RunResult:
-    """Run ``scenario`` to the end (or ``timeout`` wall seconds); agents' lines go to ``out``.
+                 inspector=None, sim_timeout: float | None = None) -> RunResult:
+    """Run ``scenario`` to the end (or ``timeout`` wall seconds, or ``sim_timeout`` simulated seconds);
+    agents' lines go to ``out``. A limit in simulated time measures what the robots did, whatever the
+    machine's load (the agents wait in simulated time too); the wall limit guards against a hung run.
 
     ``inspector``: an ``agents.inspector.live.LiveInspector`` that serves the web view on the run's hub
     (only with ``processes``) and holds the agents alive at the end.
@@ -284,9 +286,10 @@ def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float =
     world, bridges = build_world(scenario)
     try:
         if processes:
-            finished = _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark, inspector)
+            finished = _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark, inspector,
+                                      sim_timeout)
         else:
-            finished = _run_in_process(scenario, world, bridges, timeout, out, echo)
+            finished = _run_in_process(scenario, world, bridges, timeout, out, echo, sim_timeout)
     finally:
         for bridge in bridges.values():
             bridge.shutdown()
@@ -301,7 +304,24 @@ def _beliefs(scenario: Scenario, robot: RobotSetup) -> list[str]:
             f"start_pose({round(robot.x, 3)}, {round(robot.y, 3)}, {round(robot.yaw_deg, 1)})"]
 
 
-def _run_in_process(scenario, world, bridges, timeout, out, echo) -> ProgressLog:
+def _stop_at_sim_time(world, sim_timeout: float | None, stop: Callable[[], None]) -> Callable[[], None]:
+    """Call ``stop`` once ``world`` has run ``sim_timeout`` simulated seconds (checked every 0.2 s of wall
+    time, in a thread); returns what cancels the watch."""
+    if sim_timeout is None:
+        return lambda: None
+    done = threading.Event()
+    limit = world.time + sim_timeout
+
+    def watch() -> None:
+        while not done.wait(0.2):
+            if world.time >= limit:
+                stop()
+                return
+    threading.Thread(target=watch, name="sim-timeout", daemon=True).start()
+    return done.set
+
+
+def _run_in_process(scenario, world, bridges, timeout, out, echo, sim_timeout=None) -> ProgressLog:
     from agents.robot_arch import RobotArch
     from agentspeak.parser import parse_program, parse_term
     from agentspeak.runtime import LocalRuntime
@@ -320,11 +340,16 @@ def _run_in_process(scenario, world, bridges, timeout, out, echo) -> ProgressLog
         beliefs = [parse_term(b) for b in _beliefs(scenario, r)]
         runtime.add_agent(r.name, program=programs[r.program], source_file=str(path), extra_beliefs=beliefs,
                           arch=RobotArch(runtime, bridges[r.name], on_progress=log.record))
-    runtime.run(timeout=timeout, stop_when_idle=False)
+    cancel = _stop_at_sim_time(world, sim_timeout, runtime.stop)
+    try:
+        runtime.run(timeout=timeout, stop_when_idle=False)
+    finally:
+        cancel()
     return log
 
 
-def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=None, inspector=None) -> ProgressLog:
+def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=None, inspector=None,
+                   sim_timeout=None) -> ProgressLog:
     from robot_bridge.sim.server import SimServer
 
     def serve(hub) -> Callable[[], None]:
@@ -335,7 +360,8 @@ def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=No
         return lambda: (stop_inspector(), stop_sim())
     extra = ["--bridge", "zenoh"] + (["--allow-pause"] if inspector is not None and inspector.allow_pause else [])
     return run_agent_processes(scenario, extra, timeout, world=world, out=out, err=err, echo=echo,
-                               on_mark=on_mark, serve=serve, hold=inspector.hold if inspector is not None else None)
+                               on_mark=on_mark, serve=serve, hold=inspector.hold if inspector is not None else None,
+                               sim_timeout=sim_timeout)
 
 
 def write_project(scenario: Scenario, directory) -> "Path":
@@ -357,7 +383,8 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
                         serve: Callable[[object], Callable[[], None]] | None = None,
                         hold: Callable[[], None] | None = None,
                         others: Callable[[], list[tuple[str, int]]] | None = None,
-                        other_processes: Callable[[], dict] | None = None) -> ProgressLog:
+                        other_processes: Callable[[], dict] | None = None,
+                        sim_timeout: float | None = None) -> ProgressLog:
     """One ``faultmas agent run ... EXTRA_ARGS`` process per robot of ``scenario`` over a Zenoh hub on
     loopback; ``serve(hub)`` starts what the robots need on the hub (returns its stop). The progress
     reports the agents publish are recorded until every robot is done, ``on_mark`` says stop, or ``timeout``;
@@ -405,11 +432,14 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
         hub.on_control(on_control)
         from robot_bridge.processes import FreezeWatch
         watch = FreezeWatch(lambda: {**launcher.children, **(other_processes() if other_processes else {})})
+        cancel_sim_watch = _stop_at_sim_time(world, sim_timeout, launcher.stop_requested.set) \
+            if world is not None else (lambda: None)
         try:
             launcher.start()
             started = time.monotonic()
             with watch:
                 ended = launcher.wait(timeout, stop_when_idle=False, fatal=log.needed, others=others)
+            cancel_sim_watch()
             if ended == "failed":
                 # a robot the run waits for died: the others get a lease or two to notice and react
                 # (a helper releases it), then the run ends and names it, long before its timeout
@@ -421,6 +451,7 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
             if hold is not None and not log.died:
                 hold()
         finally:
+            cancel_sim_watch()
             launcher.stop_all()
             if stop_serving is not None:
                 stop_serving()

@@ -25,6 +25,9 @@ from agents.environment import add_bridge_arguments
 EVAL_FAULTS = ("none", "encoders", "both_actuators", "left_actuator", "right_actuator")
 EVAL_TEAMS = (2, 4, 8, 12)
 """Team sizes ``faultmas eval`` runs by default (robots start anywhere in the arena, often out of sight)."""
+EVAL_SIM_TIMEOUT = 600.0
+"""Simulated seconds an evaluation run may take: more than the plans' own time-outs add up to (a run ends
+with their verdict, diagnosed or undiagnosed, before), so only a run that hangs reaches it."""
 STEP_LABELS = {"started": "started its task", "fault_detected": "fault detected", "ambiguous": "ambiguous alone",
                "help_requested": "asks for help", "helper_found": "helper chosen", "searching": "searching for",
                "robot_found": "robot detected:", "found_by": "found by", "lost_sight": "lost sight of",
@@ -83,9 +86,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                          "'none' for pairs only")
     ev.add_argument("--jobs", type=int, default=2, help="worker processes (default %(default)s)")
     ev.add_argument("--json", action="store_true", help="print one JSON object: every run and the table")
-    ev.add_argument("--timeout", type=float, default=150.0,
-                    help="wall seconds per run before it counts as failed; a team of N gets N/2 times as much "
-                         "(default %(default)s)")
+    ev.add_argument("--sim-timeout", type=float, default=EVAL_SIM_TIMEOUT, metavar="S",
+                    help="simulated seconds a run may take before it counts as failed: what the robots did, "
+                         "whatever the machine's load (default %(default)s)")
+    ev.add_argument("--timeout", type=float, default=600.0,
+                    help="wall seconds per run before it counts as failed, a guard against a hung run; a team of N "
+                         "gets N/2 times as much, as every camera slows the simulator (default %(default)s)")
     ev.set_defaults(func=cmd_eval)
 
 
@@ -253,13 +259,13 @@ def eval_scenario(name: str, seed: int):
     return random_pair_scenario(name, seed)
 
 
-def _one_run(job: tuple[str, int, float]) -> dict:
+def _one_run(job: tuple[str, int, float, float]) -> dict:
     """One evaluation run; a team's steps are the means over its faulty robots."""
     from agents.cooperative import run_scenario
 
-    name, seed, timeout = job
+    name, seed, timeout, sim_timeout = job
     logging.disable(logging.WARNING)
-    result = run_scenario(eval_scenario(name, seed), processes=False, timeout=timeout)
+    result = run_scenario(eval_scenario(name, seed), processes=False, timeout=timeout, sim_timeout=sim_timeout)
     tested = [r for r in result.robots if r.fault != "none"] or result.robots[:1]
 
     def mean(clock: str) -> dict:
@@ -288,7 +294,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
         return 2
     faults += [team_label(s) for s in sizes]
     # a team's run gets more wall time: its cameras cost the simulator in proportion to the robots
-    jobs = [(f, args.seed * 100_000 + i, args.timeout * max(1.0, _team_size(f) / 2))
+    jobs = [(f, args.seed * 100_000 + i, args.timeout * max(1.0, _team_size(f) / 2), args.sim_timeout)
             for f in faults for i in range(args.runs)]
     runs: list[dict] = []
     from tqdm import tqdm

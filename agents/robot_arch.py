@@ -3,7 +3,8 @@
 Percepts come from ``bridge.percepts()`` each reasoning cycle and become literals with
 ``source(percept)`` (Jason's BUF diffs them into +p/-p events); an environment action becomes an
 ``Action`` for ``bridge.act`` and suspends only its intention until the completion arrives, which
-fails the action with the bridge's reason (``no_progress``, ``timeout``, ``unknown_action``...).
+fails the action with the bridge's reason (``no_progress``, ``timeout``, ``unknown_action``...). The
+robot's clock, when it has one, is the agent's (``environment_clock``).
 """
 from __future__ import annotations
 
@@ -65,6 +66,12 @@ class RobotArch(LocalArch):
 
     def perceive(self, agent) -> list[Literal] | None:
         return [percept_literal(p) for p in self.bridge.percepts()]
+
+    def environment_clock(self):
+        """The robot's clock, when it has one (a simulated robot: simulated time): the agent's waits and
+        timeouts follow it, so a plan's ``.wait(300)`` lasts 0.3 s of the robot's time however fast the
+        simulator runs; None for a robot in wall time."""
+        return self.bridge.clock if self.bridge.clock() is not None else None
 
     def act(self, agent, action: Literal) -> "Future | bool":
         try:

@@ -127,6 +127,9 @@ class EmbodiedNetworkArch(NetworkArch):
     def act(self, agent: Agent, action: Literal):
         return self.body.act(agent, action)
 
+    def environment_clock(self):
+        return self.body.environment_clock()
+
 
 class TransportBridge:
     """Connects every agent of ``runtime`` to ``transport``; ``attach`` once the agents are added.

@@ -3,7 +3,8 @@
 Override what you need: ``perceive`` (current percepts, or None when nothing changed), ``act``
 (start an environment action; return a ``Future`` resolving to success/failure, or a bool at once,
 or None for "no environment"), ``send`` (deliver a message), ``print_line``, ``all_names``,
-``stop_mas`` and ``wake`` (something arrived for this agent: schedule it). No I/O in ``__init__``.
+``stop_mas``, ``wake`` (something arrived for this agent: schedule it) and ``environment_clock`` (the
+environment's own time, which the agent's timers then follow). No I/O in ``__init__``.
 """
 from __future__ import annotations
 
@@ -43,6 +44,13 @@ class AgentArch:
 
     def stop_mas(self, agent: Any, delay: float = 0.0) -> None:
         agent.stopped = True
+
+    def environment_clock(self) -> Callable[[], float] | None:
+        """The clock (seconds) of this agent's environment, if it has one of its own: a simulator's
+        simulated time. The agent's timers (``.wait``, ``.at``, answer timeouts, deadlines) then count in
+        it, as a ROS 2 node with ``use_sim_time`` follows the simulator; None (the default): wall time,
+        as in Jason. Asked when the agent gets this architecture."""
+        return None
 
     def wake(self, agent: Any) -> None:
         """Called (possibly from another thread) when the agent has new work."""

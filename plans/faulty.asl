@@ -125,11 +125,17 @@ aspect_turn(A, AA, T) :- (AA < 65 | AA > 115) & A < 0 & T = -90 - A.
 +!decide(D) : outcome(D, O)
    <- .print("diagnosis: ", O, " (faulty components: ", D, ")");
       -diagnosing;
+      !trustMyselfAgain(D);
       .progress(diagnosed, O).
 +!decide(D)
    <- .print("diagnosis: faulty components ", D);
       -diagnosing;
       .progress(diagnosed, D).
+
+// nothing is wrong with me (a false alarm: held for a moment, or a motion slower than its bound): I may
+// help the others again
++!trustMyselfAgain([]) <- -self_suspect.
++!trustMyselfAgain(_).
 
 // ---- asking for help: the first helper that accepts (the others are released) --------------------
 +!broadcastHelp(Ds) <- !askForHelp(Ds, 1).

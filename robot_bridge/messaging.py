@@ -11,6 +11,7 @@ import threading
 import time
 from concurrent.futures import Future
 from dataclasses import dataclass
+from typing import Callable
 
 from robot_bridge import actions
 from robot_bridge.protocol import Action, Completion, Percept
@@ -48,16 +49,18 @@ class _Pending:
 
 
 class PendingActions:
-    """Futures by action id, each with a wall-clock deadline. Thread-safe."""
+    """Futures by action id, each with a deadline on ``clock`` (seconds; the robot's clock when it has one:
+    a simulated motion's time bound is in simulated time; default wall time). Thread-safe."""
 
-    def __init__(self) -> None:
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
         self._items: dict[int, _Pending] = {}
         self._lock = threading.Lock()
+        self._clock = clock
 
     def add(self, action: Action, limit_s: float) -> "Future[Completion]":
         future: Future[Completion] = Future()
         with self._lock:
-            self._items[action.id] = _Pending(action, future, time.monotonic() + limit_s)
+            self._items[action.id] = _Pending(action, future, self._clock() + limit_s)
         return future
 
     def finish(self, action_id: int, completion: Completion) -> bool:
@@ -71,7 +74,7 @@ class PendingActions:
 
     def expire(self, who: str) -> None:
         """Fail every action whose answer is overdue with ``timeout``, naming ``who`` was silent."""
-        now = time.monotonic()
+        now = self._clock()
         with self._lock:
             late = [self._items.pop(i) for i, p in list(self._items.items()) if p.deadline <= now]
         for item in late:

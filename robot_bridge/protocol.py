@@ -103,6 +103,12 @@ class RobotBridge(abc.ABC):
     def shutdown(self) -> None:
         """Stop the robot, release connections, fail pending actions with reason ``shutdown``."""
 
+    def clock(self) -> float | None:
+        """The robot's own time in seconds (a simulator's simulated time), or None: the robot lives in wall
+        time (a real robot). An agent counts its waits and timeouts in this clock when there is one
+        (``robot_bridge.clock``), as a ROS 2 node with ``use_sim_time`` follows ``/clock``."""
+        return None
+
 
 def completed(completion: Completion) -> "Future[Completion]":
     """A future that is already resolved: for actions that fail (or succeed) at once."""

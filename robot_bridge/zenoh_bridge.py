@@ -9,10 +9,14 @@ key                                         payload
 ``faultmas/<mas>/robot/<robot>/actions``    agent -> robot: ``ActionRequest`` (with an id)
 ``faultmas/<mas>/robot/<robot>/status``     robot -> agent: ``ActionStatus`` once the motion finished
 ``faultmas/<mas>/robot/<robot>/percepts``   robot -> agent: ``PerceptSnapshot`` (source, ttl)
+``faultmas/<mas>/clock``                    robot -> agents: the robots' time, seconds as a decimal
+                                            number (a simulator's ``/clock``; optional)
 ==========================================  =================================================
 
 The server side for the simulator is ``robot_bridge.sim.server.SimServer``. A robot that stops answering
-fails its pending actions with ``timeout``; its percepts expire after their ``ttl``.
+fails its pending actions with ``timeout``; its percepts expire after their ``ttl``. The bridge's clock
+(``clock()``, which the agent's waits follow, and its actions' time bounds) follows the clock key while it
+ticks and runs at wall pace while it does not (``robot_bridge.clock``): a server without a clock is wall time.
 
 Options: ``mas`` (namespace, default ``faultmas``), ``session`` (an open ``zenoh.Session`` to share,
 e.g. the agent's own transport session) or ``connect`` (endpoints; a private loopback peer session is
@@ -22,21 +26,31 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
 from concurrent.futures import Future
 from typing import Any, ClassVar
 
 from robot_bridge import actions
+from robot_bridge.clock import FollowingClock
 from robot_bridge.messaging import PendingActions, PerceptStore, answer_timeout
 from robot_bridge.protocol import Action, Completion, Percept, RobotBridge, completed
 
 log = logging.getLogger(__name__)
 
 EXPIRE_INTERVAL_S = 0.05
+CLOCK_SILENCE_S = 5.0
+"""Wall seconds without a clock tick (sent every 20 ms) after which the server counts as gone; the clock
+then runs on at wall pace after ``robot_bridge.clock.STALE_S`` more."""
 
 
 def robot_key(mas: str, robot: str, channel: str) -> str:
     """The key expression of ``channel`` (``actions``, ``status`` or ``percepts``) of one robot."""
     return f"faultmas/{mas}/robot/{robot}/{channel}"
+
+
+def clock_key(mas: str) -> str:
+    """The key expression on which a MAS's robot server publishes the robots' time (seconds)."""
+    return f"faultmas/{mas}/clock"
 
 
 class ZenohBridge(RobotBridge):
@@ -51,7 +65,10 @@ class ZenohBridge(RobotBridge):
         self._session, self._owns_session = session, session is None
         self.connect = (connect,) if isinstance(connect, str) else tuple(connect)
         self.action_timeout = action_timeout
-        self._pending = PendingActions()
+        self._server_time: float | None = None
+        self._clock_heard = -float("inf")       # wall time of the last tick (the server sends one per 20 ms)
+        self._clock = FollowingClock(lambda: self._server_time, alive=self._server_ticks)
+        self._pending = PendingActions(self._clock)
         self._store = PerceptStore(robot)
         self._declared: list = []
         self._stop = threading.Event()
@@ -71,6 +88,7 @@ class ZenohBridge(RobotBridge):
             self._publisher,
             session.declare_subscriber(robot_key(self.mas, self.robot, "status"), self._on_status),
             session.declare_subscriber(robot_key(self.mas, self.robot, "percepts"), self._on_percepts),
+            session.declare_subscriber(clock_key(self.mas), self._on_clock),
         ]
         self._expirer = threading.Thread(target=self._expire_loop, name=f"zenoh-bridge-{self.robot}", daemon=True)
         self._expirer.start()
@@ -98,6 +116,10 @@ class ZenohBridge(RobotBridge):
 
     def percepts(self) -> list[Percept]:
         return self._store.percepts()
+
+    def clock(self) -> float:
+        """The server's time while it publishes one (a simulator's), else wall pace (``robot_bridge.clock``)."""
+        return self._clock()
 
     def shutdown(self) -> None:
         self._ready = False
@@ -131,6 +153,23 @@ class ZenohBridge(RobotBridge):
             self._store.receive(sample.payload.to_string())
         except (wire.WireError, UnicodeDecodeError) as exc:
             log.warning("%s: dropped a bad percept message: %s", self.robot, exc)
+
+    def _on_clock(self, sample) -> None:
+        text = ""
+        try:
+            text = sample.payload.to_string()
+            seconds = float(text)
+            if seconds != seconds or seconds in (float("inf"), float("-inf")):
+                raise ValueError("not a finite number")
+        except (UnicodeDecodeError, ValueError) as exc:
+            log.warning("%s: dropped a bad clock message %.40r (expected seconds as a number): %s", self.robot, text, exc)
+            return
+        self._server_time = seconds
+        self._clock_heard = time.monotonic()
+
+    def _server_ticks(self) -> bool:
+        """Whether the server's clock ticks arrive (a paused world's time stands; a dead server's does not)."""
+        return time.monotonic() - self._clock_heard < CLOCK_SILENCE_S
 
     def _expire_loop(self) -> None:
         while not self._stop.wait(EXPIRE_INTERVAL_S):

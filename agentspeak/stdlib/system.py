@@ -122,7 +122,8 @@ def set_random_seed(ctx, seed):
 def wait(ctx, what, timeout=None, elapsed=None):
     """``.wait(Ms)``, ``.wait({Event}[, Ms[, Elapsed]])`` or ``.wait(Condition[, Ms[, Elapsed]])``.
     With two arguments a timeout fails the goal; with three it does not (Elapsed says how long)."""
-    started = time.monotonic()
+    clock = ctx.agent.clock  # the agent's time (its environment's clock, if it has one): Elapsed counts in it
+    started = clock()
     from agentspeak.terms import Literal
     if isinstance(what, (int, float)):
         return Suspend(timeout=max(0.0, what / 1000.0), on_timeout=lambda c: True, reason="wait",
@@ -134,7 +135,7 @@ def wait(ctx, what, timeout=None, elapsed=None):
         seconds = timeout / 1000.0
 
     def done(c) -> bool:
-        return elapsed is None or c.unify(elapsed, normalise_number(round((time.monotonic() - started) * 1000)))
+        return elapsed is None or c.unify(elapsed, normalise_number(round((clock() - started) * 1000)))
 
     on_timeout = None
     if seconds is not None:
@@ -154,9 +155,10 @@ def wait(ctx, what, timeout=None, elapsed=None):
 
 @internal_action(".stopMAS", args=(0, 2))
 def stop_mas(ctx, delay=0, code=0):
-    """Stop every agent of the MAS."""
+    """Stop every agent of the MAS; with a delay (ms), each agent gets ``+jag_shutting_down(Delay)``
+    and runs until then, the caller too (as Jason)."""
     ctx.agent.arch.stop_mas(ctx.agent, (delay or 0) / 1000.0)
-    return Suspend(reason="stopping")
+    return True if delay else Suspend(reason="stopping")
 
 
 @internal_action(".include", args=(1, 2))

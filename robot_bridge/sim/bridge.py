@@ -23,6 +23,7 @@ from concurrent.futures import Future
 from typing import ClassVar
 
 from robot_bridge import actions, percepts
+from robot_bridge.clock import FollowingClock
 from robot_bridge.protocol import Action, Completion, Percept, RobotBridge, completed
 from robot_bridge.sim.runner import WorldRunner, shared_runner
 from robot_bridge.sim.world import CameraFrame, World
@@ -58,6 +59,7 @@ class SimBridge(RobotBridge):
         self._ready = False
         self._seen: tuple[float, list[Percept]] = (-1.0, [])
         self._unsubscribe = None
+        self._clock = FollowingClock(lambda: self.world.time, alive=self._stepping)
 
     @classmethod
     def for_team(cls, robots: list[str], **options: object) -> "dict[str, SimBridge]":
@@ -76,7 +78,8 @@ class SimBridge(RobotBridge):
             self.world.add_robot(self.robot, **self._placement)
         if self._placement["camera"]:
             self._detect = _load_detector()
-            self._unsubscribe = self.world.subscribe_camera(self.robot, self._on_frame, reads_pixels=True)
+            self._unsubscribe = self.world.subscribe_camera(self.robot, self._on_frame, reads_pixels=True,
+                                                            robots_only=True)
         if self.drive:
             self._runner = shared_runner(self.world, self.speed)
             self._runner.acquire()
@@ -109,8 +112,23 @@ class SimBridge(RobotBridge):
             found += seen
         return found
 
+    def clock(self) -> float:
+        """Simulated time (the world's), running on at wall pace if the world stops stepping."""
+        return self._clock()
+
+    def _stepping(self) -> bool:
+        """Whether this bridge's runner steps the world (however slowly): its clock is then the world's."""
+        runner = self._runner
+        return runner is not None and runner.running and runner.error is None
+
     def _on_frame(self, frame: CameraFrame) -> None:
-        """A new camera frame: detect robots in its pixels, as a real camera's frame would be."""
+        """A new camera frame: detect robots in its pixels, as a real camera's frame would be. A frame in
+        which no robot can be (none in the view within the depth range) is not rendered: the detector
+        would find nothing in it (``tests/robot_bridge/test_world_camera.py``), and in a team spread over
+        the arena that is most frames."""
+        if not getattr(frame, "may_show_robots", True):
+            self._seen = (frame.time, [])
+            return
         best = self._detect(frame.rgb, frame.depth, frame.camera)
         if best is None:
             self._seen = (frame.time, [])

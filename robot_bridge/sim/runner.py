@@ -6,8 +6,8 @@
   pace (1x), so idle periods still pass (a camera keeps its rate, an agent's ``.wait(500)`` sees about
   0.5 simulated seconds go by) instead of freezing or racing ahead.
 
-Agents' ``.wait`` and deadlines are in wall time; the simulated clock is the world's (``World.time``) and
-actions complete in simulated time. With ``speed=0`` a ``move(1)`` that takes 5 simulated seconds
+The simulated clock is the world's (``World.time``); actions complete in simulated time, and agents on
+the world's robots count their waits and deadlines in it too (``SimBridge.clock``, ``robot_bridge.clock``). With ``speed=0`` a ``move(1)`` that takes 5 simulated seconds
 typically completes within tens of wall milliseconds. For results that must not depend on the machine,
 drive the world directly (``World.step``/``run_until``) instead of through a runner.
 """

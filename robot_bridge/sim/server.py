@@ -3,7 +3,9 @@
 Each robot is a ``SimBridge`` in this process; agents reach it through ``robot_bridge.zenoh_bridge``
 (keys and wire format are documented there). Percept snapshots go out when they change (checked every
 ``interval`` seconds of wall time) and at least every ``refresh`` seconds, and always just before an
-action's status, so an agent that sees ``move`` completed also perceives where the robot ended up.
+action's status, so an agent that sees ``move`` completed also perceives where the robot ended up. The
+world's simulated time goes out every ``interval`` (the clock key: the agents' waits follow it, see
+``robot_bridge.clock``).
 A malformed request is answered with ``bad_args`` when it has an id, else dropped with a log line.
 """
 from __future__ import annotations
@@ -15,7 +17,7 @@ from typing import Any
 
 from robot_bridge.protocol import Action, Completion
 from robot_bridge.sim.bridge import SimBridge
-from robot_bridge.zenoh_bridge import robot_key
+from robot_bridge.zenoh_bridge import clock_key, robot_key
 
 log = logging.getLogger(__name__)
 
@@ -37,8 +39,12 @@ class SimServer:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.requests = 0
+        self._clock_publisher: Any = None
 
     def start(self) -> "SimServer":
+        self._clock_publisher = self.session.declare_publisher(clock_key(self.mas))
+        self._declared.append(self._clock_publisher)
+        self.publish_clock()
         for name in self.bridges:
             status = self.session.declare_publisher(robot_key(self.mas, name, "status"))
             percepts = self.session.declare_publisher(robot_key(self.mas, name, "percepts"))
@@ -75,8 +81,19 @@ class SimServer:
             self._last[name] = (text, now)
             self._publishers[name][1].put(text)
 
+    def publish_clock(self) -> None:
+        """Send the world's simulated time (every ``interval``, changed or not: the ticks also say the server
+        is there, so a paused world's time stands while a dead server's runs on, see ``robot_bridge.clock``)."""
+        if self.bridges:
+            self._clock_publisher.put(repr(next(iter(self.bridges.values())).world.time))
+
     def _loop(self) -> None:
         while not self._stop.wait(self.interval):
+            try:
+                self.publish_clock()
+            except Exception as exc:  # a closed session at shutdown
+                if not self._stop.is_set():
+                    log.warning("sim server: cannot publish the clock: %s", exc)
             for name in self.bridges:
                 try:
                     self.publish_percepts(name)

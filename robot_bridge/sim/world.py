@@ -22,7 +22,7 @@ import numpy as np
 
 from robot_bridge import percepts as vocabulary
 from robot_bridge.protocol import Completion, Percept
-from robot_bridge.sim import faults, imu, kobuki, motion, odometry
+from robot_bridge.sim import allocator, faults, imu, kobuki, motion, odometry
 from robot_bridge.sim.camera_frame import CameraFrame
 from robot_bridge.sim.faults import NO_FAULT, Fault
 from robot_bridge.sim.odometry_fusion import OdometryFusion, Pose2D
@@ -86,6 +86,8 @@ class _Robot:
     camera_listeners: list[Callable[[CameraFrame], None]] = field(default_factory=list)
     pixel_readers: int = 0
     """How many of ``camera_listeners`` read every frame's pixels (their frames are rendered in parallel)."""
+    robot_readers: int = 0
+    """How many of those read only frames that may show a robot (``DeferredFrame.may_show_robots``)."""
     last_frame: float = -math.inf
     over_current_at: list[float] = field(default_factory=lambda: [-math.inf, -math.inf])
     """When each motor last drew over-current (simulated seconds)."""
@@ -139,6 +141,8 @@ class World:
             base = kobuki.BaseState(x=x, y=y, yaw=math.radians(yaw_deg), time=self.time)
             ticks = kobuki.encoder_ticks(base)
             mount = CameraMount() if camera is True else (camera or None)
+            if mount is not None:     # frames will be rendered here, world after world: bounded heaps
+                allocator.limit_arenas()
             gyro_rng = np.random.default_rng([self.seed, key, 2]) if self.noise else None
             robot = _Robot(name, base, rng, np.random.default_rng([self.seed, key, 1]), fault,
                            odometry.Odometry(ticks=ticks), ticks, camera=mount,
@@ -420,12 +424,14 @@ class World:
 
     # ------------------------------------------------------------------ cameras
     def subscribe_camera(self, name: str, listener: Callable[[CameraFrame], None],
-                         reads_pixels: bool = False) -> Callable[[], None]:
+                         reads_pixels: bool = False, robots_only: bool = False) -> Callable[[], None]:
         """Call ``listener`` with each frame robot ``name``'s camera takes at its rate; returns unsubscribe.
 
         Frames render their pixels when first read. A listener that reads every frame (a detector)
         says so with ``reads_pixels``: then the frames due at the same step are rendered side by side
         on the cores before the listeners are called, instead of one after the other in the listeners.
+        ``robots_only`` (with ``reads_pixels``): it reads only the frames that may show a robot (a robot
+        detector checks ``DeferredFrame.may_show_robots`` first), so the others are not rendered for it.
         """
         with self._lock:
             robot = self._robot(name)
@@ -433,12 +439,14 @@ class World:
                 raise ValueError(f"robot {name!r} has no camera (add it with camera=True)")
             robot.camera_listeners.append(listener)
             robot.pixel_readers += bool(reads_pixels)
+            robot.robot_readers += bool(reads_pixels and robots_only)
 
         def unsubscribe() -> None:
             with self._lock:
                 if listener in robot.camera_listeners:
                     robot.camera_listeners.remove(listener)
                     robot.pixel_readers -= bool(reads_pixels)
+                    robot.robot_readers -= bool(reads_pixels and robots_only)
         return unsubscribe
 
     def camera_frame(self, name: str) -> CameraFrame:
@@ -457,7 +465,10 @@ class World:
             if robot.camera_listeners:
                 every = max(1, round(1.0 / (robot.camera.rate_hz * self.dt)))
                 if self._steps % every == 0:
-                    frames.append((list(robot.camera_listeners), self._render(robot), robot.pixel_readers > 0))
+                    frame = self._render(robot)
+                    read = robot.pixel_readers > robot.robot_readers or \
+                        (robot.robot_readers > 0 and frame.may_show_robots)
+                    frames.append((list(robot.camera_listeners), frame, read))
         return frames
 
     def _render(self, robot: _Robot) -> CameraFrame:

@@ -138,6 +138,16 @@ def test_without_any_helper_the_robot_reports_undiagnosed_with_its_candidates():
     assert "[left_encoder,right_encoder]" in candidates and "[left_motor,right_motor]" in candidates
 
 
+def test_a_run_ends_at_its_limit_in_simulated_time():
+    """Alone, the robot asks for help for 4 x 3 simulated seconds; a 3 s limit ends the run first, and it
+    counts as not finished (the agents wait in simulated time, so the limit does not depend on the load)."""
+    scenario = Scenario((RobotSetup("faulty", 0.0, 0.0, 0.0, "encoders", "faulty.asl"),), seed=6)
+    result = run_scenario(scenario, processes=False, timeout=60, sim_timeout=3.0)
+    assert not result.finished and result.outcome == "timeout"
+    assert 3.0 <= result.world.time < 8.0
+    assert marks_of(result, "help_requested") and not marks_of(result, "undiagnosed")
+
+
 def test_six_robots_two_of_them_faulty_diagnose_concurrently():
     scenario = team_scenario(6, 2, seed=1)
     result = run_scenario(scenario, processes=True, timeout=180)

@@ -100,3 +100,49 @@ def test_no_server_means_setup_names_the_key_and_a_silent_robot_times_out():
             mute.shutdown()
     finally:
         session.close()
+
+
+def test_the_bridges_clock_is_the_servers_and_an_actions_time_bound_counts_in_it(caplog):
+    """A simulator 20 times slower than real time: a move's bound (0.3 s here) is simulated seconds, so the
+    move is still pending after a wall second; it fails once the server's clock passes the bound. A bad
+    clock message is dropped with a log line."""
+    import threading
+    import time
+
+    from robot_bridge.zenoh_bridge import clock_key
+
+    endpoint = loopback_endpoint()
+    session = zenoh.open(build_config(ZenohOptions(listen=(endpoint,))))
+    percepts = session.declare_publisher(robot_key("zc", "slow", "percepts"))
+    ticks = session.declare_publisher(clock_key("zc"))
+    sim = [10.0]
+    stop = threading.Event()
+
+    def serve() -> None:
+        while not stop.wait(0.05):
+            percepts.put('{"source":"sim","literals":["stopped"]}')
+            ticks.put(repr(sim[0]))
+            sim[0] += 0.0025
+    server = threading.Thread(target=serve, daemon=True)
+    server.start()
+    bridge = ZenohBridge("slow", mas="zc", session=session, action_timeout=0.3)
+    try:
+        bridge.setup(timeout=5)
+        deadline = time.monotonic() + 5
+        while not bridge._clock.following and time.monotonic() < deadline:
+            time.sleep(0.02)
+        start = bridge.clock()
+        pending = bridge.act(Action("move", (1.0,)))
+        time.sleep(1.0)
+        assert not pending.done()
+        assert 0.0 < bridge.clock() - start < 0.2
+        session.put(clock_key("zc"), "soon")          # dropped, named
+        sim[0] += 1.0
+        done = pending.result(5)
+        assert (done.ok, done.reason) == (False, "timeout")
+        assert any("bad clock message" in r.getMessage() for r in caplog.records)
+    finally:
+        stop.set()
+        server.join(2)
+        bridge.shutdown()
+        session.close()

@@ -36,8 +36,8 @@ from robot_bridge.sim.camera.pipeline import MarkerPixels, _render, frames_rende
 from robot_bridge.sim.camera.renderer import _renderer
 from robot_bridge.sim.camera.scene import (BoxProp, CameraRig, CylinderProp, DepthSensor, Pose, RGB, RobotLook, Scene,
                                            Wall)
-from robot_bridge.sim.camera.truth import TrueView, to_camera, true_view
+from robot_bridge.sim.camera.truth import TrueView, may_show_robots, to_camera, true_view
 
 __all__ = ["CameraFrame", "BoxProp", "CameraRig", "CylinderProp", "DepthSensor", "Pose", "RGB", "RobotLook", "Scene",
-           "Wall", "TrueView", "to_camera", "true_view", "MarkerPixels", "frames_rendered", "render",
+           "Wall", "TrueView", "may_show_robots", "to_camera", "true_view", "MarkerPixels", "frames_rendered", "render",
            "render_with_pixels", "DeferredFrame", "deferred_frame", "render_all", "render_threads"]

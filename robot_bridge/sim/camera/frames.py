@@ -17,6 +17,7 @@ import numpy as np
 
 from robot_bridge.sim.camera.pipeline import _frames, _frames_lock, render
 from robot_bridge.sim.camera.scene import CameraRig, Pose, Scene
+from robot_bridge.sim.camera.truth import may_show_robots
 from robot_bridge.sim.camera_frame import CameraFrame
 
 
@@ -49,6 +50,13 @@ class DeferredFrame(CameraFrame):
     @property
     def rendered(self) -> bool:
         return self._pixels is not None
+
+    @property
+    def may_show_robots(self) -> bool:
+        """Whether a robot's markers may be in this frame (``truth.may_show_robots``); False: a detector
+        finds nothing in it and need not read its pixels."""
+        rig, pose, robots, scene, _ = self._job
+        return may_show_robots(rig, pose, robots, scene)
 
     @property
     def job(self) -> tuple[CameraRig, Pose, tuple[Pose, ...], Scene, int]:

@@ -9,7 +9,12 @@ import math
 from dataclasses import dataclass
 
 from perception import markers
-from robot_bridge.sim.camera.scene import CameraRig, Pose
+from robot_bridge.sim.camera.scene import CameraRig, Pose, Scene
+
+FAR_MARGIN_M = 0.5
+"""Beyond the depth sensor's range by this much (15 noise sigmas there), a cylinder reads no depth at all."""
+EDGE_MARGIN_M = 0.05
+"""Sideways slack beyond a cylinder's radius at the image's edges."""
 
 
 @dataclass(frozen=True)
@@ -49,3 +54,21 @@ def true_view(rig: CameraRig, camera_pose: Pose, robot: Pose) -> TrueView:
         front_xz=(fx_, fz_), rear_xz=(bx_, bz_),
         front_u=cam.fx * fx_ / fz_ + cam.cx if fz_ > 0 else math.nan,
         rear_u=cam.fx * bx_ / bz_ + cam.cx if bz_ > 0 else math.nan)
+
+
+def may_show_robots(rig: CameraRig, camera_pose: Pose, robots: "tuple[Pose, ...] | list[Pose]", scene: Scene) -> bool:
+    """Whether a marker cylinder of any of ``robots`` may be in the view: in front of the camera, within the
+    image's columns and within the depth sensor's range (with margins). False means the detector cannot
+    find a robot in the frame (a pair needs a cylinder with depth readings, ``perception.detect``), so a
+    detector need not render it: in a team spread over an arena most frames show nobody."""
+    cam = rig.camera
+    tan_half = max(cam.cx, cam.width - cam.cx) / cam.fx
+    far = scene.depth.max_m + FAR_MARGIN_M
+    reach = markers.CYLINDER_RADIUS_M + EDGE_MARGIN_M
+    for rx, ry, ryaw in robots:
+        c, s = math.cos(ryaw), math.sin(ryaw)
+        for offset in (markers.FRONT_OFFSET_M, markers.REAR_OFFSET_M):
+            x, z = to_camera(rig, camera_pose, rx + c * offset, ry + s * offset)
+            if -reach < z < far and abs(x) <= max(z, 0.0) * tan_half + 2 * reach:
+                return True
+    return False
