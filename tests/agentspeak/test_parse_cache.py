@@ -25,9 +25,14 @@ twice(X, Y) :- Y = X * 2.
     .sort(L, S);
     ?p(a)[note(N)];
     X = my.twice(math.abs(-4));
-    .print(S, " ", N, " ", X, " ", .length([])).
+    .print(S, " ", N, " ", X, " ", .length([]));
+    !a.
++!a <- !s(1); !s(2). {
+    +!s(1) <- .print(inner).
+}
++!s(N) <- .print(outer, N).
 """
-EXPECTED = "[prog] [1,2,3] x 8 0"
+EXPECTED = "[prog] [1,2,3] x 8 0\n[prog] inner\n[prog] outer2"
 
 
 def _run(argv: list[str], cache: Path, seed: str, watched: tuple[str, ...] = ("lark", "agentspeak.parser")):
@@ -44,7 +49,7 @@ def _run(argv: list[str], cache: Path, seed: str, watched: tuple[str, ...] = ("l
     return json.loads(done.stdout.splitlines()[-1])
 
 
-def test_a_file_run_again_skips_the_parser_and_prints_the_same(tmp_path: Path) -> None:
+def test_a_file_run_again_skips_the_parser_and_prints_the_same_and_an_edited_one_is_parsed(tmp_path: Path) -> None:
     source = tmp_path / "prog.asl"
     source.write_text(PROGRAM)
     cache = tmp_path / "cache"
@@ -53,15 +58,8 @@ def test_a_file_run_again_skips_the_parser_and_prints_the_same(tmp_path: Path) -
     assert len(list((cache / parse_cache.SUBDIRECTORY).glob("program-prog.asl-*.pickle"))) == 1
     status, out, imported = _run(["asl", "run", str(source)], cache, "2")      # another hash seed
     assert (status, out.strip(), imported) == (0, EXPECTED, [])
-
-
-def test_an_edited_file_is_parsed_again(tmp_path: Path) -> None:
-    source = tmp_path / "prog.asl"
-    source.write_text(PROGRAM)
-    cache = tmp_path / "cache"
-    _run(["asl", "run", str(source)], cache, "1")
     source.write_text(PROGRAM.replace('" ", X,', '" ", X + 1,'))
-    status, out, imported = _run(["asl", "run", str(source)], cache, "2")
+    status, out, imported = _run(["asl", "run", str(source)], cache, "3")
     assert (status, out.strip(), imported) == (0, EXPECTED.replace(" 8 ", " 9 "), ["agentspeak.parser", "lark"])
 
 
@@ -95,6 +93,28 @@ def test_a_loaded_program_is_the_parsed_one_in_this_process(tmp_path: Path, monk
     from agentspeak.terms import NIL
     assert loaded.beliefs[1].args[0] is NIL                      # `t is NIL` tests hold
     assert loaded.plans[0].atomic
+    assert [len(p.sub_plans) for p in loaded.plans] == [len(p.sub_plans) for p in parsed.plans] == [0, 1, 0]
+
+
+def test_kept_literals_hash_as_the_loading_process_does(tmp_path: Path, monkeypatch) -> None:
+    """String hashes differ between processes: a literal must not bring its hash from the one that kept it."""
+    monkeypatch.setenv("FAULTMAS_CACHE_DIR", str(tmp_path))
+    source = str(tmp_path / "prog.asl")
+    parse_cache._PROGRAMS.clear()
+    {hash(b) for b in parse_program(PROGRAM, source).beliefs}   # hashed here (the parser shares these terms) ...
+    parse_cache.cached_program(PROGRAM, source)                  # ... then kept by this process
+    code = ("import sys\n"
+            "from agentspeak import parse_cache\n"
+            "from agentspeak.parser import parse_program\n"
+            f"text, source = {PROGRAM!r}, {source!r}\n"
+            "parse_cache._parse = None\n"                          # loaded, or this fails
+            "loaded = parse_cache.cached_program(text, source)\n"
+            "fresh = set(parse_program(text, source + '.fresh').beliefs)\n"
+            "print([b in fresh for b in loaded.beliefs])\n")
+    for seed in ("7", "8"):
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                              env={**os.environ, "PYTHONHASHSEED": seed})
+        assert done.stdout.strip() == "[True, True, True]", done.stderr
 
 
 def test_anything_an_entry_depends_on_makes_it_miss(tmp_path: Path, monkeypatch) -> None:
