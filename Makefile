@@ -69,18 +69,22 @@ campaign: speedups
 	FAULTMAS_CHAOS=campaign $(PY) -m pytest -q -s -p no:cacheprovider tests/hardening/test_chaos_campaign.py \
 		tests/hardening/test_multihost_netns.py
 
-# The soak (tests/hardening/soak.py): team-of-6 runs back to back until SOAK_SIM_SECONDS of simulated time
-# (default 1 h) or SOAK_WALL_SECONDS of wall time; RSS slope, threads, descriptors, intentions left per run.
+# The soak (tests/hardening/soak.py): one team of 6 that stays up and diagnoses fault after fault until
+# SOAK_SIM_SECONDS of simulated time (default 1 h) or SOAK_WALL_SECONDS of wall time; RSS slopes (this process
+# and every agent), threads, descriptors, Zenoh declarations, stuck intentions, per task.
 SOAK_SIM_SECONDS ?= 3600
 SOAK_WALL_SECONDS ?= 36000
 soak: speedups
 	$(PY) -m tests.hardening.soak --sim-seconds $(SOAK_SIM_SECONDS) --wall-seconds $(SOAK_WALL_SECONDS) --out soak.jsonl
 
-# Jason 3.3.2's own AgentSpeak unit tests, run unchanged from ../shared (see tests/jason_suite): fails
-# unless every executed test passes, and prints executed/passed
+# Jason 3.3.2's own AgentSpeak unit tests, run unchanged from ../shared (see tests/jason_suite), in one
+# process and with --processes (both run; fails unless every executed test passed in both); prints
+# executed/passed for each
 JASON_TESTS ?= ../shared/jason-unit-tests
 jason-tests: speedups
-	$(PY) -m tests.jason_suite $(abspath $(JASON_TESTS))
+	@$(PY) -m tests.jason_suite $(abspath $(JASON_TESTS)); in_process=$$?; \
+	$(PY) -m tests.jason_suite $(abspath $(JASON_TESTS)) --processes; processes=$$?; \
+	exit $$((in_process | processes))
 
 # A user's install, slow (~2 min: a fresh venv, plain `pip install '.[ros2]'`, then `faultmas run`), so not
 # part of `make test`: tests/test_install.py (issue 23).

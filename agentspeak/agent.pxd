@@ -11,7 +11,8 @@ cdef class Agent:
     cdef public object name, arch, _arch_seen, _perceive, registry, tro, bb, plans, events, running
     cdef public object suspended, mailbox, feedback, timers, event_waiters, condition_waiters
     cdef public object pending_futures, pending_asks, atomic_intention, percepts, source_file, stopped
-    cdef public object cycles, failures_unhandled, dropped, current_intention, sleeping_evt, timer_clock, clock
+    cdef public object cycles, failures_unhandled, dropped, current_intention, sleeping_evt, timer_lag, clock
+    cdef public object timer_seen, timer_busy
 
     cpdef cycle(self)
 

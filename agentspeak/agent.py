@@ -42,8 +42,8 @@ _JAG_AWAKING = Literal("jag_awaking")
 _seq = itertools.count()
 
 TIMER_STEP = 0.001
-"""How far past its timers a busy agent's clock moves in one reasoning cycle (seconds), see ``sense``."""
-TIMER_MAX_LAG = 1.0
+"""How far a busy agent's timer clock moves in one reasoning cycle at most (seconds), see ``sense``."""
+TIMER_MAX_LAG = 2.0
 """... and how far behind the real clock it may fall at most."""
 
 
@@ -69,7 +69,9 @@ class Agent:
         self.mailbox: deque = deque()          # appended from any thread
         self.feedback: deque = deque()         # callables run in the sense phase (thread-safe append)
         self.timers: list = []                 # heap of (when, seq, callback)
-        self.timer_clock = 0.0                 # up to when timers have been run (see sense)
+        self.timer_lag = 0.0                   # how far the timer clock is behind the real one (see sense)
+        self.timer_seen = 0.0                  # real time of the last look at the timers
+        self.timer_busy = False                # busy at that look
         self.event_waiters: list = []          # (trigger pattern, intention, suspend)
         self.condition_waiters: list = []      # (intention, suspend)
         self.pending_futures = 0               # actions / awaited results in flight
@@ -98,9 +100,9 @@ class Agent:
         old = getattr(self, "clock", None)
         if old is not None and old is not clock and self.timers:
             now, then = old(), clock()
-            self.timers = [(then + (when - now), seq, callback) for when, seq, callback in self.timers]
+            self.timers = [(then + (when + self.timer_lag - now), seq, callback) for when, seq, callback in self.timers]
+            self.timer_lag = 0.0   # deadlines now on the new clock itself
             heapq.heapify(self.timers)
-            self.timer_clock = then + (self.timer_clock - now)
         self.clock = clock
         """Seconds, the agent's time: its timers (``.wait``, ``.at``, answer and action timeouts) count in
         it. Wall time (``time.monotonic``), as in Jason, unless the environment has a clock of its own (a
@@ -314,7 +316,8 @@ class Agent:
         return not (self.has_work() or self.timers or self.pending_futures)
 
     def next_timer(self) -> float | None:
-        return self.timers[0][0] if self.timers else None
+        """When the next timer is due at the earliest, on the agent's clock (``self.clock``)."""
+        return self.timers[0][0] + self.timer_lag if self.timers else None
 
     # -- sense
     def sense(self) -> bool:
@@ -330,21 +333,23 @@ class Agent:
             did = True
         timers = self.timers
         if timers:
-            # The timers run in the order of their deadlines, and a busy agent (events or intentions to
-            # run) moves its timer clock at most TIMER_STEP per cycle: when the process got no CPU for a
-            # while, what an agent on a thread of its own does in a few cycles after one deadline still
-            # happens before the next (.wait(50) then 20 formulas, before another intention's .wait(150)
-            # ends), as in Jason on a machine with time to spare. An idle agent's clock is the real one.
+            # Timers run by the agent's timer clock, in the order of their deadlines on it. While the agent
+            # stays busy (events or intentions to run) that clock moves at most TIMER_STEP per cycle, and
+            # deadlines are set on it: when the process gets the CPU seldom, what an agent on a thread of
+            # its own does in a few cycles after one deadline still happens before the next (.wait(50)
+            # then 20 formulas, before another intention's .wait(150) ends; six .wait(50) in a row end
+            # before a .wait(500) begun with them), as Jason on a machine with time to spare. The clock
+            # falls at most TIMER_MAX_LAG behind, and no timer ends before its time on the real clock.
             now = self.clock()   # the agent's time: its environment's clock, if it has one
-            if self.running or self.events:
-                clock = self.timer_clock + TIMER_STEP
-                if clock > now:
-                    clock = now
-                elif clock < now - TIMER_MAX_LAG:
-                    clock = now - TIMER_MAX_LAG
-            else:
-                clock = now
-            self.timer_clock = clock
+            busy = bool(self.running or self.events)
+            if busy and self.timer_busy:
+                slow = now - self.timer_seen - TIMER_STEP
+                if slow > 0.0:
+                    lag = self.timer_lag + slow
+                    self.timer_lag = lag if lag < TIMER_MAX_LAG else TIMER_MAX_LAG
+            self.timer_seen = now
+            self.timer_busy = busy
+            clock = now - self.timer_lag
             if timers[0][0] <= clock:
                 due = []
                 while timers and timers[0][0] <= clock:
@@ -397,13 +402,16 @@ class Agent:
         if intention is not None and intention.dropped:
             return True
         self.current_intention = intention  # what .intention(..., current) means in a plan context
-        if intention is not None:
-            if intention.stack:
-                top_plan = intention.stack[-1].plan
-                if top_plan.sub_library is not None or top_plan.scope is not None:
-                    return self._deliberate_in_scope(ev)
-        elif self.plans.has_update_sub_plans and trigger.kind == BEL and trigger.op != META:
-            self._branch_for_update(trigger)
+        if self.bb.select_option:
+            return self._select_option_bb(ev)
+        if self.plans.has_sub_plans:  # Jason(ER): only agents with sub-plans pay for these checks
+            if intention is not None:
+                if intention.stack:
+                    top_plan = intention.stack[-1].plan
+                    if top_plan.sub_library is not None or top_plan.scope is not None:
+                        return self._deliberate_in_scope(ev)
+            elif self.plans.has_update_sub_plans and trigger.kind == BEL and trigger.op != META:
+                self._branch_for_update(trigger)
         lit = trigger.literal
         if type(lit) is Literal:
             # PlanLibrary.relevant, inlined; every plan listed under the key has the event's
@@ -477,6 +485,51 @@ class Agent:
         self._no_plan(ev, "no_applicable", f"found a goal for which there is no applicable plan: {trigger}")
         return True
 
+    def _select_option_bb(self, ev: Event) -> bool:
+        """Jason 3.3's ``select__option(Event, IntentionId, Plan, Unifier)`` rules: every option (each
+        applicable plan with each solution of its context) is tested with the rule, and the first that
+        passes is taken (Agent.selectOptionBB; -1 is the id of an external event's intention)."""
+        from agentspeak.solver import solve
+        from agentspeak.terms import make_list
+        trigger, intention = ev.trigger, ev.intention
+        lit = trigger.literal
+        options: list = []
+        for plan in self.plans.relevant(trigger):
+            b: dict = {}
+            if not unify(plan.trigger.literal, lit, b, []):
+                continue
+            if plan.context is None:
+                options.append((plan, b))
+                continue
+            try:
+                for _ in solve(self, plan.context, b, []):
+                    options.append((plan, dict(b)))
+            except (SolveError, ArithmeticError_, RecursionError, TypeError, ValueError) as exc:
+                log.warning("[%s] error in the context of the plan at %s:%s: %s", self.name,
+                            plan.source_file, plan.line, getattr(exc, "message", exc))
+        event = P.PlanTerm(plan=Plan(Trigger(trigger.op, trigger.kind, lit)), bare=True)
+        ident = intention.id if intention is not None else -1
+        chosen = None
+        for plan, b in options:
+            unifier = make_list([Literal("map", (Var(v.name), resolve(v, b))) for v in b
+                                 if type(v) is Var and not v.name.startswith("_")])
+            query = Literal("select__option", (event, ident, P.PlanTerm(plan=plan.resolved(b)), unifier))
+            try:
+                ok = solve_first(self, query, {})
+            except (SolveError, ArithmeticError_, RecursionError, TypeError, ValueError) as exc:
+                log.warning("[%s] error in select__option: %s", self.name, getattr(exc, "message", exc))
+                ok = False
+            if ok and chosen is None:
+                chosen = (plan, b)
+        if chosen is None:
+            kind = "applicable" if self.plans.relevant(trigger) else "relevant"
+            self._no_plan(ev, "no_" + kind, f"found a goal for which there is no {kind} plan: {trigger}")
+            return True
+        self.push_im(ev, *chosen)
+        if trigger.op == ADD and trigger.kind == ACHIEVE and self.plans.has_meta:
+            self.goal_state(trigger, "executing")
+        return True
+
     # ------------------------------------------------------------------ Jason(ER) sub-plans
     def _deliberate_in_scope(self, ev: Event) -> bool:
         """An event of an intention whose top plan has sub-plans, or is one: its plans are looked for
@@ -499,6 +552,18 @@ class Agent:
         kind = "relevant" if error == "no_relevant" else "applicable"
         self._no_plan(ev, error, f"found a goal for which there is no {kind} plan: {trigger}")
         return True
+
+    @staticmethod
+    def _relevant_in_scope(trigger: Trigger, intention: Intention) -> bool:
+        """A plan for ``trigger`` among the sub-plans the intention's top plan sees (its own, then the
+        blocks around it): where a failure plan ``-!g`` of a sub-goal may be written."""
+        top = intention.stack[-1].plan if intention.stack else None
+        library = None if top is None else (top.sub_library if top.sub_library is not None else top.scope)
+        while library is not None:
+            if library.relevant(trigger):
+                return True
+            library = library.father
+        return False
 
     def _option(self, plan: Plan, lit: Term, start: dict | None) -> dict | None:
         """The bindings with which ``plan`` is applicable to the event literal ``lit`` (None if it is not)."""
@@ -582,8 +647,8 @@ class Agent:
         # an internal subgoal without a plan: fail it (its -!g plan, or the callers')
         lit = trigger.literal
         annots = self._failure_annots(error, message, self._current_instr(intention))
-        fkey_lit = lit
-        if self.plans.relevant(Trigger(DEL, trigger.kind, fkey_lit)):
+        failed = Trigger(DEL, trigger.kind, lit)
+        if self.plans.relevant(failed) or (self.plans.has_sub_plans and self._relevant_in_scope(failed, intention)):
             self.post_internal(Trigger(DEL, trigger.kind, _add_annots(lit, annots)), intention)
             return
         self._fail(intention, error, message, annots=annots)
@@ -866,7 +931,9 @@ class Agent:
                 if self.plans.has_meta:
                     self.goal_state(Trigger(ADD, trig.kind, resolve(im.event_literal, im.b)), "failed",
                                     Literal(error))
-                if type(lit) is Literal and self.plans.relevant(Trigger(DEL, trig.kind, lit)):
+                failed = Trigger(DEL, trig.kind, lit)
+                if type(lit) is Literal and (self.plans.relevant(failed) or (
+                        self.plans.has_sub_plans and self._relevant_in_scope(failed, intention))):
                     self.events.append(Event(Trigger(DEL, trig.kind, _add_annots(lit, annots)), intention, im))
                     self._notify_waiters(self.events[-1].trigger)
                     self._suspend(intention, "event")
@@ -1010,10 +1077,11 @@ class Agent:
                 self._resume(intention, True, susp)
 
     def add_timer(self, seconds: float, callback: Callable[[], None]) -> None:
-        now = self.clock()
-        if not self.timers:
-            self.timer_clock = now
-        heapq.heappush(self.timers, (now + max(0.0, seconds), next(_seq), callback))
+        now = self.clock()   # the agent's time: its environment's clock, if it has one
+        if not self.timers:  # (set in a cycle of this agent: the time to its next cycle is busy if it is then)
+            self.timer_lag, self.timer_seen, self.timer_busy = 0.0, now, True
+        # on the timer clock: ``timers[0][0] + timer_lag`` is the real time it is due at the earliest
+        heapq.heappush(self.timers, (now - self.timer_lag + max(0.0, seconds), next(_seq), callback))
         self.arch.wake(self)
 
     def post_feedback(self, callback: Callable[[], None]) -> None:

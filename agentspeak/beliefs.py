@@ -65,6 +65,9 @@ class _Bucket:
         return s
 
 
+_SELECT_OPTION_KEY = (False, "select__option", 4)
+
+
 class BeliefBase:
     """Facts and rules of one agent."""
 
@@ -74,6 +77,7 @@ class BeliefBase:
         self._front = itertools.count(-1, -1)
         self._back = itertools.count(1)
         self.size = 0
+        self.select_option = False  # a select__option/4 rule chooses among a goal's options (Jason 3.3)
 
     # -- facts -------------------------------------------------------------------------------
     def add(self, lit: Literal, at_end: bool = False) -> Literal | None:
@@ -185,6 +189,8 @@ class BeliefBase:
     # -- rules -------------------------------------------------------------------------------
     def add_rule(self, rule: Rule, at_end: bool = True) -> None:
         rules = self._rules.setdefault(rule.head.key, [])
+        if rule.head.key == _SELECT_OPTION_KEY:
+            self.select_option = True
         if at_end:
             rules.append(rule)
         else:
@@ -195,6 +201,8 @@ class BeliefBase:
         for i, r in enumerate(rules):
             if str(r) == str(rule):
                 del rules[i]
+                if rule.head.key == _SELECT_OPTION_KEY and not rules:
+                    self.select_option = False
                 return True
         return False
 

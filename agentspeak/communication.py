@@ -13,7 +13,6 @@ import itertools
 import logging
 import os
 import time
-import uuid
 from typing import Any
 
 from agentspeak.beliefs import SELF, SOURCE_SELF, source
@@ -28,7 +27,7 @@ PERFORMATIVES = ("tell", "untell", "achieve", "unachieve", "askOne", "askAll", "
                  "untellHow", "askHow", "signal")
 
 _ids = itertools.count(1)
-_prefix = f"{os.getpid():x}{uuid.uuid4().hex[:6]}"
+_prefix = f"{os.getpid():x}{os.urandom(3).hex()}"   # not uuid: its import (platform) costs start-up
 
 
 def new_message_id() -> str:

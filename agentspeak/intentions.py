@@ -134,6 +134,7 @@ class PlanLibrary:
         self.has_extras = False     # either of the two above: the end of a cycle checks them
         self.has_jag = False        # a +jag_sleeping/+jag_awaking plan exists: the agent posts them
         self.has_update_sub_plans = False  # a sub-plan reacts to +b/-b: such events may branch intentions
+        self.has_sub_plans = False  # some plan has sub-plans (failure plans are looked for in them too)
         self.father: PlanLibrary | None = None  # a library of sub-plans: the library of their plan
 
     def add(self, plan: Plan, at_end: bool = True) -> None:
@@ -168,6 +169,7 @@ class PlanLibrary:
             sub.add(q)
         root = self
         while root is not None:
+            root.has_sub_plans = True
             if sub.has_goal_conditions:
                 root.has_goal_conditions = root.has_extras = True
             if sub.has_update_sub_plans or any(p.trigger.kind == BEL and p.trigger.op != "^" for p in sub.plans):

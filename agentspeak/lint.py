@@ -57,7 +57,9 @@ def internal_action_problems(program: Program, registry: Registry = STDLIB) -> l
     if not registry._extensions_loaded:
         registry.load_extensions()
     places: list[tuple[object, int]] = []
-    for plan in program.plans:
+    plans = list(program.plans)
+    for plan in plans:
+        plans.extend(plan.sub_plans)  # Jason(ER) sub-plans are checked too
         if plan.context is not None:
             places.append((plan.context, plan.line))
         places.extend((term, line or plan.line) for term, line in _body_terms(plan.body))

@@ -5,7 +5,6 @@ instruction keeps the source line it came from so failures can say ``code_line``
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
 from typing import Callable
 
 from agentspeak.terms import (
@@ -300,37 +299,42 @@ def body_variables(body: tuple, out: list | None = None) -> list:
 _plan_counter = [0]
 
 
-@dataclass(eq=False)
 class Plan:
-    """``@label trigger : context <- body.``"""
+    """``@label trigger : context <- body.``
 
-    trigger: Trigger
-    context: Term | None = None
-    body: tuple = ()
-    label: Literal | None = None
-    source_file: str = ""
-    line: int = 0
-    atomic: bool = field(init=False, default=False)
-    all_unifs: bool = field(init=False, default=False)
-    goal_condition: Term | None = field(init=False, default=None)
-    """Jason 3.2's ``+!g <: C <- body``: the goal is achieved as soon as C holds."""
-    sub_plans: tuple = field(init=False, default=())
-    """Jason(ER)'s ``+!g <- body. { sub-plans }``: plans relevant only while this plan's intended
-    means is on an intention; their variables of the same name are this plan's (the parser maps them)."""
-    sub_library: object = field(init=False, default=None, repr=False)
-    """The ``PlanLibrary`` of ``sub_plans`` once the plan is in an agent's library (its father is that
-    library); ``scope`` is the library a sub-plan lives in."""
-    scope: object = field(init=False, default=None, repr=False)
-    matcher: tuple | None = field(init=False, default=None, repr=False)
-    """(trigger variables, compiled context, tail-call key) for deliberation, made on first use
-    (``plan_matcher``); shared by every agent whose plan has the same terms."""
+    Attributes beside the constructor's: ``atomic`` and ``all_unifs`` (from the label's annotations),
+    ``goal_condition`` (Jason 3.2's ``+!g <: C <- body``: the goal is achieved as soon as C holds) and
+    ``matcher`` ((trigger variables, compiled context, tail-call key) for deliberation, made on first use
+    by ``plan_matcher``; shared by every agent whose plan has the same terms); ``sub_plans`` (Jason(ER)'s
+    ``+!g <- body. { sub-plans }``: plans relevant only while this plan's intended means is on an intention;
+    their variables of the same name are this plan's, the parser maps them); ``sub_library`` (the
+    ``PlanLibrary`` of ``sub_plans`` once the plan is in an agent's library, its father that library) and
+    ``scope`` (the library a sub-plan lives in). A plain class, not a dataclass: importing ``dataclasses``
+    is a noticeable part of a hello world's start (issue 23)."""
 
-    def __post_init__(self) -> None:
-        self.refresh_label_flags()
+    def __init__(self, trigger: Trigger, context: Term | None = None, body: tuple = (), label: Literal | None = None,
+                 source_file: str = "", line: int = 0) -> None:
+        self.trigger = trigger
+        self.context = context
+        self.body = body
+        self.label = label
+        self.source_file = source_file
+        self.line = line
+        self.goal_condition: Term | None = None
+        self.sub_plans: tuple = ()
+        self.sub_library: object = None
+        self.scope: object = None
+        self.refresh_label_flags()         # atomic, all_unifs, matcher
+
+    def __repr__(self) -> str:
+        return (f"Plan(trigger={self.trigger!r}, context={self.context!r}, body={self.body!r}, label={self.label!r}, "
+                f"source_file={self.source_file!r}, line={self.line!r}, atomic={self.atomic!r}, "
+                f"all_unifs={self.all_unifs!r}, goal_condition={self.goal_condition!r}, sub_plans={self.sub_plans!r})")
 
     def __getstate__(self) -> dict:
-        # without the matcher: it holds compiled closures, made again on first use (agentspeak/parse_cache.py)
-        return {**self.__dict__, "matcher": None}
+        # as parsed (agentspeak/parse_cache.py): without the matcher (compiled closures, made again on first use)
+        # and without the libraries an agent's copy is put in
+        return {**self.__dict__, "matcher": None, "sub_library": None, "scope": None}
 
     def refresh_label_flags(self) -> None:
         annots = self.label.annots if type(self.label) is Literal and self.label.annots else ()
@@ -447,15 +451,18 @@ def plan_matcher(plan: Plan) -> tuple:
     return plan.matcher
 
 
-@dataclass(eq=False)
 class Rule:
     """``head :- body.`` (a non-ground initial belief ``b(X).`` becomes ``b(X) :- true``)."""
 
-    head: Literal
-    body: Term
-    source_file: str = ""
-    line: int = 0
-    nvars: int = 0
+    def __init__(self, head: Literal, body: Term, source_file: str = "", line: int = 0, nvars: int = 0) -> None:
+        self.head, self.body, self.source_file, self.line, self.nvars = head, body, source_file, line, nvars
+
+    def copy(self) -> "Rule":
+        return Rule(self.head, self.body, self.source_file, self.line, self.nvars)
+
+    def __repr__(self) -> str:
+        return (f"Rule(head={self.head!r}, body={self.body!r}, source_file={self.source_file!r}, line={self.line!r}, "
+                f"nvars={self.nvars!r})")
 
     def __str__(self) -> str:
         return f"{to_str(self.head)} :- {to_str(self.body)}"
@@ -753,16 +760,30 @@ class TriggerInstr(Instr):
         return str(self.trigger)
 
 
-@dataclass
 class Program:
-    """Everything one .asl file (and its includes) declares, in source order."""
+    """Everything one .asl file (and its includes) declares, in source order: ``beliefs`` (ground literals),
+    ``rules`` (Rule), ``goals`` (literals of initial goals), ``plans`` (Plan)."""
 
-    beliefs: list = field(default_factory=list)       # ground literals
-    rules: list = field(default_factory=list)         # Rule
-    goals: list = field(default_factory=list)         # literals of initial goals
-    plans: list = field(default_factory=list)         # Plan
-    source_file: str = ""
-    warnings: list = field(default_factory=list)
+    _FIELDS = ("beliefs", "rules", "goals", "plans", "source_file", "warnings")
+
+    def __init__(self, beliefs: list | None = None, rules: list | None = None, goals: list | None = None,
+                 plans: list | None = None, source_file: str = "", warnings: list | None = None) -> None:
+        self.beliefs = [] if beliefs is None else beliefs
+        self.rules = [] if rules is None else rules
+        self.goals = [] if goals is None else goals
+        self.plans = [] if plans is None else plans
+        self.source_file = source_file
+        self.warnings = [] if warnings is None else warnings
+
+    def __eq__(self, other: object) -> bool:
+        if type(other) is not Program:
+            return NotImplemented
+        return all(getattr(self, f) == getattr(other, f) for f in self._FIELDS)
+
+    __hash__ = None  # type: ignore[assignment]  (mutable, compared by value)
+
+    def __repr__(self) -> str:
+        return "Program(" + ", ".join(f"{f}={getattr(self, f)!r}" for f in self._FIELDS) + ")"
 
 
 def copy_program(program: Program) -> Program:
@@ -770,7 +791,7 @@ def copy_program(program: Program) -> Program:
     agent of a shared source gets (plans hold per-agent labels and flags)."""
     return Program(
         beliefs=list(program.beliefs),
-        rules=[replace(r) for r in program.rules],
+        rules=[r.copy() for r in program.rules],
         goals=list(program.goals),
         plans=[p.copy() for p in program.plans],
         source_file=program.source_file,

@@ -90,7 +90,6 @@ class LocalRuntime:
         # Jason's own tests expect a tell answered, or an .at run, within 200-500 ms.
         self.ready: deque[Agent] = deque()
         self.busy: deque[Agent] = deque()
-        self._woken_turns = 0                # turns given to woken agents in a row (see _run)
         self._timed: set[Agent] = set()      # agents that had timers at the end of their last turn
         self._ready_set: set[str] = set()
         self._cond = threading.Condition()
@@ -250,6 +249,14 @@ class LocalRuntime:
         log.warning("message %s to unknown agent '%s' dropped", message.msg_id, message.receiver)
 
     def stop(self, delay: float = 0.0) -> None:
+        """Stop the MAS ``delay`` seconds from now; with a delay, every agent first gets the event
+        ``+jag_shutting_down(MS)`` to prepare itself (Jason's ``RunLocalMAS.stopAgs``)."""
+        if delay > 0 and get_ident() == self._loop_thread:
+            from agentspeak.program import ADD, BEL, Trigger
+            ms = round(delay * 1000)
+            for agent in list(self.agents.values()):
+                agent.post_external(Trigger(ADD, BEL, Literal("jag_shutting_down", (ms,))), force=True)
+                self.wake(agent)
         with self._cond:
             self._stop_at = time.monotonic() + delay
             self._cond.notify()
@@ -289,6 +296,7 @@ class LocalRuntime:
         ready = self.ready
         busy = self.busy
         ready_set = self._ready_set
+        woken_turns = 0  # turns given to woken agents in a row
         timed = self._timed
         timed.update([a for a in self.agents.values() if a.timers])  # a list: a generator is a closure, which
         # the compiled (cpdef, see runtime.pxd) loop cannot hold
@@ -306,10 +314,10 @@ class LocalRuntime:
                 for agent in list(timed):
                     if not agent.timers:
                         timed.discard(agent)
-                    elif agent.timers[0][0] <= agent.clock() and not (agent.running or agent.events) \
+                    elif agent.timers[0][0] + agent.timer_lag <= agent.clock() and not (agent.running or agent.events) \
                             and (not ready or ready[0] is not agent):
                         # (a busy agent runs its timers by its own clock, in its turns: Agent.sense)
-                        due.append((agent.timers[0][0], agent))
+                        due.append((agent.timers[0][0] + agent.timer_lag, agent))
                 if due:
                     # first in line, the earliest first, even if already queued: a .wait or .at that is
                     # due goes on at once, as an agent on a thread of its own would (Jason), not after a
@@ -321,12 +329,16 @@ class LocalRuntime:
                 # no lock: a wake from another thread in between either finds the agent still marked
                 # ready (and the has_work() check after its turn sees the news) or queues it again.
                 # Woken agents first, but a busy one gets every fourth turn (none starves).
-                if ready and (not busy or self._woken_turns < 3):
-                    agent = ready.popleft()
-                    self._woken_turns += 1
+                if ready:
+                    if busy and woken_turns >= 3:
+                        agent = busy.popleft()
+                        woken_turns = 0
+                    else:
+                        agent = ready.popleft()
+                        woken_turns += 1
                 else:
                     agent = busy.popleft()
-                    self._woken_turns = 0
+                    woken_turns = 0
                 ready_set.discard(agent.name)
                 CURRENT.agent = agent  # whose beliefs functions such as .count(Q) read
                 started = 0.0
@@ -353,7 +365,7 @@ class LocalRuntime:
                     if agent.name not in ready_set:  # (unless woken meanwhile)
                         ready_set.add(agent.name)
                         busy.append(agent)
-                elif agent.timers and agent.timers[0][0] <= agent.clock():
+                elif agent.timers and agent.timers[0][0] + agent.timer_lag <= agent.clock():
                     self.wake(agent)
                 continue
             if stop_when_idle and self.idle() and not self._external_pending():
@@ -385,5 +397,5 @@ def _timer_wait(agent: Agent, now: float) -> float:
     ``CLOCK_POLL_S``: the comparison costs nothing, the agent runs only once its timer is due."""
     clock = agent.clock
     if clock is time.monotonic:
-        return agent.timers[0][0] - now
-    return min(agent.timers[0][0] - clock(), CLOCK_POLL_S)
+        return agent.timers[0][0] + agent.timer_lag - now
+    return min(agent.timers[0][0] + agent.timer_lag - clock(), CLOCK_POLL_S)

@@ -193,19 +193,36 @@ def _timed(function, spent: list[float]):
     return wrapper
 
 
-def _dds_cpu() -> float:
-    """CPU seconds of this process's Fast DDS threads (Fast DDS names them ``dds.*``)."""
+def thread_cpu() -> dict[str, float]:
+    """CPU seconds of each of this process's threads, summed by name (``dds.shm.7411`` -> ``dds.shm``:
+    Fast DDS names its threads ``dds.*``; ours are named in ``threading``)."""
     import psutil
 
-    total = 0.0
+    total: dict[str, float] = {}
     for thread in psutil.Process().threads():
         try:
-            name = Path(f"/proc/self/task/{thread.id}/comm").read_text()
+            name = Path(f"/proc/self/task/{thread.id}/comm").read_text().strip()
         except OSError:
             continue
-        if name.startswith("dds."):
-            total += thread.user_time + thread.system_time
+        group = ".".join(name.split(".")[:2]) if name.startswith("dds.") else name.rstrip("0123456789-_ ")
+        total[group] = total.get(group, 0.0) + thread.user_time + thread.system_time
     return total
+
+
+def _dds_cpu() -> float:
+    """CPU seconds of this process's Fast DDS threads (Fast DDS names them ``dds.*``)."""
+    return sum(seconds for name, seconds in thread_cpu().items() if name.startswith("dds."))
+
+
+def thread_shares(before: dict[str, float], after: dict[str, float], wall: float) -> str:
+    """``dds.shm 2.1 %, python 0.6 %, ...``: each thread group's CPU share over ``wall`` seconds, largest first."""
+    shares = {name: 100.0 * (after[name] - before.get(name, 0.0)) / wall for name in after}
+    return ", ".join(f"{name} {share:.2f} %" for name, share in sorted(shares.items(), key=lambda kv: -kv[1])
+                     if share >= 0.01)
+
+
+LAST_THREADS = ""
+"""The per-thread split of the last ``online_share`` (``thread_shares``)."""
 
 
 def online_share(folder: Path, seconds: float) -> tuple[float, float, float, int]:
@@ -236,10 +253,14 @@ def online_share(folder: Path, seconds: float) -> tuple[float, float, float, int
         tap.start()
         wait_for(lambda: tap.observers.messages > 2000, 30)
         before_msgs, before_cpu, before_wall = tap.observers.messages, time.process_time(), time.monotonic()
-        before_ours, before_dds = spent[0], _dds_cpu()
+        before_ours, before_threads = spent[0], thread_cpu()
         threading.Event().wait(seconds)
         cpu, wall = time.process_time() - before_cpu, time.monotonic() - before_wall
-        ours, dds = spent[0] - before_ours, _dds_cpu() - before_dds
+        after_threads = thread_cpu()
+        ours = spent[0] - before_ours
+        dds = sum(v - before_threads.get(k, 0.0) for k, v in after_threads.items() if k.startswith("dds."))
+        global LAST_THREADS
+        LAST_THREADS = thread_shares(before_threads, after_threads, wall)
         received = tap.observers.messages - before_msgs
         tap.close()
         pipeline.close()
@@ -272,4 +293,5 @@ def run(quick: bool = False) -> str:
             lines.append(f"| online: of which observers + decoding + diagnoser + rules | {ours:.2f} % | - |")
             lines.append(f"| online: of which Fast DDS's receive threads | {dds:.2f} % | - |")
             lines.append(f"| online: of which the reader taking the messages (rest) | {share - ours - dds:.2f} % | - |")
+            lines.append(f"| online: by thread | {LAST_THREADS} | - |")
     return "\n".join(lines)

@@ -36,33 +36,59 @@ def _dataset(profiles: tuple[str, ...] = ("paper", "smoke")):
     raise RuntimeError("no perfbugs data set: faultmas experiment perfbugs --generate")
 
 
-def _watch_child(domain: int, models_dir: str, seconds: float) -> None:
-    """In the child: watch the team for ``seconds`` after a warm-up; print CPU seconds and ticks."""
+def _hz_config(models) -> str:
+    """Observers beside the learned detector: an ``hz`` observer on every ROS 2 topic the models read
+    (what ``faultmas observe CONFIG --learned`` does when both watch the same topics)."""
+    from detection.learned.observer import model_columns
+    topics = sorted({t for m in models.values() for t in model_columns(m) if t.startswith("/")})
+    return "main_loop_rate: 10\nsetup:\n  - type: hz\n    topics:\n" + "".join(
+        f"      - {{name: {t}, states: [{{state: ok, frequency: {{type: greater_than, greater_than: -1}}}}]}}\n"
+        for t in topics)
+
+
+def _watch_child(domain: int, models_dir: str, seconds: float, observers: str = "") -> None:
+    """In the child: watch the team for ``seconds`` after a warm-up; print CPU seconds and ticks.
+    ``observers``: '' the learned detector alone; 'shared' with hz observers on its topics through one
+    reader (one subscription per topic); 'separate' the same with a participant each (as before)."""
     import psutil
 
+    from detection.config import load_observers
     from detection.learned.observer import load_models
     from detection.learned.scenario import ROBOTS
     from detection.learned.watch import LiveLearnedObserver
+    from detection.taps.ros2 import Ros2Tap
 
-    from benchmarks.bench_observers import _dds_cpu
+    from benchmarks.bench_observers import thread_cpu, thread_shares
 
-    live = LiveLearnedObserver(load_models(models_dir), [f"/{r}" for r in ROBOTS], lambda obs: None, domain)
+    models = load_models(models_dir)
+    tap = None
+    if observers:
+        config = load_observers("<bench>", _hz_config(models))
+        tap = Ros2Tap(config, config.build(), lambda obs: None, domain_id=domain)
+    live = LiveLearnedObserver(models, [f"/{r}" for r in ROBOTS], lambda obs: None, domain,
+                               reader=tap.reader if observers == "shared" else None)
+    if tap is not None:
+        tap.start()
     try:
         time.sleep(3.0)
         me = psutil.Process()
         before, ticks, received = me.cpu_times(), len(live.observer.tick_seconds), live.tap.received
-        before_dds, before_tick = _dds_cpu(), sum(live.observer.tick_cpu_seconds)
+        before_threads, before_tick = thread_cpu(), sum(live.observer.tick_cpu_seconds)
         time.sleep(seconds)
-        after = me.cpu_times()
+        after, after_threads = me.cpu_times(), thread_cpu()
         cpu = (after.user + after.system) - (before.user + before.system)
-        dds, tick = _dds_cpu() - before_dds, sum(live.observer.tick_cpu_seconds) - before_tick
+        dds = sum(v - before_threads.get(k, 0.0) for k, v in after_threads.items() if k.startswith("dds."))
+        tick = sum(live.observer.tick_cpu_seconds) - before_tick
         print(f"{cpu} {len(live.observer.tick_seconds) - ticks} {live.tap.received - received} {dds} {tick}",
               flush=True)
+        print(thread_shares(before_threads, after_threads, seconds), flush=True)
     finally:
         live.close()
+        if tap is not None:
+            tap.close()
 
 
-def _live_share(models, seconds: float, camera: bool) -> tuple[float, int, int]:
+def _live_share(models, seconds: float, camera: bool, observers: tuple[str, ...] = ("",)) -> list[tuple]:
     """The team is launched as the models' data set was recorded (``camera``): models of the camera
     nodes refuse a team without them, and models without them would not watch the images."""
     import rclpy
@@ -82,16 +108,22 @@ def _live_share(models, seconds: float, camera: bool) -> tuple[float, int, int]:
                 raise RuntimeError("the team did not come up")
             with RosContext(domain_id=domain) as work:
                 Workload(work.add(rclpy.create_node("bench_workload", context=work.context)), ROBOTS, seed=3)
-                child = subprocess.run([sys.executable, "-c", "import sys; from benchmarks.bench_perfbugs import "
-                                        f"_watch_child; _watch_child({domain}, {tmp!r}, {seconds})"],
-                                       capture_output=True, text=True, env=loopback_env(), timeout=seconds + 120,
-                                       cwd=Path(__file__).resolve().parents[1])
+                children = [subprocess.run([sys.executable, "-c", "import sys; from benchmarks.bench_perfbugs import "
+                                            f"_watch_child; _watch_child({domain}, {tmp!r}, {seconds}, {kind!r})"],
+                                           capture_output=True, text=True, env=loopback_env(), timeout=seconds + 120,
+                                           cwd=Path(__file__).resolve().parents[1])
+                            for kind in observers]
         finally:
             supervisor.stop()
-    if child.returncode != 0:
-        raise RuntimeError(child.stderr[-2000:])
-    cpu, ticks, messages, dds, tick = child.stdout.split()
-    return float(cpu) / seconds, int(ticks), int(messages), float(dds) / seconds, float(tick) / seconds
+    results = []
+    for child in children:
+        if child.returncode != 0:
+            raise RuntimeError(child.stderr[-2000:])
+        figures, threads = child.stdout.strip().splitlines()[-2:]
+        cpu, ticks, messages, dds, tick = figures.split()
+        results.append((float(cpu) / seconds, int(ticks), int(messages), float(dds) / seconds, float(tick) / seconds,
+                        threads))
+    return results
 
 
 def run(quick: bool = False) -> str:
@@ -128,10 +160,18 @@ def run(quick: bool = False) -> str:
         lines.append(f"{'online observer CPU share, live team':<58} {'(skipped: --quick)':>14}")
     else:
         from detection.learned.scenario import PROFILES
-        share, ticks, messages, dds, tick = _live_share(models, 30.0, PROFILES[profile].camera)
+        kinds = ("", "separate", "shared")
+        results = _live_share(models, 30.0, PROFILES[profile].camera, kinds)
+        share, ticks, messages, dds, tick, threads = results[0]
         lines.append(f"{f'online observer CPU share, live team, {profile} models ({messages / 30:.0f} msg/s, {ticks} ticks)':<58} "
                      f"{share * 100:>12.2f} % {'<= 2 %':>10}")
         lines.append(f"{'  of which Fast DDS receive threads':<58} {dds * 100:>12.2f} %")
         lines.append(f"{'  of which ticks (psutil counters + features + models)':<58} {tick * 100:>12.2f} %")
         lines.append(f"{'  of which taking + encoding the messages (rest)':<58} {(share - dds - tick) * 100:>12.2f} %")
+        lines.append(f"  by thread: {threads}")
+        for kind, (share, _, _, dds, _, threads) in zip(kinds[1:], results[1:]):
+            what = {"separate": "hz observers on its topics too, a participant each",
+                    "shared": "hz observers on its topics too, one subscription per topic"}[kind]
+            lines.append(f"{'  + ' + what:<58} {share * 100:>12.2f} % {'':>10}")
+            lines.append(f"      Fast DDS {dds * 100:.2f} %; by thread: {threads}")
     return "\n".join(lines)

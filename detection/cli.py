@@ -21,9 +21,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("config", metavar="CONFIG.yaml", nargs="?",
                    help="observer configuration (docs/observers.md); may be left out with --learned")
     p.add_argument("--learned", metavar="MODELS_DIR",
-                   help="live ROS 2: also run the learned resource observer (docs/perfbugs.md) with the models in "
-                   "MODELS_DIR ('faultmas experiment perfbugs --save-models MODELS_DIR'); it emits ~resource(C) into "
-                   "the same diagnoser and rules. Without --model the architecture is the one discovered")
+                   help="also run the learned resource observer (docs/perfbugs.md) with the models in MODELS_DIR "
+                   "('faultmas experiment perfbugs --save-models MODELS_DIR'); it emits ~resource(C) into the same "
+                   "diagnoser and rules. Live it shares the observers' subscriptions (ROS 2) or session (--zenoh: "
+                   "the agents' keys); with --bag it replays a bag recorded with --learned and --record. Without "
+                   "--model the architecture is the one discovered (or, with --bag, the models' own)")
     p.add_argument("--model", metavar="ARCH.yaml", help="architecture model: diagnose what is observed")
     p.add_argument("--rules", metavar="RULES.yaml",
                    help="rules to fire (default: the model's NAME.rules.yaml when it exists)")
@@ -34,7 +36,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
                    help="with --zenoh, or --learned with models of agents: a Zenoh endpoint to connect to, "
                    "e.g. tcp/127.0.0.1:7447 (repeatable)")
-    p.add_argument("--record", metavar="PATH", help="live ROS 2: also record what is observed to a new MCAP bag")
+    p.add_argument("--record", metavar="PATH", help="live ROS 2: also record what is observed (with --learned: its topics and ticks too) "
+                   "to a new MCAP bag")
     p.add_argument("--domain-id", type=int, default=None, help="ROS_DOMAIN_ID (default: the environment's)")
     p.add_argument("--duration", type=float, default=None, metavar="S", help="live: stop after S seconds")
     p.set_defaults(func=run)

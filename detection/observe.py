@@ -53,10 +53,9 @@ def _bad_combination(args: argparse.Namespace) -> str:
     learned = getattr(args, "learned", None)
     if args.config is None and learned is None:
         return "nothing to observe: give CONFIG.yaml, --learned MODELS_DIR, or both"
-    if learned is not None and (args.bag or args.zenoh):
-        return ("--learned watches the live ROS 2 graph (and the agents' Zenoh keys through --connect); "
-                "it cannot be used with " + ("--bag" if args.bag else "--zenoh"))
-    if args.config is None and (args.bag or args.zenoh):
+    if args.bag and args.zenoh:
+        return "--bag replays a recording; it cannot be used with --zenoh"
+    if args.config is None and learned is None and (args.bag or args.zenoh):
         return "CONFIG.yaml is needed with " + ("--bag" if args.bag else "--zenoh")
     if args.connect and not (args.zenoh or learned is not None):
         return "--connect goes with --zenoh or --learned"
@@ -64,11 +63,22 @@ def _bad_combination(args: argparse.Namespace) -> str:
 
 
 def _replay(args: argparse.Namespace) -> int:
+    detector = None
+    if getattr(args, "learned", None) is not None:      # bad input: before anything runs
+        from detection.learned.observer import TICK_CHANNEL, BagReplay
+        from detection.taps.bag import first_tap_data, topic_types
+        detector = BagReplay(_learned_models(args), topic_types(args.bag))
+        if first_tap_data(args.bag, TICK_CHANNEL) is None:
+            print(f"faultmas observe: {args.bag}: no learned ticks in this bag: record it with "
+                  "'faultmas observe --learned MODELS_DIR --record PATH'", file=sys.stderr)
+            return 2
     session = open_session(args.config, args.model, args.rules)
+    if detector is not None and args.model is None:
+        session.use_model(_replayed_model(detector, args.bag), args.rules)
     show, _ = _printer(args, session)
     session.pipeline.add_listener(show)
     try:
-        replay_bag(session, args.bag)
+        replay_bag(session, args.bag, detector)
     except KeyboardInterrupt:
         pass
     finally:
@@ -95,11 +105,15 @@ def _live(args: argparse.Namespace) -> int:
     tap = learned = None
     try:
         show, table = _printer(args, session)
-        if models:                                      # first: without --model it sets the diagnoser's model
-            learned = _start_learned(args, models, session, environment)
-        tap = Ros2Tap(session.config, session.observers, session.pipeline.observe, domain_id=args.domain_id)
+        # one participant and one subscription per topic for the observers and the learned detector:
+        # Fast DDS receives each message once (its receive thread is most of the CPU spent watching)
+        tap = Ros2Tap(session.config, session.observers, lambda obs: session.pipeline.observe(obs),
+                      domain_id=args.domain_id)
         if args.record:
             tap.recorder = BagRecorder(args.record)
+        if models:                                      # before the listeners: without --model it sets the model
+            learned = _start_learned(args, models, session, environment, reader=tap.reader,
+                                     record=_learned_recording(tap, session) if args.record else None)
         environment.parameters = Ros2Parameters(args.domain_id)
         session.pipeline.add_listener(info_publisher(tap))
         session.pipeline.add_listener(show)
@@ -158,17 +172,31 @@ def _learned_models(args: argparse.Namespace) -> dict:
     return load_models(args.learned)
 
 
-def _start_learned(args: argparse.Namespace, models: dict, session: Session, environment) -> _LearnedFeed:
-    """The learned ``resource`` observer on the live system, emitting into ``session.pipeline``.
-    Without ``--model`` the diagnoser's architecture is the one discovered (every watched component,
-    its topics and keys, ``resource(C)`` declared), so a ``~resource(C)`` is still diagnosed."""
+def _learned_recording(tap, session: Session):
+    """What the learned detector records with ``--record``: its ticks, and the messages of its topics
+    that no observer reads (those the observers read are recorded once, by the tap)."""
+    observed = set(session.config.topics)
+
+    def record(channel: str, t_ns: int, **kwargs) -> None:
+        if channel not in observed:
+            tap.record(channel, t_ns, **kwargs)
+    return record
+
+
+def _start_learned(args: argparse.Namespace, models: dict, session: Session, environment, *, reader=None,
+                   zenoh_keys=None, record=None) -> _LearnedFeed:
+    """The learned ``resource`` observer on the live system, emitting into ``session.pipeline``, sharing
+    the observers' ROS 2 ``reader`` or Zenoh session (``zenoh_keys``) when given. Without ``--model``
+    the diagnoser's architecture is the one discovered (every watched component, its topics and keys,
+    ``resource(C)`` declared), so a ``~resource(C)`` is still diagnosed."""
     from detection.learned.model import ModelFileError
     from detection.learned.watch import LiveLearnedObserver
 
     feed = _LearnedFeed()
     try:
         live = LiveLearnedObserver(models, _namespaces(models), feed.emit, domain_id=args.domain_id,
-                                   skip_unfit=True, zenoh_connect=args.connect)
+                                   skip_unfit=True, zenoh_connect=args.connect, reader=reader,
+                                   zenoh_keys=zenoh_keys, record=record)
     except ModelFileError:
         raise
     except ValueError as exc:       # e.g. two teams' nodes in one domain: say so, never watch the wrong one
@@ -191,6 +219,23 @@ def _namespaces(models: dict) -> list[str]:
     from detection.learned.observer import model_columns
     return sorted({"/" + t.split("/")[1] for m in models.values() for t in model_columns(m)
                    if t.startswith("/") and t.count("/") >= 2})
+
+
+def _replayed_model(detector, bag):
+    """The architecture a replay diagnoses with, without ``--model``: the one the live run discovered
+    (recorded in the bag), else the models' components with the topics they read."""
+    from detection.learned.observer import COMPONENTS_CHANNEL
+    from detection.learned.ros_tap import Component
+    from detection.learned.watch import architecture_yaml
+    from detection.taps.bag import first_tap_data
+    from diagnosis.architecture_yaml import load_architecture
+    from diagnosis.yaml_source import YamlSource
+
+    recorded = first_tap_data(bag, COMPONENTS_CHANNEL) or {}
+    components = [Component(c, **recorded[c]) if c in recorded else Component(c, "", c, [t for t, _ in chans], [])
+                  for c, chans in detector.observer.channels.items()]
+    return load_architecture(YamlSource(f"<discovered by --learned, recorded in {bag}>",
+                                        architecture_yaml("observed", components)))
 
 
 def _discovered_model(live):
@@ -222,16 +267,31 @@ def _zenoh(args: argparse.Namespace) -> int:
     if args.record:
         print("faultmas observe: --record records ROS 2 topics; it cannot be used with --zenoh", file=sys.stderr)
         return 2
+    models = _learned_models(args)                      # bad input: before any network
+    if models:
+        from robot_bridge.ros2.runtime import RosUnavailable, require_ros
+        try:
+            require_ros()                               # the learned components are ROS 2 nodes (agents too)
+        except RosUnavailable as exc:
+            print(f"faultmas observe: {exc}", file=sys.stderr)
+            return 3
     session = open_session(args.config, args.model, args.rules)
-    tap = None
+    tap = learned = None
     try:
         show, table = _printer(args, session)
-        tap = ZenohTap(session.config, session.observers, session.pipeline.observe, connect=args.connect)
+        tap = ZenohTap(session.config, session.observers, lambda obs: session.pipeline.observe(obs),
+                       connect=args.connect)
+        if models:                                      # the agents' keys through the tap's one Zenoh session
+            learned = _start_learned(args, models, session, None, zenoh_keys=tap.keys)
         session.pipeline.add_listener(tap.info_publisher())
         session.pipeline.add_listener(show)
         tap.start()
+        if learned is not None:
+            learned.open_into(session.pipeline.observe)
         _run_until_stopped(args, table)
     finally:
+        if learned is not None:
+            learned.close()
         if tap is not None:
             tap.close()
         session.close()

@@ -50,19 +50,29 @@ def open_session(config_path: str | Path | None, model_path: str | Path | None =
     return Session(config, config.build(), Pipeline(model, rules, environment))
 
 
-def replay_bag(session: Session, bag: str | Path) -> list[Update]:
+def replay_bag(session: Session, bag: str | Path, detector=None) -> list[Update]:
     """Every message of the bag through the observers and the pipeline; the updates, in order.
 
     The clock starts where the live run that recorded the bag started (else at the first message) and
-    runs to where its clock stopped (else to the last message)."""
+    runs to where its clock stopped (else to the last message). ``detector`` (e.g. the learned
+    observer's ``BagReplay``) gets the messages on its ``topics`` and ``channels`` instead, in the same
+    order, and its observations go into the same pipeline."""
     from detection.taps.bag import replay, start_time_ns, stop_time_ns
 
     updates: list[Update] = []
     start = start_time_ns(bag)
     last = None
-    for msg in replay(bag, session.config.topics):
+    theirs = set() if detector is None else set(detector.topics) | set(detector.channels)
+    for msg in replay(bag, set(session.config.topics) | (set(detector.topics) if detector is not None else set())):
         if session.observers.t0_ns is None:
             session.observers.start(start if start is not None else msg.t_ns)
+        if msg.channel in theirs:
+            update = session.pipeline.observe(detector.feed(msg))
+            if update is not None:
+                updates.append(update)
+            if msg.channel not in session.config.topics:       # the detector's alone
+                last = msg.t_ns
+                continue
         update = session.pipeline.observe(session.observers.feed(msg))
         if update is not None:
             updates.append(update)

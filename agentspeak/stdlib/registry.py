@@ -19,9 +19,12 @@ through the ``faultmas.internal_actions`` entry-point group (a module imported o
 from __future__ import annotations
 
 import threading
+from collections import namedtuple
 from concurrent.futures import Future
-from dataclasses import dataclass, field
 from typing import Any, Callable
+
+# Plain classes and named tuples, not dataclasses: importing ``dataclasses`` is a noticeable part of a hello
+# world's start-up (issue 23).
 
 from agentspeak.errors import FaultmasError
 from agentspeak.terms import ArithmeticError_, normalise_number, to_str
@@ -48,46 +51,42 @@ def wrong_arguments(message: str) -> IAError:
     return IAError("wrong_arguments", message)
 
 
-@dataclass
 class Suspend:
     """Returned by an internal action to suspend the calling intention.
 
     ``future``: resume when it resolves; ``on_result(ctx, value) -> bool`` decides success (and may
     bind with ``ctx.unify``). ``timeout`` (seconds) fails or calls ``on_timeout(ctx) -> bool``.
     ``until`` (a zero-argument callable) is re-checked after each reasoning cycle.
-    ``event`` (a Trigger) resumes when a matching event is posted.
+    ``event`` (a Trigger) resumes when a matching event is posted. ``term``: why, as a term
+    (``.suspended(G, R)`` gives it; Jason's ``wait(W)[time(T)]`` for ``.wait``). ``answer_waiting``: for an
+    ask, is an answer sent by this (monotonic) deadline still unread in the mailbox? Then the timeout waits
+    for it to be read.
     """
 
-    future: Future | None = None
-    on_result: Callable[[Any, Any], bool] | None = None
-    timeout: float | None = None
-    on_timeout: Callable[[Any], bool] | None = None
-    until: Callable[[], bool] | None = None
-    event: Any = None
-    reason: str = "suspended"
-    on_event: Callable[[Any, Any], bool] | None = None
-    term: Any = None
-    """Why, as a term (``.suspended(G, R)`` gives it; Jason's ``wait(W)[time(T)]`` for ``.wait``)."""
-    answer_waiting: Callable[[float], bool] | None = None
-    """For an ask: is an answer sent by this (monotonic) deadline still unread in the mailbox? Then the
-    timeout waits for it to be read."""
+    def __init__(self, future: Future | None = None, on_result: Callable[[Any, Any], bool] | None = None,
+                 timeout: float | None = None, on_timeout: Callable[[Any], bool] | None = None,
+                 until: Callable[[], bool] | None = None, event: Any = None, reason: str = "suspended",
+                 on_event: Callable[[Any, Any], bool] | None = None, term: Any = None,
+                 answer_waiting: Callable[[float], bool] | None = None) -> None:
+        self.future, self.on_result, self.timeout, self.on_timeout = future, on_result, timeout, on_timeout
+        self.until, self.event, self.reason, self.on_event, self.term = until, event, reason, on_event, term
+        self.answer_waiting = answer_waiting
+
+    def __repr__(self) -> str:
+        return (f"Suspend(future={self.future!r}, timeout={self.timeout!r}, event={self.event!r}, "
+                f"reason={self.reason!r}, term={self.term!r})")
 
 
-@dataclass(frozen=True)
-class InternalActionSpec:
-    name: str
-    function: Callable
-    min_args: int
-    max_args: int | None
-    doc: str
+class InternalActionSpec(namedtuple("InternalActionSpec", "name function min_args max_args doc")):
+    __slots__ = ()
 
 
-@dataclass
 class Registry:
     """Internal actions by AgentSpeak name (with the leading dot)."""
 
-    actions: dict[str, InternalActionSpec] = field(default_factory=dict)
-    _extensions_loaded: bool = False
+    def __init__(self, actions: dict[str, InternalActionSpec] | None = None) -> None:
+        self.actions: dict[str, InternalActionSpec] = {} if actions is None else actions
+        self._extensions_loaded = False
 
     def register(self, name: str, function: Callable, min_args: int = 0, max_args: int | None = None) -> None:
         if not name.startswith(".") and "." not in name:
@@ -166,19 +165,14 @@ class _CurrentAgent(threading.local):
 CURRENT = _CurrentAgent()
 
 
-@dataclass(frozen=True)
-class FunctionSpec:
+class FunctionSpec(namedtuple("FunctionSpec", "name function arities unground_ok needs_agent doc",
+                              defaults=(False, False, ""))):
     """One arithmetic function: ``function(*args)`` (or ``function(agent, *args)`` when
     ``needs_agent``) returns a number or raises ``FunctionError``. ``arities`` are the argument
     counts it accepts (None: any); a literal with another count is not this function (Jason's
     ``checkArity``). ``unground_ok``: evaluated even with unbound variables (``.count(p(_))``)."""
 
-    name: str
-    function: Callable
-    arities: tuple[int, ...] | None
-    unground_ok: bool = False
-    needs_agent: bool = False
-    doc: str = ""
+    __slots__ = ()
 
     def accepts(self, arity: int) -> bool:
         return self.arities is None or arity in self.arities
@@ -218,13 +212,13 @@ def _call_text(name: str, args: tuple) -> str:
     return name + ("(" + ",".join(to_str(a) for a in args) + ")" if args else "")
 
 
-@dataclass
 class FunctionRegistry:
     """Arithmetic functions by AgentSpeak name (``math.max``, ``.count``). The parser turns a
     literal into a function call when its name and arity are registered here (Jason decides at
     parse time too), so register before parsing."""
 
-    functions: dict[str, FunctionSpec] = field(default_factory=dict)
+    def __init__(self, functions: dict[str, FunctionSpec] | None = None) -> None:
+        self.functions: dict[str, FunctionSpec] = {} if functions is None else functions
 
     def register(self, spec: FunctionSpec) -> None:
         if "." not in spec.name:

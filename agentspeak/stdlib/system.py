@@ -1,9 +1,8 @@
 """Time, randomness, waiting and the MAS: time, date, nano_time, random, wait, stopMAS, include."""
 from __future__ import annotations
 
-import datetime
 import random as _random
-import time
+import time        # not datetime: its import is a noticeable part of a hello world's start (issue 23)
 
 from agentspeak.program import PlanTerm
 from agentspeak.stdlib.registry import Suspend, internal_action, wrong_arguments
@@ -12,15 +11,16 @@ from agentspeak.terms import normalise_number
 
 @internal_action(".time", args=(3, 4))
 def time_(ctx, h, m, s, ms=None):
-    now = datetime.datetime.now()
-    ok = ctx.unify(h, now.hour) and ctx.unify(m, now.minute) and ctx.unify(s, now.second)
-    return ok and (ms is None or ctx.unify(ms, now.microsecond // 1000))
+    seconds = time.time()
+    now = time.localtime(seconds)
+    ok = ctx.unify(h, now.tm_hour) and ctx.unify(m, now.tm_min) and ctx.unify(s, now.tm_sec)
+    return ok and (ms is None or ctx.unify(ms, int(seconds % 1 * 1000)))
 
 
 @internal_action(".date", args=3)
 def date(ctx, y, m, d):
-    today = datetime.date.today()
-    return ctx.unify(y, today.year) and ctx.unify(m, today.month) and ctx.unify(d, today.day)
+    today = time.localtime()
+    return ctx.unify(y, today.tm_year) and ctx.unify(m, today.tm_mon) and ctx.unify(d, today.tm_mday)
 
 
 @internal_action(".nano_time", args=1)
@@ -155,9 +155,10 @@ def wait(ctx, what, timeout=None, elapsed=None):
 
 @internal_action(".stopMAS", args=(0, 2))
 def stop_mas(ctx, delay=0, code=0):
-    """Stop every agent of the MAS."""
+    """Stop every agent of the MAS; with a delay (ms), each agent gets ``+jag_shutting_down(Delay)``
+    and runs until then, the caller too (as Jason)."""
     ctx.agent.arch.stop_mas(ctx.agent, (delay or 0) / 1000.0)
-    return Suspend(reason="stopping")
+    return True if delay else Suspend(reason="stopping")
 
 
 @internal_action(".include", args=(1, 2))

@@ -75,6 +75,8 @@ class LearnedResourceObserver:
         self.last_distance: dict[str, float] = {}
         self.tick_seconds: list[float] = []
         self.tick_cpu_seconds: list[float] = []
+        self.last_tick: float | None = None
+        self.last_samples: dict[str, np.ndarray | None] = {}
 
     def on_event(self, t: float, topic: str, vector: np.ndarray) -> None:
         buffer = self.buffers.get(topic)
@@ -101,6 +103,7 @@ class LearnedResourceObserver:
                 samples[c] = read_counters(process)
             except Exception:                       # a process that is gone: the activated observer's job
                 samples[c] = None
+        self.last_tick, self.last_samples = now, samples
         features = {topic: buffer.features(now) for topic, buffer in self.buffers.items()}
         changes = []
         for c, model in self.models.items():
@@ -123,6 +126,63 @@ class LearnedResourceObserver:
         if changes:
             self.emit(changes)
         return changes
+
+
+TICK_CHANNEL = "@learned"
+"""The tap channel on which a recording keeps each tick's time and counters (``faultmas observe --learned
+--record``): with the topics' messages, what ``BagReplay`` needs to give the live verdicts again."""
+
+
+COMPONENTS_CHANNEL = "@learned/components"
+"""Where a recording keeps the watched components (``ros_tap.Component.to_dict``), as discovered live:
+a replay diagnoses with the architecture the live run had."""
+
+
+def tick_record(observer: LearnedResourceObserver) -> dict:
+    """The last tick as JSON: its time and each component's counters (None: its process was not read)."""
+    return {"t": observer.last_tick,
+            "counters": {c: None if s is None else [float(v) for v in s] for c, s in observer.last_samples.items()}}
+
+
+class BagReplay:
+    """The learned observer over a recorded bag (``faultmas observe --bag PATH --learned MODELS_DIR``):
+    the models' topics encoded as live, a tick at each recorded ``@learned`` tick with its recorded
+    counters. ``feed(msg)`` takes the bag's messages in order and returns the observations that changed.
+    A message tapped live just after a tick's last batch but received before it is replayed before that
+    tick: the verdicts are the live ones up to such messages in flight at a tick."""
+
+    def __init__(self, models: dict[str, ComponentModel], topic_types: dict[str, str],
+                 confirm: tuple[int, int] = DEFAULT_CONFIRM) -> None:
+        from detection.learned.encoding import RosEncoder
+        from detection.learned.zenoh_events import is_zenoh_channel
+
+        zenoh = sorted(c for c, m in models.items() if any(is_zenoh_channel(t) for t in model_columns(m)))
+        if zenoh:
+            raise ModelFileError(f"models of {', '.join(zenoh)} read Zenoh keys, which a rosbag does not hold; "
+                                 "leave them out of MODELS_DIR to replay the others")
+        self.observer = LearnedResourceObserver(models, {c: None for c in models}, lambda _obs: None, confirm)
+        self.topics = set(self.observer.buffers)
+        self.channels = {TICK_CHANNEL, COMPONENTS_CHANNEL}
+        # a topic the bag lacks had no message in the run (its counts stay 0, as live)
+        self.encoders = {t: RosEncoder.for_type(topic_types[t]) for t in self.topics if t in topic_types}
+        self.dropped: dict[str, int] = {}
+        self.ticks = 0
+
+    def feed(self, msg) -> list[Observation]:
+        if msg.channel == COMPONENTS_CHANNEL:
+            return []
+        if msg.channel == TICK_CHANNEL:
+            self.ticks += 1
+            counters = {c: None if v is None else np.array(v, dtype=np.float64)
+                        for c, v in msg.data["counters"].items()}
+            return self.observer.tick(float(msg.data["t"]), counters)
+        try:
+            vector = self.encoders[msg.channel].encode_raw(msg.raw)
+        except Exception:                       # counted as live, never raised
+            self.dropped[msg.channel] = self.dropped.get(msg.channel, 0) + 1
+            return []
+        self.observer.on_event(msg.t_ns / 1e9, msg.channel, vector)
+        return []
 
 
 def replay(observer: LearnedResourceObserver, run_file: str | Path,

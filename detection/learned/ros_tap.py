@@ -72,33 +72,46 @@ BATCH_S = 0.1
 
 class RawTap:
     """Every message on ``topics`` encoded and handed to ``on_event(t, topic, vector)``, read by the
-    one ROS 2 reader (``detection.taps.ros2_reader.TopicReader``) on a node of its own in ``node``'s
-    context; ``on_tick()`` (if given) runs every ``tick_s`` seconds on the same thread, so a user
-    needs no lock between events and ticks. ``close()`` stops it (closing the context does too).
+    one ROS 2 reader (``detection.taps.ros2_reader.TopicReader``): its own, on a node of its own in
+    ``node``'s context, or ``reader`` shared with other consumers (the observers of ``faultmas observe
+    CONFIG --learned``: one subscription per topic, so Fast DDS receives each message once).
+    ``on_tick()`` (if given) runs every ``tick_s`` seconds on the same thread, so a user needs no lock
+    between events and ticks; ``on_raw(t_ns, topic, cdr)`` (if given) sees each message before it is
+    encoded (a recording). ``close()`` stops it (closing the context does too).
 
     A message that cannot be decoded is counted in ``dropped`` (per topic), never raised in the reader.
     """
 
     def __init__(self, node, topic_types: dict[str, str], on_event: Callable[[float, str, np.ndarray], None],
-                 on_tick: Callable[[], None] | None = None, tick_s: float = 1.0) -> None:
+                 on_tick: Callable[[], None] | None = None, tick_s: float = 1.0, *, reader=None,
+                 on_raw: Callable[[int, str, bytes], None] | None = None) -> None:
         from detection.taps.ros2_reader import TopicReader
 
         self.encoders = {topic: RosEncoder.for_type(type_name) for topic, type_name in topic_types.items()}
         self.dropped: dict[str, int] = {}
         self.received = 0
-        self._on_event = on_event                               # before the first message can arrive
-        self.reader = TopicReader(node.context, self._on_batch, on_tick=on_tick, tick_s=tick_s, batch_s=BATCH_S,
-                                  name=f"{node.get_name()}_tap")
+        self._on_event, self._on_raw = on_event, on_raw          # before the first message can arrive
+        self._owns = reader is None
+        self.reader = reader if reader is not None else TopicReader(node.context, batch_s=BATCH_S,
+                                                                    name=f"{node.get_name()}_tap")
+        self._listener = self.reader.add_listener(self._on_batch, topics=set(self.encoders), on_tick=on_tick,
+                                                  tick_s=tick_s, batch_s=BATCH_S)
         for topic, encoder in self.encoders.items():
             self.reader.subscribe(topic, encoder.msg_class)
-        self.reader.start()
+        if self._owns:
+            self.reader.start()
 
     def close(self) -> None:
-        self.reader.close()
+        if self._owns:
+            self.reader.close()
+        else:
+            self.reader.remove_listener(self._listener)
 
     def _on_batch(self, batch) -> None:
-        encoders, on_event = self.encoders, self._on_event
+        encoders, on_event, on_raw = self.encoders, self._on_event, self._on_raw
         for t_ns, topic, data in batch:
+            if on_raw is not None:
+                on_raw(t_ns, topic, data)
             try:
                 vector = encoders[topic].encode_raw(data)
             except Exception as exc:            # a bad message is counted and logged, never kills the tap

@@ -12,7 +12,8 @@ from typing import Callable, Iterable, Sequence
 from detection.learned.encoding import RosEncoder
 from detection.learned.features import feature_names
 from detection.learned.model import ComponentModel, ModelFileError
-from detection.learned.observer import LearnedResourceObserver, model_channels, model_columns, node_processes
+from detection.learned.observer import (COMPONENTS_CHANNEL, TICK_CHANNEL, LearnedResourceObserver, model_channels,
+                                       model_columns, node_processes, tick_record)
 from detection.learned.ros_tap import Component, RawTap, discover
 from detection.learned.zenoh_events import (AGENT_NODE, ZenohFeed, adopt_bridge_nodes, agent_component,
                                             agent_processes, is_zenoh_channel, mas_of, wait_for_bridge_nodes)
@@ -54,13 +55,21 @@ class LiveLearnedObserver:
     def __init__(self, models: dict[str, ComponentModel], namespaces: list[str], emit: Callable[[list[Observation]], object],
                  domain_id: int | None = None, confirm: tuple[int, int] = (3, 5), settle_s: float = 2.0,
                  skip_unfit: bool = False, zenoh_connect: Sequence[str] = (), agents_timeout_s: float = 30.0,
-                 discovery_s: float = 20.0) -> None:
+                 discovery_s: float = 20.0, *, reader=None, zenoh_keys=None,
+                 record: Callable[..., None] | None = None) -> None:
         """``skip_unfit``: watch only the components whose model fits the live system (the others are
         listed in ``unfit``) instead of refusing with a ``ModelFileError``. ``agents_timeout_s``: how
         long to wait for the ROS 2 bridge nodes of the agents the models watch (agents start slowly).
         ``discovery_s``: how long discovery may take to show every model's component with all its
         topics (DDS discovery of a busy graph takes seconds); a model still missing or unfit then is
-        refused (or, with ``skip_unfit``, left out)."""
+        refused (or, with ``skip_unfit``, left out).
+
+        Sharing, so that each message is received once per process (``faultmas observe CONFIG --learned``):
+        ``reader``, a started or not yet started ``TopicReader`` of the observers' tap, takes the models'
+        topics too (its context and node are used; no participant of ours); ``zenoh_keys``, the Zenoh
+        tap's ``ZenohKeys``, carries the agents' keys. ``record(channel, t_ns, raw=, data=, msgtype=)``
+        (a ``LiveTap.record``) gets every message tapped and, at each tick, the counters read
+        (``@learned``), so that ``replay_ticks`` over the bag gives the same verdicts."""
         import time
 
         import rclpy
@@ -72,9 +81,11 @@ class LiveLearnedObserver:
         agents = [c[:-len(AGENT_SUFFIX)] for c, cols in zenoh_columns.items() if cols and c.endswith(AGENT_SUFFIX)]
         self.zenoh: ZenohFeed | None = None
         self.tap: RawTap | None = None
-        self.ros = RosContext(domain_id=domain_id).start()
+        self.record = record
+        self.ros = RosContext(domain_id=domain_id).start() if reader is None else None
         try:
-            node = self.ros.add(rclpy.create_node("faultmas_learned_resource", context=self.ros.context))
+            node = reader.node if reader is not None else \
+                self.ros.add(rclpy.create_node("faultmas_learned_resource", context=self.ros.context))
             time.sleep(settle_s)                                     # discovery has no fixed delay
             wait_for_bridge_nodes(node, agents, agents_timeout_s)    # missing ones: their models are unfit
             deadline = time.monotonic() + discovery_s
@@ -102,11 +113,16 @@ class LiveLearnedObserver:
                 if c in models:
                     processes.update(agent_processes([agent], mas_of(zenoh_columns[c]), zenoh_connect))
             self.observer = LearnedResourceObserver(models, processes, emit, confirm)
+            if record is not None:
+                record(COMPONENTS_CHANNEL, time.time_ns(), data={c: self.components[c].to_dict() for c in models})
             keys = {t: cols for c in models for t, cols in zenoh_columns[c].items()}
             if keys:
-                self.zenoh = ZenohFeed(keys, self.observer.on_event, connect=zenoh_connect)
-            self.tap = RawTap(node, {t: ty for t, ty in topic_types.items() if t in self.observer.buffers},
-                              self.observer.on_event, on_tick=self._tick)   # the reader's thread: no race
+                self.zenoh = ZenohFeed(keys, self.observer.on_event, connect=zenoh_connect, keys=zenoh_keys)
+            self.types = {t: ty for t, ty in topic_types.items() if t in self.observer.buffers}
+            on_raw = None if record is None else \
+                (lambda t_ns, topic, raw: record(topic, t_ns, raw=raw, msgtype=self.types[topic]))
+            self.tap = RawTap(node, self.types, self.observer.on_event, on_tick=self._tick, reader=reader,
+                              on_raw=on_raw)                       # the reader's thread: no race
         except BaseException:
             self.close()
             raise
@@ -115,6 +131,8 @@ class LiveLearnedObserver:
         if self.zenoh is not None:
             self.zenoh.drain()
         self.observer.tick()
+        if self.record is not None and self.observer.last_tick is not None:
+            self.record(TICK_CHANNEL, int(self.observer.last_tick * 1e9), data=tick_record(self.observer))
 
     @staticmethod
     def _unfit(name: str, model: ComponentModel, component: Component, columns: dict[str, list[str]]) -> str:
@@ -134,4 +152,5 @@ class LiveLearnedObserver:
             self.tap.close()
         if self.zenoh is not None:
             self.zenoh.close()
-        self.ros.close()
+        if self.ros is not None:
+            self.ros.close()

@@ -42,6 +42,27 @@ def _marker_time_ns(path: str | Path, topic: str) -> int | None:
         reader.close()
 
 
+def first_tap_data(path: str | Path, channel: str):
+    """The data of the first message on a tap channel (``@learned/components``); None when there is none."""
+    reader = _open(path)
+    try:
+        conns = [c for c in reader.connections if c.topic == codec.tap_topic(channel)]
+        for _conn, _t_ns, raw in reader.messages(connections=conns):
+            return codec.decode_tap_data(channel, raw)
+        return None
+    finally:
+        reader.close()
+
+
+def topic_types(path: str | Path) -> dict[str, str]:
+    """The bag's topics and their message types (the taps' own channels left out)."""
+    reader = _open(path)
+    try:
+        return {c.topic: c.msgtype for c in reader.connections if not c.topic.startswith(codec.TAP_PREFIX)}
+    finally:
+        reader.close()
+
+
 def _open(path: str | Path):
     from rosbags.rosbag2 import Reader
 

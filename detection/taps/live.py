@@ -55,6 +55,13 @@ class LiveTap:
         if changed:
             self.on_observations(changed)
 
+    def record(self, channel: str, t_ns: int, raw: bytes | None = None, data=None, msgtype: str | None = None) -> None:
+        """Write a message no observer reads (another detector's: the learned one's topics and its
+        ``@learned`` ticks) to the recording, if any, beside the observers' messages."""
+        with self._lock:
+            if self.recorder is not None:
+                self.recorder.write(Message(channel, t_ns, data, raw), msgtype)
+
     def graph(self, names: frozenset[str]) -> None:
         """The nodes (or liveliness tokens) present now; fed to ``activated`` only when the set changes."""
         if self.config.nodes and names != self._graph:

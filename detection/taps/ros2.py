@@ -57,8 +57,8 @@ class Ros2Tap(LiveTap):
         period = 0.5 / max(config.rate_hz, 1.0)        # two ticks per evaluation period
         # messages are taken once per tick, all at once (each keeps its receive time, so the observers
         # see the same stream): one wake-up per tick instead of one per message
-        self.reader = TopicReader(self.ros.context, self._on_batch, on_tick=self._tick, tick_s=period,
-                                  batch_s=period, name="faultmas_observers")
+        self.reader = TopicReader(self.ros.context, batch_s=period, name="faultmas_observers")
+        self._listener = self.reader.add_listener(self._on_batch, topics=(), on_tick=self._tick, tick_s=period)
         self.node = self.reader.node
         self._failed: set[str] = set()
         self._last_graph = 0.0
@@ -76,6 +76,7 @@ class Ros2Tap(LiveTap):
         self.ros.close()
         self.close_recorder()
 
+
     def _subscribe(self, topic: str, msgtype: str) -> None:
         cls = message_class(msgtype)
         if topic in self.config.decoded:
@@ -84,6 +85,7 @@ class Ros2Tap(LiveTap):
             except codec.UnknownType as exc:
                 raise TapError(f"{topic}: {exc}") from None
         self.types[topic] = msgtype
+        self.reader.listen_to(self._listener, topic)
         self.reader.subscribe(topic, cls)
         log.info("observing %s (%s)", topic, msgtype)
 

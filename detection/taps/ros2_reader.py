@@ -27,32 +27,89 @@ Batch = list[tuple[int, str, bytes]]
 BATCH_S = 0.02          # after a wake-up, let messages gather this long (at 1,000 msgs/s: ~20 per wake-up)
 
 
+class _Listener:
+    """One consumer of a shared reader: its topics (None: all), its batch callback and its own tick."""
+
+    def __init__(self, on_batch, topics, on_tick, tick_s: float) -> None:
+        self.on_batch, self.on_tick, self.tick_s = on_batch, on_tick, tick_s
+        self.topics: set[str] | None = None if topics is None else set(topics)
+        self.next_tick = time.monotonic() + tick_s
+
+
 class TopicReader:
     """Raw subscriptions on a private node, read by one thread that calls ``on_batch(batch)`` with
     what arrived and ``on_tick()`` every ``tick_s`` seconds (both on that thread, so a user needs
-    no lock between them)."""
+    no lock between them).
 
-    def __init__(self, context, on_batch: Callable[[Batch], None], *, on_tick: Callable[[], None] | None = None,
-                 tick_s: float = 1.0, batch_s: float = BATCH_S, name: str = "faultmas_reader") -> None:
+    Several consumers may share one reader (``add_listener``): the observers and the learned detector
+    of ``faultmas observe CONFIG --learned`` then take each topic through one subscription, so Fast DDS
+    receives a message once, not once per consumer (its receive thread is most of the CPU spent)."""
+
+    def __init__(self, context, on_batch: Callable[[Batch], None] | None = None, *,
+                 on_tick: Callable[[], None] | None = None, tick_s: float = 1.0, batch_s: float = BATCH_S,
+                 name: str = "faultmas_reader") -> None:
         import rclpy.node
         from rclpy.guard_condition import GuardCondition
 
         self.context = context
         self.node = rclpy.node.Node(name, context=context, start_parameter_services=False)
-        self.on_batch, self.on_tick = on_batch, on_tick
-        self.tick_s, self.batch_s = tick_s, batch_s
+        self.batch_s = batch_s
         self.received = 0
+        self._listeners: list[_Listener] = []
         self._subscriptions: dict[str, object] = {}
         self._changed = True
         self._stop = threading.Event()
         self._wake = GuardCondition(None, None, context=context)
         self._thread: threading.Thread | None = None
+        if on_batch is not None or on_tick is not None:
+            self.add_listener(on_batch or (lambda _batch: None), on_tick=on_tick, tick_s=tick_s)
+
+    @property
+    def on_batch(self) -> Callable[[Batch], None]:
+        """The first listener's batch callback (a benchmark wraps it to time it)."""
+        return self._listeners[0].on_batch
+
+    @on_batch.setter
+    def on_batch(self, function: Callable[[Batch], None]) -> None:
+        self._listeners[0].on_batch = function
+
+    @property
+    def on_tick(self) -> Callable[[], None] | None:
+        return self._listeners[0].on_tick
+
+    @on_tick.setter
+    def on_tick(self, function: Callable[[], None] | None) -> None:
+        self._listeners[0].on_tick = function
+
+    def add_listener(self, on_batch: Callable[[Batch], None], *, topics=None,
+                     on_tick: Callable[[], None] | None = None, tick_s: float = 1.0, batch_s: float | None = None):
+        """Another consumer: ``on_batch`` gets the messages of ``topics`` (None: every topic), ``on_tick``
+        runs every ``tick_s`` seconds, on the reader's thread like the others. ``batch_s``: the longest
+        it may wait for a batch (the reader takes the smallest its listeners ask for)."""
+        listener = _Listener(on_batch, topics, on_tick, tick_s)
+        self._listeners = [*self._listeners, listener]          # the thread iterates over a snapshot
+        if batch_s is not None:
+            self.batch_s = min(self.batch_s, batch_s)
+        self._wake.trigger()
+        return listener
+
+    def remove_listener(self, listener: _Listener) -> None:
+        """``listener`` gets nothing more (its topics stay subscribed: another listener may read them)."""
+        self._listeners = [l for l in self._listeners if l is not listener]
+
+    def listen_to(self, listener: _Listener, topic: str) -> None:
+        """``listener`` (of ``add_listener``) gets ``topic`` too (a topic subscribed once discovered)."""
+        if listener.topics is not None:
+            listener.topics = listener.topics | {topic}
 
     def subscribe(self, topic: str, msg_class: type, depth: int = 100) -> None:
         """Take ``topic``'s messages (best effort: matches every publisher; ``depth`` messages are kept
-        between two wake-ups, 100 ms of a 1 kHz topic at the default)."""
+        between two wake-ups, 100 ms of a 1 kHz topic at the default). A topic already taken keeps its
+        one subscription (another listener's), whoever asks again."""
         from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+        if topic in self._subscriptions:
+            return
         qos = QoSProfile(depth=depth, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT)
         self._subscriptions[topic] = self.node.create_subscription(msg_class, topic, lambda _raw: None, qos,
                                                                    raw=True)   # taken by the thread, never called
@@ -64,8 +121,10 @@ class TopicReader:
         return list(self._subscriptions)
 
     def start(self) -> "TopicReader":
-        self._thread = threading.Thread(target=self._loop, daemon=True, name="faultmas-ros2-reader")
-        self._thread.start()
+        """Start the thread (once: a second consumer's ``start`` is a no-op)."""
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._loop, daemon=True, name="faultmas-ros2-reader")
+            self._thread.start()
         return self
 
     def close(self) -> None:
@@ -83,7 +142,6 @@ class TopicReader:
         from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 
         wait_set, subs = None, []
-        next_tick = time.monotonic() + self.tick_s
         try:
             while not self._stop.is_set() and self.context.ok():
                 if self._changed or wait_set is None:
@@ -91,6 +149,8 @@ class TopicReader:
                     subs = list(self._subscriptions.items())
                     with self.context.handle:
                         wait_set = _rclpy.WaitSet(len(subs), 1, 0, 0, 0, 0, self.context.handle)
+                listeners = self._listeners
+                next_tick = min((l.next_tick for l in listeners), default=time.monotonic() + 1.0)
                 wait_set.clear_entities()
                 for _topic, sub in subs:
                     wait_set.add_subscription(sub.handle)
@@ -104,11 +164,19 @@ class TopicReader:
                 if batch:
                     batch.sort(key=lambda m: m[0])
                     self.received += len(batch)
-                    self.on_batch(batch)
-                if time.monotonic() >= next_tick:
-                    next_tick = time.monotonic() + self.tick_s
-                    if self.on_tick is not None:
-                        self.on_tick()
+                    for listener in listeners:
+                        if listener.topics is None:
+                            listener.on_batch(batch)
+                        else:
+                            mine = [m for m in batch if m[1] in listener.topics]
+                            if mine:
+                                listener.on_batch(mine)
+                now = time.monotonic()
+                for listener in listeners:
+                    if now >= listener.next_tick:
+                        listener.next_tick = now + listener.tick_s
+                        if listener.on_tick is not None:
+                            listener.on_tick()
                 if batch:
                     self._stop.wait(self.batch_s)
         except Exception:

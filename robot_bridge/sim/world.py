@@ -22,7 +22,7 @@ import numpy as np
 
 from robot_bridge import percepts as vocabulary
 from robot_bridge.protocol import Completion, Percept
-from robot_bridge.sim import faults, imu, kobuki, motion, odometry
+from robot_bridge.sim import allocator, faults, imu, kobuki, motion, odometry
 from robot_bridge.sim.camera_frame import CameraFrame
 from robot_bridge.sim.faults import NO_FAULT, Fault
 from robot_bridge.sim.odometry_fusion import OdometryFusion, Pose2D
@@ -141,6 +141,8 @@ class World:
             base = kobuki.BaseState(x=x, y=y, yaw=math.radians(yaw_deg), time=self.time)
             ticks = kobuki.encoder_ticks(base)
             mount = CameraMount() if camera is True else (camera or None)
+            if mount is not None:     # frames will be rendered here, world after world: bounded heaps
+                allocator.limit_arenas()
             gyro_rng = np.random.default_rng([self.seed, key, 2]) if self.noise else None
             robot = _Robot(name, base, rng, np.random.default_rng([self.seed, key, 1]), fault,
                            odometry.Odometry(ticks=ticks), ticks, camera=mount,

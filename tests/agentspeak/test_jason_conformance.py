@@ -409,3 +409,27 @@ def test_clone_copies_beliefs_and_plans_but_not_goals():
         +p(X) : a(V) & test(T) <- .print(X, " : ", V + T).
     """
     assert run_mas({"main": main}) == ["[main] started", "[bob] 10 : 41"]
+
+
+def test_stop_mas_with_a_delay_posts_jag_shutting_down_to_every_agent_and_runs_until_then():
+    # RunLocalMAS.stopAgs: with a deadline, every agent gets +jag_shutting_down(Deadline) and runs
+    # that long; .stopMAS itself succeeds (its caller goes on)
+    out = run_mas({
+        "a": "!s.\n+!s <- .stopMAS(3000); .print(goes_on).\n"
+             "+jag_shutting_down(T) <- .print(a_down, T).\n",
+        "b": "+jag_shutting_down(T) <- .wait(50); .print(b_packed, T / 1000).\n",
+    }, timeout=20)  # (3 s: b's .wait(50) must end before the stop on a loaded machine too)
+    assert sorted(out) == ["[a] a_down3000", "[a] goes_on", "[b] b_packed3"]
+
+
+def test_a_select_option_rule_chooses_among_the_options():
+    # Agent.selectOptionBB (Jason 3.3, demos/selectOptionBB): each option (plan x context solution) is
+    # tested with select__option(Event, IntentionId, Plan, Unifier); the first that passes is taken
+    out = run_asl(asl("""
+        select__option(E, I, P, U) :- .print(I, " ", U) & P = {@L +!T : C <- B} & L =.. [_, _, As] & .member(kk, As).
+        a(10). a(20). b(30).
+        !g.
+        +!g : a(X) <- .print(X).
+        @pt[kk] +!g : b(X) <- .print(X).
+    """))
+    assert out == ["-1 [map(X,10)]", "-1 [map(X,20)]", "-1 [map(X,30)]", "30"]

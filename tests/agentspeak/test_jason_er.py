@@ -141,3 +141,14 @@ def test_contract_net_with_sub_plans_between_agents():
     assert "[c] winnerp2" in out
     assert "[p2] wonfix" in out and "[p1] lostfix" in out
     assert out.index("[c] winnerp2") < out.index("[p2] wonfix")
+
+
+def test_a_failure_plan_among_the_sub_plans_handles_a_failed_sub_goal():
+    out = run_asl(asl("""
+        !cnp(7).
+        +!cnp(Id) <- !bids; .print(after, Id). {
+            +!bids <- .fail.
+            -!bids <- .print(no_bids, Id).
+        }
+    """))
+    assert out == ["no_bids7", "after7"]

@@ -61,11 +61,14 @@ def _agents(monkeypatch, sources: dict[str, str]):
     runtime = LocalRuntime(printer=lambda name, text: lines.append(f"{name}: {text}"))
     agents = {name: runtime.add_agent(name, text) for name, text in sources.items()}
 
-    def cycles(name: str, n: int, per_cycle: float = 0.0) -> None:
-        CURRENT.agent = agents[name]
+    def cycles(name: str, n: int, per_cycle: float = 0.0, idle: float | None = None) -> None:
+        """``n`` cycles of one agent; each takes ``per_cycle`` s, or ``idle`` s if the agent was idle."""
+        ag = agents[name]
+        CURRENT.agent = ag
         for _ in range(n):
-            agents[name].cycle()
-            clock.now += per_cycle
+            busy = bool(ag.running or ag.events)
+            ag.cycle()
+            clock.now += per_cycle if busy or idle is None else idle
     return clock, lines, cycles
 
 
@@ -81,6 +84,20 @@ def test_a_busy_agent_whose_cycles_are_slow_runs_its_timers_in_order(monkeypatch
     """)})
     cycles("ag", 40, per_cycle=0.2)
     assert lines == ["ag: a", "ag: b", "ag: c", "ag: d", "ag: in_time", "ag: waited"]
+
+
+def test_the_time_a_busy_agent_lost_is_not_taken_from_its_later_waits(monkeypatch):
+    # Jason's queueplan pattern: six .wait(50) in a row, each followed by a few formulas, end long before
+    # a .wait(500) begun with them. When each formula takes 50 ms of real time (the process gets the CPU
+    # seldom), the time lost while busy must not shorten the waits that follow.
+    _, lines, cycles = _agents(monkeypatch, {"ag": asl("""
+        !start.
+        +!start <- !!chain(0); .wait(500); .count(step(_), N); .print(steps(N)).
+        +!chain(6).
+        +!chain(I) <- .wait(50); +step(I); .print(I); .print(I); !!chain(I+1).
+    """)})
+    cycles("ag", 1000, per_cycle=0.05, idle=0.001)
+    assert lines[-1] == "ag: steps(6)"
 
 
 def test_an_answer_sent_before_the_askers_timeout_is_taken_though_read_after_it(monkeypatch):

@@ -11,6 +11,7 @@ BAD = """!start.
 +!start : .member(X, [1,2]) <- .print("hi"); .wait(1, 2, 3, 4); .diagnos(m, [], D).
 +!g <- if (.lenght([1], N)) { .print(N) }; for (.member(Y, [1])) { .my_nam(Y) }.
 r(X) :- .my_name(X) & .concat("a", "b", X, Y, Z, W, V) & .nonsense.
++!cnp <- !call. { +!call <- .df_serch("p", L). }
 """
 
 
@@ -23,6 +24,7 @@ def test_unknown_internal_actions_and_wrong_arities_fail_the_check(tmp_path: Pat
     assert f"{source}:2: unknown internal action .diagnos/3; did you mean .diagnose?" in err   # a plug-in's
     assert f"{source}:3: unknown internal action .lenght/2; did you mean .length?" in err       # in an if
     assert f"{source}:3: unknown internal action .my_nam/1" in err                              # in a for body
+    assert f"{source}:5: unknown internal action .df_serch/2; did you mean .df_search?" in err   # a sub-plan
     assert f"{source}:4: unknown internal action .nonsense/0" in err                             # in a rule
     assert ".member" not in err and ".print" not in err and ".my_name/" not in err
 

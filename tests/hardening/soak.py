@@ -1,29 +1,41 @@
-"""The soak of issue 22 (``make soak``): a team of six robots diagnoses faults over and over, one
-``faultmas run --robots 6`` run after another (agent processes over Zenoh, the embedded simulator served by
-this process), until the runs add up to ``--sim-seconds`` of simulated time (default one hour).
+"""The soak of issue 22 (``make soak``): one team of six robots that stays up and diagnoses fault after fault
+for ``--sim-seconds`` of simulated time (default one hour), as a real team between repairs would.
 
-What it watches: this long-lived process (the launcher's hub, the simulator server, the world: what
-``faultmas eval`` keeps for hundreds of runs) for RSS, threads and open file descriptors after each run,
-with the least-squares slope of RSS per run and per simulated hour; and at the end of every run that
-finished, before the agents are stopped, each agent's intentions, events and beliefs (the inspector's
-summary query) and its process's RSS and threads. A run that leaves intentions behind, threads or
-descriptors that grow, or RSS that climbs run after run is a defect; the figures go to
-docs/reliability.md. The agents live one run each: a leak inside an agent shows as a per-run figure that
-grows with the run's length, not across runs.
+The team is what ``faultmas run --robots 6`` starts (six agent processes over Zenoh, the embedded simulator
+served by this process), started once. Its first task is an ordinary team run; then, task after task, this
+process plays the fleet manager and the repair crew: it waits until every robot has ended its task or its
+diagnosis and every agent is idle, repairs every robot, turns each round (towards the arena's middle when
+near a wall), resets the odometry, injects a fault into one robot chosen at random, and tells every robot
+``task(N, X, Y, YawDeg)`` (plans/team_robot_tasks.asl: its pose, and go again). Nothing is restarted, so a
+leak anywhere in the team adds up over the hour, and an hour of simulated time costs about an hour of wall
+time (the simulator runs in real time while the robots stand, faster while they move).
 
-``python -m tests.hardening.soak --sim-seconds 3600 --out soak.jsonl`` (one JSON line per run, then the
-summary line). A team run lasts seconds of simulated time (the robots stop once the fault is diagnosed or
-declared undiagnosed) and tens of wall seconds (six agent processes start), so an hour of simulated time
-takes many hours of wall time: ``--wall-seconds`` caps it, and the summary says which limit ended it."""
+What it watches, after every task: this process (hub, simulator server, world) for RSS, threads and open
+descriptors; every agent (the inspector's summary query) for intentions, events and beliefs once it should
+be idle (an agent still busy then has a stuck intention); every agent process for RSS and threads; the
+Zenoh declarations of this process's hub. The summary gives the least-squares slope of each RSS per hour
+of simulated time. A task that ends neither diagnosed nor arrived within ``--task-timeout`` wall seconds is
+named (``timeout``) and the next task starts anyway.
+
+``python -m tests.hardening.soak --sim-seconds 3600 --out soak.jsonl`` (one JSON line per task, then the
+summary line); ``--wall-seconds`` caps it, and the summary says which limit ended it."""
 from __future__ import annotations
 
 import argparse
 import json
+import math
+import random
 import sys
 import threading
 import time
+from dataclasses import replace
 
 import psutil
+
+PROGRAM = "team_robot_tasks.asl"
+FINAL = ("arrived", "diagnosed", "undiagnosed")
+SENDER = "fleet"
+"""The name tasks come from: not a member of the MAS, which the default profile allows for a tell."""
 
 
 def _team_state(hub, mas: str) -> dict:
@@ -45,7 +57,7 @@ def _agent_processes() -> dict:
     for child in psutil.Process().children():
         try:
             argv = child.cmdline()
-            if "--name" in argv:
+            if "--name" in argv and child.status() != psutil.STATUS_ZOMBIE:
                 found[argv[argv.index("--name") + 1]] = {"rss_mib": round(child.memory_info().rss / 2 ** 20, 1),
                                                          "threads": child.num_threads()}
         except psutil.Error:
@@ -53,35 +65,165 @@ def _agent_processes() -> dict:
     return found
 
 
-def one_run(seed: int, timeout: float) -> dict:
-    """One team run as ``faultmas run --robots 6`` does it, with the agents' state read before they stop."""
+class TaskLog:
+    """The robots' ``.progress`` reports, by task: a robot's reports belong to the task it last announced."""
+
+    def __init__(self, robots: list[str]) -> None:
+        self.robots = robots
+        self.task = {r: 0 for r in robots}
+        self.final: dict[int, dict[str, tuple[str, str]]] = {}
+        self.changed = threading.Condition()
+
+    def on_control(self, message: dict) -> None:
+        from agents.progress import ProgressReport
+
+        report = ProgressReport.from_message(message)
+        if report is None or report.agent not in self.task:
+            return
+        with self.changed:
+            if report.step == "task":
+                self.task[report.agent] = int(report.detail)
+            elif report.step in FINAL:
+                self.final.setdefault(self.task[report.agent], {}).setdefault(report.agent, (report.step, report.detail))
+            self.changed.notify_all()
+
+    def wait_done(self, task: int, timeout: float) -> bool:
+        """Wait until every robot has ended ``task`` (its destination reached, or a diagnosis)."""
+        with self.changed:
+            return self.changed.wait_for(lambda: len(self.final.get(task, {})) == len(self.robots), timeout)
+
+
+def _wait_idle(hub, mas: str, robots: list[str], timeout: float) -> tuple[dict, float]:
+    """The agents' states once all are idle (no intention, no event), or as they are after ``timeout``."""
+    deadline = time.monotonic() + timeout
+    while True:
+        states = _team_state(hub, mas)
+        idle = all(states.get(r, {}).get("intentions") == 0 and states.get(r, {}).get("events") == 0 for r in robots)
+        if idle or time.monotonic() >= deadline:
+            return states, max(0.0, timeout - (deadline - time.monotonic()))
+        time.sleep(0.5)
+
+
+def _turn_round(world, bridges, robot: str) -> float:
+    """Degrees for ``robot`` to face the arena's middle when it stands near a wall, else about."""
+    x, y, yaw = world.pose(robot)
+    xmin, ymin, xmax, ymax = world.arena
+    cx, cy = (xmin + xmax) / 2, (ymin + ymax) / 2
+    if min(x - xmin, xmax - x, y - ymin, ymax - y) < 2.0:
+        heading = math.degrees(math.atan2(cy - y, cx - x))
+    else:
+        heading = yaw + 180.0
+    return (heading - yaw + 180.0) % 360.0 - 180.0
+
+
+def _next_task(n: int, world, bridges, hub, mas: str, rng: random.Random, timeout: float) -> tuple[str, str, list]:
+    """Repair, turn round, reset odometry, inject one fault, tell every robot task ``n``; also returns the
+    robots whose turn did not complete (against another robot, or not within ``timeout`` wall seconds):
+    they start from where they are."""
+    import concurrent.futures
+
+    from agents.cooperative import TEAM_FAULTS
+    from agents.transport.envelope import Envelope
+    from robot_bridge.protocol import Action
+
+    robots = list(bridges)
+    for robot in robots:
+        world.set_fault(robot, "none")
+    turns = {r: bridges[r].act(Action("turn", (round(_turn_round(world, bridges, r), 1),))) for r in robots}
+    concurrent.futures.wait(list(turns.values()), timeout=timeout)
+    unturned = sorted(r for r, f in turns.items() if not f.done() or not f.result().ok)
+    for robot in unturned:
+        world.cancel_all("preempted", name=robot)
+    faulty, fault = rng.choice(robots), rng.choice(TEAM_FAULTS)
+    for robot in robots:
+        world.reset_odometry(robot)
+    world.set_fault(faulty, fault)
+    for robot in robots:
+        x, y, yaw = world.pose(robot)
+        hub.send(Envelope(mas, SENDER, (robot,), "tell", f"task({n}, {x:.3f}, {y:.3f}, {yaw:.1f})"))
+    return faulty, fault, unturned
+
+
+def _declared(hub) -> int:
+    """Zenoh publishers and subscribers this process's hub holds (per receiver and agent)."""
+    return len(hub._publishers) + len(hub._declared)
+
+
+def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, seed: int, settle: float,
+         emit) -> dict:
     from agents.cooperative import build_world, run_agent_processes, team_scenario
     from robot_bridge.sim.server import SimServer
 
-    scenario = team_scenario(6, 1, seed)
+    first = team_scenario(6, 1, seed)
+    scenario = replace(first, robots=tuple(replace(r, program=PROGRAM) for r in first.robots))
+    robots = [r.name for r in scenario.robots]
     world, bridges = build_world(scenario)
+    log = TaskLog(robots)
+    rng = random.Random(seed)
+    me = psutil.Process()
+    rows: list[dict] = []
     hub_of: dict = {}
-    seen: dict = {}
+    started = time.monotonic()
 
     def serve(hub):
         hub_of["hub"] = hub
+        hub.on_control(log.on_control)
         return SimServer(hub.session, scenario.mas, bridges).start().stop
 
+    def limit_reached() -> str | None:
+        if world.time >= sim_seconds:
+            return "sim_seconds"
+        if wall_seconds is not None and time.monotonic() - started >= wall_seconds:
+            return "wall_seconds"
+        return None
+
     def hold():
-        seen["agents"] = _team_state(hub_of["hub"], scenario.mas)
-        seen["processes"] = _agent_processes()
-    started = time.monotonic()
+        try:
+            tasks()
+        except Exception as exc:   # the figures so far still count: the summary names what ended it
+            import traceback
+            traceback.print_exc()
+            hold_state["ended_by"] = f"soak error: {exc!r}"
+
+    def tasks():
+        hub = hub_of["hub"]
+        n, faulty = 0, next((r.name, r.fault, []) for r in scenario.robots if r.fault != "none")
+        task_sim, task_wall = 0.0, started
+        while True:
+            done = log.wait_done(n, max(0.0, task_timeout - (time.monotonic() - task_wall)))
+            states, waited = _wait_idle(hub, scenario.mas, robots, settle)
+            ended = log.final.get(n, {})
+            step, detail = ended.get(faulty[0], (None, None))
+            diagnosis = detail if step == "diagnosed" else step
+            row = {"task": n, "faulty": faulty[0], "fault": faulty[1], "diagnosis": diagnosis, "unturned": faulty[2],
+                   "outcome": ("correct" if diagnosis == faulty[1] else "wrong") if done else "timeout",
+                   "not_ended": sorted(set(robots) - set(ended)),
+                   "sim_s": round(world.time - task_sim, 1), "wall_s": round(time.monotonic() - task_wall, 1),
+                   "sim_total_s": round(world.time, 1), "wall_total_s": round(time.monotonic() - started, 1),
+                   "settle_s": round(waited, 1),
+                   "stuck": {a: s for a, s in states.items() if s.get("intentions") or s.get("events")},
+                   "missing_agents": sorted(set(robots) - set(states)),
+                   "agents": {a: {k: s.get(k) for k in ("intentions", "events", "beliefs")} for a, s in states.items()},
+                   "agent_processes": _agent_processes(),
+                   "soak_rss_mib": round(me.memory_info().rss / 2 ** 20, 1), "soak_threads": threading.active_count(),
+                   "soak_os_threads": me.num_threads(), "soak_fds": me.num_fds(), "hub_declared": _declared(hub)}
+            rows.append(row)
+            emit(row)
+            why = limit_reached()
+            if why is not None or len(row["agent_processes"]) < len(robots):
+                hold_state["ended_by"] = why or "an agent process ended"
+                return
+            n += 1
+            task_sim, task_wall = world.time, time.monotonic()
+            faulty = _next_task(n, world, bridges, hub, scenario.mas, rng, task_timeout)
+
+    hold_state: dict = {}
     try:
-        log = run_agent_processes(scenario, ["--bridge", "zenoh"], timeout, world=world, serve=serve, hold=hold)
+        run = run_agent_processes(scenario, ["--bridge", "zenoh"], task_timeout, world=world, serve=serve, hold=hold)
     finally:
         for bridge in bridges.values():
             bridge.shutdown()
-    results = log.results()
-    return {"seed": seed, "sim_s": round(world.time, 1), "wall_s": round(time.monotonic() - started, 1),
-            "finished": log.done.is_set(), "died": log.died, "frozen": log.frozen,
-            "faults": [r.fault for r in results], "diagnoses": [r.diagnosis for r in results],
-            "correct": log.done.is_set() and all(r.correct for r in results),
-            "agents": seen.get("agents", {}), "agent_processes": seen.get("processes", {})}
+    return summarize(rows, hold_state.get("ended_by", "the first task failed"), run.died, run.frozen, started)
 
 
 def _slope(xs: list[float], ys: list[float]) -> float:
@@ -91,53 +233,64 @@ def _slope(xs: list[float], ys: list[float]) -> float:
     return float(np.polyfit(xs, ys, 1)[0])
 
 
+def summarize(rows: list[dict], ended_by: str, died, frozen, started: float) -> dict:
+    settled = rows[1:] or rows  # the first task loads the interpreter, models, Zenoh and caches: not a leak
+    hours = [r["sim_total_s"] / 3600 for r in settled]
+    agents = sorted({a for r in rows for a in r["agent_processes"]})
+
+    def first_last(key):
+        return [settled[0][key], settled[-1][key]] if settled else None
+    per_agent_slope = {a: round(_slope([r["sim_total_s"] / 3600 for r in settled if a in r["agent_processes"]],
+                                       [r["agent_processes"][a]["rss_mib"] for r in settled
+                                        if a in r["agent_processes"]]), 2) for a in agents}
+    return {
+        "ended_by": ended_by, "tasks": len(rows),
+        "sim_hours": round(rows[-1]["sim_total_s"] / 3600, 3) if rows else 0.0,
+        "wall_hours": round((time.monotonic() - started) / 3600, 3),
+        "outcomes": {o: sum(r["outcome"] == o for r in rows) for o in ("correct", "wrong", "timeout")},
+        "died": died, "frozen": frozen,
+        "tasks_with_stuck_intentions": sum(bool(r["stuck"]) for r in rows),
+        "max_settle_s": max((r["settle_s"] for r in rows), default=None),
+        "soak_rss_mib_first_last": first_last("soak_rss_mib"),
+        "soak_rss_slope_mib_per_sim_hour": round(_slope(hours, [r["soak_rss_mib"] for r in settled]), 2),
+        "soak_threads_first_last": first_last("soak_os_threads"),
+        "soak_fds_first_last": first_last("soak_fds"),
+        "hub_declared_first_last": first_last("hub_declared"),
+        "agent_rss_mib_first_last": {a: [next(r["agent_processes"][a]["rss_mib"] for r in settled if a in r["agent_processes"]),
+                                         next(r["agent_processes"][a]["rss_mib"] for r in reversed(settled) if a in r["agent_processes"])]
+                                     for a in agents} if settled else {},
+        "agent_rss_slope_mib_per_sim_hour": per_agent_slope,
+        "agent_threads_first_last": {a: [next(r["agent_processes"][a]["threads"] for r in settled if a in r["agent_processes"]),
+                                         next(r["agent_processes"][a]["threads"] for r in reversed(settled) if a in r["agent_processes"])]
+                                     for a in agents} if settled else {},
+        "agent_beliefs_first_last": {a: [settled[0]["agents"].get(a, {}).get("beliefs"),
+                                         settled[-1]["agents"].get(a, {}).get("beliefs")] for a in agents} if settled else {},
+    }
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sim-seconds", type=float, default=3600.0, help="simulated time to reach (default 1 h)")
     parser.add_argument("--wall-seconds", type=float, default=None,
                         help="also stop after this much wall time (the summary says which limit ended it)")
-    parser.add_argument("--run-timeout", type=float, default=240.0, help="wall seconds per run (default 240)")
-    parser.add_argument("--first-seed", type=int, default=1000)
+    parser.add_argument("--task-timeout", type=float, default=240.0,
+                        help="wall seconds a task may take before it is named a timeout (default 240)")
+    parser.add_argument("--settle", type=float, default=30.0,
+                        help="wall seconds the agents may take to be idle once a task ended (default 30)")
+    parser.add_argument("--seed", type=int, default=1000)
     parser.add_argument("--out", default=None, help="also write the JSON lines here")
     args = parser.parse_args(argv)
-    me = psutil.Process()
     out = open(args.out, "w") if args.out else None
-    rows, sim_total, seed = [], 0.0, args.first_seed
-    started = time.monotonic()
-    while sim_total < args.sim_seconds and (args.wall_seconds is None
-                                            or time.monotonic() - started < args.wall_seconds):
-        row = one_run(seed, args.run_timeout)
-        sim_total += row["sim_s"]
-        row.update(sim_total_s=round(sim_total, 1), soak_rss_mib=round(me.memory_info().rss / 2 ** 20, 1),
-                   soak_threads=threading.active_count(), soak_os_threads=me.num_threads(), soak_fds=me.num_fds())
-        rows.append(row)
+
+    def emit(row: dict) -> None:
         line = json.dumps(row)
         print(line, flush=True)
         if out:
             out.write(line + "\n")
             out.flush()
-        seed += 1
-    settled = rows[1:] or rows  # the first run loads the interpreter, models and Zenoh: not a leak
-    rss = [r["soak_rss_mib"] for r in settled]
-    left = [a["intentions"] for r in rows if r["finished"] for a in r["agents"].values()]
-    summary = {
-        "ended_by": "sim_seconds" if sim_total >= args.sim_seconds else "wall_seconds",
-        "runs": len(rows), "sim_hours": round(sim_total / 3600, 2), "wall_hours": round((time.monotonic() - started) / 3600, 2),
-        "correct": sum(r["correct"] for r in rows), "finished": sum(r["finished"] for r in rows),
-        "died": sum(bool(r["died"]) for r in rows), "frozen": sum(bool(r["frozen"]) for r in rows),
-        "rss_mib_first_last": [rss[0], rss[-1]],
-        "rss_slope_kib_per_run": round(_slope(list(range(len(rss))), rss) * 1024, 1),
-        "rss_slope_mib_per_sim_hour": round(_slope([r["sim_total_s"] / 3600 for r in settled], rss), 2),
-        "threads_first_last": [settled[0]["soak_os_threads"], settled[-1]["soak_os_threads"]],
-        "fds_first_last": [settled[0]["soak_fds"], settled[-1]["soak_fds"]],
-        "max_intentions_left_after_a_finished_run": max(left, default=None),
-        "agent_rss_mib_max": max((p["rss_mib"] for r in rows for p in r["agent_processes"].values()), default=None),
-        "agent_threads_max": max((p["threads"] for r in rows for p in r["agent_processes"].values()), default=None),
-    }
-    line = json.dumps({"summary": summary})
-    print(line, flush=True)
+    summary = soak(args.sim_seconds, args.wall_seconds, args.task_timeout, args.seed, args.settle, emit)
+    emit({"summary": summary})
     if out:
-        out.write(line + "\n")
         out.close()
     return 0
 

@@ -98,12 +98,21 @@ def test_the_run_loads_as_a_data_set_with_agent_features(agents_run):
 
 
 @pytest.mark.timeout(240)
-def test_a_model_of_an_agent_watches_it_live_over_ros2_and_zenoh(agents_run):
+@pytest.mark.timeout(300)
+def test_a_model_of_an_agent_watches_it_live_over_ros2_and_zenoh(agents_run, tmp_path):
     """The online path for an agent: its model's channels (bridge topics and Zenoh keys) fit the live
-    agent, its process is found by its command line, its keys' samples reach the buffers, and it is
-    scored. The model is the recorded run's feature layout with a neutral fit (no training needed to
-    test the plumbing; detection quality is the data set's evaluation's job)."""
+    agent, its process is found by its command line, its keys' samples reach the buffers through a Zenoh
+    session shared with the observers' tap (``faultmas observe --zenoh --learned``: one session), and it is
+    scored; then the same through the command. The model is the recorded run's feature layout with a
+    neutral fit (no training needed to test the plumbing; detection quality is the data set's
+    evaluation's job)."""
+    import subprocess
+    import sys
+
     import rclpy
+
+    from detection.taps.zenoh import ZenohKeys
+    from robot_bridge.ros2.runtime import loopback_env
 
     from detection.learned.counters import TARGET_NAMES
     from detection.learned.dataset import load
@@ -124,16 +133,19 @@ def test_a_model_of_an_agent_watches_it_live_over_ros2_and_zenoh(agents_run):
     agents = CooperativeAgents()
     supervisor = Supervisor(plan(list(ROBOTS), fault=agents.robot_fault(3), camera=False, seed=3), domain)
     supervisor.start()
-    team = live = None
+    team = live = keys = None
     emitted: list = []
+    model.save(tmp_path / "faulty_agent.npz")
     try:
         assert supervisor.wait_ready(90) == set()
         team = agents.start(domain, 3)
         with RosContext(domain_id=domain) as work:
             Workload(work.add(rclpy.create_node("perfbugs_workload", context=work.context)), ROBOTS, seed=3)
             time.sleep(3.0)
+            keys = ZenohKeys(connect=[team.endpoint])          # the observers' Zenoh tap's session
             live = LiveLearnedObserver({"faulty_agent": model}, [f"/{r}" for r in ROBOTS], emitted.extend, domain,
-                                       zenoh_connect=[team.endpoint])
+                                       zenoh_connect=[team.endpoint], zenoh_keys=keys)
+            assert live.zenoh.tap.keys is keys
             assert live.observer.processes["faulty_agent"].pid == team.pids["faulty"]
             keys = [t for t in live.observer.buffers if not t.startswith("/")]
             assert "faultmas/coop/agent/faulty/inbox" in keys
@@ -143,12 +155,24 @@ def test_a_model_of_an_agent_watches_it_live_over_ros2_and_zenoh(agents_run):
             deadline = time.monotonic() + 60
             while (not emitted or sum(drained) == 0) and time.monotonic() < deadline:
                 time.sleep(0.5)
+            live.close()
+            live = None
+            command = subprocess.run([sys.executable, "-m", "agents", "observe", "--zenoh", "--learned", str(tmp_path),
+                                      "--connect", team.endpoint, "--domain-id", str(domain), "--json",
+                                      "--duration", "8"], text=True, capture_output=True, timeout=120,
+                                     env=loopback_env())
     finally:
         if live is not None:
             live.close()
+        if keys is not None:
+            keys.close()
         if team is not None:
             team.stop()
         supervisor.stop()
     assert sum(drained) > 0, "no Zenoh sample of the agents reached the observer"
     assert [o.literal for o in emitted][:1] == ["resource(faulty_agent)"]
     assert emitted[0].source == "learned" and np.isfinite(emitted[0].measured)
+    assert command.returncode == 0, command.stderr[-2000:]
+    assert "learned resource observer watching faulty_agent" in command.stderr
+    first = json.loads(command.stdout.splitlines()[0])
+    assert [(c["literal"], c["source"]) for c in first["changed"]] == [("resource(faulty_agent)", "learned")]
