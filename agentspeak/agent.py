@@ -1034,7 +1034,7 @@ class Agent:
             susp.future.add_done_callback(on_done)
         if susp.timeout is not None:
             # answers are stamped in wall time; on an environment's clock the timeout's wall time is when it fires
-            deadline = time.monotonic() + susp.timeout if self.clock is time.monotonic else None
+            deadline = time.monotonic() + susp.timeout if self.clock == time.monotonic else None
 
             def on_timeout() -> None:
                 if done[0]:

@@ -396,6 +396,6 @@ def _timer_wait(agent: Agent, now: float) -> float:
     simulator's, which may run slower or faster than wall time) it is looked at again every
     ``CLOCK_POLL_S``: the comparison costs nothing, the agent runs only once its timer is due."""
     clock = agent.clock
-    if clock is time.monotonic:
+    if clock == time.monotonic:
         return agent.timers[0][0] + agent.timer_lag - now
     return min(agent.timers[0][0] + agent.timer_lag - clock(), CLOCK_POLL_S)
