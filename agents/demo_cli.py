@@ -25,6 +25,8 @@ from agents.environment import add_bridge_arguments
 EVAL_FAULTS = ("none", "encoders", "both_actuators", "left_actuator", "right_actuator")
 EVAL_TEAMS = (2, 4, 8, 12)
 """Team sizes ``faultmas eval`` runs by default (robots start anywhere in the arena, often out of sight)."""
+RUN_TIMEOUT = 120.0
+"""Wall seconds ``faultmas run`` gives the pair by default (a team of N: N/2 times as much)."""
 EVAL_SIM_TIMEOUT = 600.0
 """Simulated seconds an evaluation run may take: more than the plans' own time-outs add up to (a run ends
 with their verdict, diagnosed or undiagnosed, before), so only a run that hangs reaches it."""
@@ -64,7 +66,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     run.add_argument("--json", action="store_true", help="print one JSON object (agents' lines go to stderr)")
     run.add_argument("--plot", metavar="PNG", help="draw ground-truth and believed trajectories to this file")
     run.add_argument("--quiet", action="store_true", help="do not show the agents' own lines")
-    run.add_argument("--timeout", type=float, default=120.0, help="wall seconds before giving up (default %(default)s)")
+    run.add_argument("--timeout", type=float, default=None,
+                     help="wall seconds before giving up (default 120; a team of N gets N/2 times as much, as "
+                          "every camera slows the simulator)")
     run.add_argument("--inspect", action="store_true",
                      help="serve the live web view (faultmas inspect) of this run; wait at its end until Ctrl-C")
     run.add_argument("--inspect-hold", type=float, default=None, metavar="S",
@@ -137,6 +141,8 @@ def cmd_run(args: argparse.Namespace) -> int:
             print(f"faultmas run: --bridge {args.bridge} runs the pair in agent processes (not --robots, "
                   f"--in-process or --inspect)", file=sys.stderr)
             return 2
+    if args.timeout is None:
+        args.timeout = RUN_TIMEOUT * max(1.0, (args.robots or 2) / 2)
     show = sys.stderr if args.json else sys.stdout
     inspector = None
     if args.inspect:
