@@ -251,8 +251,15 @@ def plans_dir():
     return resources.files("plans")
 
 
-def build_world(scenario: Scenario, speed: float = 0.0):
-    """The world and one ``SimBridge`` (with camera) per robot, set up."""
+PROCESS_BUSY_CAP = 4.0
+"""Simulated seconds per wall second at most while robots move, when the agents run in processes of their own
+(idle, the world runs at real time as always): fast enough for short runs, slow enough that a command sent
+over Zenoh arrives long before a simulated deadline passes (a 3 s move deadline is 0.75 s of wall time,
+against milliseconds of latency; always real time tripled the runs' wall time)."""
+
+
+def build_world(scenario: Scenario, speed: float = 0.0, busy_cap: float | None = None):
+    """The world and one ``SimBridge`` (with camera) per robot, set up; ``busy_cap``: see ``WorldRunner``."""
     from robot_bridge.sim.bridge import SimBridge
     from robot_bridge.sim.world import World
 
@@ -264,6 +271,9 @@ def build_world(scenario: Scenario, speed: float = 0.0):
                                     camera=True, speed=speed)
     for bridge in bridges.values():
         bridge.setup()
+    if busy_cap is not None:
+        from robot_bridge.sim.runner import shared_runner
+        shared_runner(world, speed).busy_cap = busy_cap
     return world, bridges
 
 
@@ -283,7 +293,11 @@ def run_scenario(scenario: Scenario, *, processes: bool = True, timeout: float =
     robustness tests: a helper or a faulty robot that dies mid-way); a true return ends the run.
     Only with ``processes``.
     """
-    world, bridges = build_world(scenario)
+    # Agents in processes of their own see the world over Zenoh, some wall milliseconds late, and count
+    # their deadlines in its simulated time: a world stepping flat out while one robot moves spent another
+    # robot's whole 3 s move deadline (0.1 s of wall time) before its command arrived. So it is paced then
+    # (PROCESS_BUSY_CAP); in-process agents keep the flat-out world (``faultmas eval``).
+    world, bridges = build_world(scenario, busy_cap=PROCESS_BUSY_CAP if processes else None)
     try:
         if processes:
             finished = _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark, inspector,

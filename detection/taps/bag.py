@@ -35,6 +35,8 @@ def _marker_time_ns(path: str | Path, topic: str) -> int | None:
     reader = _open(path)
     try:
         conns = [c for c in reader.connections if c.topic == topic]
+        if not conns:  # (rosbags reads every connection when given none)
+            return None
         for _conn, t_ns, _raw in reader.messages(connections=conns):
             return t_ns
         return None
@@ -47,6 +49,8 @@ def first_tap_data(path: str | Path, channel: str):
     reader = _open(path)
     try:
         conns = [c for c in reader.connections if c.topic == codec.tap_topic(channel)]
+        if not conns:  # (rosbags reads every connection when given none)
+            return None
         for _conn, _t_ns, raw in reader.messages(connections=conns):
             return codec.decode_tap_data(channel, raw)
         return None
@@ -95,6 +99,8 @@ def replay(path: str | Path, topics: Iterable[str]) -> Iterator[Message]:
             import logging
             logging.getLogger("faultmas.detection").warning(
                 "%s: no messages on %s in this bag", path, ", ".join(sorted(missing)))
+        if not conns:  # nothing wanted is in the bag (rosbags would read every connection when given none)
+            return
         try:
             for conn, t_ns, raw in reader.messages(connections=conns):
                 channel = codec.tap_channel(conn.topic)

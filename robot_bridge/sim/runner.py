@@ -27,6 +27,11 @@ class WorldRunner:
         if speed < 0:
             raise ValueError(f"speed must be >= 0 (0 = as fast as possible), got {speed!r}")
         self.world, self.speed = world, speed
+        self.busy_cap: float | None = None
+        """With ``speed=0``: at most this many simulated seconds per wall second while robots move (None:
+        flat out). Agents in other processes, whose commands arrive some wall milliseconds late and whose
+        deadlines count in simulated time, need it: flat out, one robot's move spent another's whole move
+        deadline before its command arrived."""
         self._users = 0
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -65,13 +70,14 @@ class WorldRunner:
         try:
             while not self._stop.is_set():
                 fast = self.speed == 0 and world.busy()
-                if fast:
+                cap = self.busy_cap
+                if fast and cap is None:
                     world.step()
                     flat_out = True
                     continue
-                if flat_out:  # back to paced time: re-anchor so idle time is not "caught up" at once
-                    anchor_wall, anchor_sim, flat_out = time.monotonic(), world.time, False
-                rate = self.speed or 1.0
+                rate = self.speed or (cap if fast else 1.0)
+                if flat_out != fast:  # the pace changes: re-anchor so idle time is not "caught up" at once
+                    anchor_wall, anchor_sim, flat_out = time.monotonic(), world.time, fast
                 due = anchor_sim + (time.monotonic() - anchor_wall) * rate
                 if world.time + dt <= due:
                     world.step()

@@ -147,8 +147,8 @@ def test_a_model_of_an_agent_watches_it_live_over_ros2_and_zenoh(agents_run, tmp
                                        zenoh_connect=[team.endpoint], zenoh_keys=keys)
             assert live.zenoh.tap.keys is keys
             assert live.observer.processes["faulty_agent"].pid == team.pids["faulty"]
-            keys = [t for t in live.observer.buffers if not t.startswith("/")]
-            assert "faultmas/coop/agent/faulty/inbox" in keys
+            agent_channels = [t for t in live.observer.buffers if not t.startswith("/")]
+            assert "faultmas/coop/agent/faulty/inbox" in agent_channels
             drained = []
             drain = live.zenoh.drain
             live.zenoh.drain = lambda: drained.append(drain()) or drained[-1]
