@@ -31,13 +31,16 @@ def stop_time_ns(path: str | Path) -> int | None:
     return _marker_time_ns(path, codec.STOP_TOPIC)
 
 
+def _messages(reader, conns: list):
+    """The messages of ``conns`` only: none when it is empty (rosbags reads every connection when given none)."""
+    return reader.messages(connections=conns) if conns else iter(())
+
+
 def _marker_time_ns(path: str | Path, topic: str) -> int | None:
     reader = _open(path)
     try:
         conns = [c for c in reader.connections if c.topic == topic]
-        if not conns:  # (rosbags reads every connection when given none)
-            return None
-        for _conn, t_ns, _raw in reader.messages(connections=conns):
+        for _conn, t_ns, _raw in _messages(reader, conns):
             return t_ns
         return None
     finally:
@@ -49,9 +52,7 @@ def first_tap_data(path: str | Path, channel: str):
     reader = _open(path)
     try:
         conns = [c for c in reader.connections if c.topic == codec.tap_topic(channel)]
-        if not conns:  # (rosbags reads every connection when given none)
-            return None
-        for _conn, _t_ns, raw in reader.messages(connections=conns):
+        for _conn, _t_ns, raw in _messages(reader, conns):
             return codec.decode_tap_data(channel, raw)
         return None
     finally:
@@ -99,10 +100,8 @@ def replay(path: str | Path, topics: Iterable[str]) -> Iterator[Message]:
             import logging
             logging.getLogger("faultmas.detection").warning(
                 "%s: no messages on %s in this bag", path, ", ".join(sorted(missing)))
-        if not conns:  # nothing wanted is in the bag (rosbags would read every connection when given none)
-            return
         try:
-            for conn, t_ns, raw in reader.messages(connections=conns):
+            for conn, t_ns, raw in _messages(reader, conns):
                 channel = codec.tap_channel(conn.topic)
                 if channel is not None:
                     yield Message(channel, t_ns, codec.decode_tap_data(channel, raw))
