@@ -15,6 +15,8 @@ from pathlib import Path
 
 from setuptools import Extension, setup
 from setuptools.command.build_ext import build_ext
+from setuptools.command.build_py import build_py
+from setuptools.command.editable_wheel import editable_wheel
 
 HERE = Path(__file__).resolve().parent
 SPEEDUPS = runpy.run_path(str(HERE / "agentspeak" / "_speedups.py"))
@@ -107,4 +109,49 @@ class BuildWithManifest(build_ext):
         self.compiled_now.add(ext.name)   # reached when it compiled, or was up to date with its (current) C file
 
 
-setup(ext_modules=_extensions(), cmdclass={"build_ext": BuildWithManifest})
+# _faultmas_ros_libraries.py says why: this .pth keeps the ROS 2 wheels from re-executing every interpreter
+ROS_LIBRARIES_PTH = HERE / "_faultmas_ros_libraries.pth"
+
+
+class BuildPyWithPth(build_py):
+    """build_py, plus the ``.pth`` at the root of the wheel (site-packages), where only a ``.pth`` runs."""
+
+    def run(self) -> None:
+        super().run()
+        if not self.editable_mode:
+            self.copy_file(str(ROS_LIBRARIES_PTH), str(Path(self.build_lib) / ROS_LIBRARIES_PTH.name))
+
+    def get_outputs(self, include_bytecode: bool = True) -> list[str]:
+        return [*super().get_outputs(include_bytecode), str(Path(self.build_lib) / ROS_LIBRARIES_PTH.name)]
+
+
+class EditableWheelWithPth(editable_wheel):
+    """The editable install (``pip install -e``, the Makefile's) with the same ``.pth``: setuptools' strategies
+    write only their own files into the editable wheel, so the chosen one is wrapped. ``_select_strategy`` is
+    setuptools' own (84): were it gone, the editable install would lack the ``.pth`` and the ROS wheels would
+    re-execute every interpreter again, slower but correct."""
+
+    def _select_strategy(self, *args, **kwargs):  # type: ignore[no-untyped-def]
+        return _StrategyWithPth(super()._select_strategy(*args, **kwargs))
+
+
+class _StrategyWithPth:
+    def __init__(self, strategy) -> None:  # type: ignore[no-untyped-def]
+        self.strategy = strategy
+
+    def __call__(self, wheel, files, mapping) -> None:  # type: ignore[no-untyped-def]
+        self.strategy(wheel, files, mapping)
+        wheel.writestr(ROS_LIBRARIES_PTH.name, ROS_LIBRARIES_PTH.read_bytes())
+
+    def __enter__(self) -> "_StrategyWithPth":
+        self.strategy.__enter__()
+        return self
+
+    def __exit__(self, *exc) -> object:  # type: ignore[no-untyped-def]
+        return self.strategy.__exit__(*exc)
+
+
+commands = {"build_ext": BuildWithManifest, "build_py": BuildPyWithPth}
+if hasattr(editable_wheel, "_select_strategy"):
+    commands["editable_wheel"] = EditableWheelWithPth
+setup(ext_modules=_extensions(), cmdclass=commands)
