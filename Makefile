@@ -19,7 +19,10 @@ $(STAMP): pyproject.toml constraints.txt Makefile setup.py
 	@echo "faultmas: installing faultmas and its dependencies at the versions of constraints.txt, with ROS 2 Jazzy wheels and the test tools (a few minutes the first time)"
 	@# The ROS 2 wheels first: they bring lark-parser 0.12, which overwrites Lark 1.x ...
 	@# (not compiled here: `speedups` compiles the interpreter in place, once)
-	@$(PURE_PYTHON) $(PY) -m pip install -q -c constraints.txt -e '.[ros2,dev]'
+	@# editable_mode=compat: the editable install is a plain path entry (this folder) in a .pth; setuptools'
+	@# default, an import hook module, imports pathlib, re, enum... at every interpreter start of the venv:
+	@# 2/3 of `python -c pass`, which a user's `pip install faultmas` never pays (issue 23, start-up).
+	@$(PURE_PYTHON) $(PY) -m pip install -q -c constraints.txt -e '.[ros2,dev]' --config-settings editable_mode=compat
 	@echo "faultmas: putting Lark 1.x back over the lark-parser 0.12 the ROS 2 wheels bring"
 	@# ... so Lark 1.x is reinstalled last (see ../shared/notes/ros2-and-zenoh.md, 1.4).
 	@$(PY) -m pip install -q --force-reinstall --no-deps 'lark==1.3.1'

@@ -65,6 +65,24 @@ def option_literals(text: str | None, file: str) -> list:
     return list_items(parse_term(f"[{text}]"))
 
 
+def project_option_literals(project) -> list[tuple[list, list]]:
+    """``(beliefs, goals)`` of each agent declaration of ``project`` (``option_literals`` of its options), kept in
+    the parse cache (``agentspeak.parse_cache``) as one entry per project: a project run again never imports the
+    parser for them (in a 10-agent ring with a ``beliefs=`` option each, importing the parser and loading its
+    tables for those was a third of the whole run)."""
+    options = [(decl.options.get("beliefs"), decl.options.get("goals")) for decl in project.agents]
+    if not any(beliefs or goals for beliefs, goals in options):
+        return [([], []) for _ in options]
+    from agentspeak.parse_cache import cached
+    from agentspeak.stdlib.registry import FUNCTIONS
+
+    def parse() -> list[tuple[list, list]]:
+        return [(option_literals(beliefs, project.file), option_literals(goals, project.file))
+                for beliefs, goals in options]
+    # the literals depend on the texts and on which arithmetic functions are registered, as programs do
+    return cached("options", repr(options), project.file, tuple(sorted(FUNCTIONS.functions)), parse)
+
+
 def cmd_agent_run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -93,10 +111,9 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
             project = load_mas2j(args.project)
             source_dirs = project.source_dirs
             declared = project.agent_names()
-            for decl in project.agents:
+            for decl, (decl_beliefs, decl_goals) in zip(project.agents, project_option_literals(project)):
                 if args.name in decl.instance_names():
-                    beliefs = option_literals(decl.options.get("beliefs"), project.file)
-                    goals = option_literals(decl.options.get("goals"), project.file)
+                    beliefs, goals = decl_beliefs, decl_goals
         identity = None
         if args.project:
             identity = project_identity(project, [args.name], args.identity)

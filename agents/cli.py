@@ -8,7 +8,6 @@ heavy libraries (OpenCV, rclpy, Zenoh) only inside the function that runs.
 from __future__ import annotations
 
 import argparse
-import functools
 import importlib
 import os
 import re
@@ -112,6 +111,14 @@ def help_width() -> int:
     return (columns or 80) - 2
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser with its help width from ``help_width``: argparse's own formatter imports ``shutil`` for
+    it, in every sub-command's parser too (they are made of this class: argparse uses the parent's)."""
+
+    def _get_formatter(self) -> argparse.HelpFormatter:
+        return self.formatter_class(prog=self.prog, width=help_width())
+
+
 def command_of(argv: Sequence[str]) -> str | None:
     """The sub-command named in ``argv`` (its first word that is one), or None."""
     return next((word for word in argv if word in COMMANDS), None)
@@ -119,8 +126,7 @@ def command_of(argv: Sequence[str]) -> str | None:
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser; only ``command``'s module is imported (None: none, e.g. for ``faultmas --help``)."""
-    parser = argparse.ArgumentParser(prog="faultmas", description=DESCRIPTION,
-                                     formatter_class=functools.partial(argparse.HelpFormatter, width=help_width()))
+    parser = _Parser(prog="faultmas", description=DESCRIPTION)
     parser.add_argument("--version", action=_VersionAction, help="print the installed version and exit")
     add_logging_options(parser, top=True)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")

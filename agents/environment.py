@@ -11,17 +11,16 @@ the bridge does not take, is an error naming the file and line.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from typing import NamedTuple      # not dataclasses: its import (inspect, ast...) was a tenth of `faultmas mas run`
 
 log = logging.getLogger("faultmas.agents")
 
 
-@dataclass(frozen=True)
-class BridgeChoice:
+class BridgeChoice(NamedTuple):
     """A bridge name and its options, both as values (for ``create``) and as written (for a child's command line)."""
 
     name: str
-    options: dict = field(default_factory=dict)
+    options: dict
     texts: tuple[str, ...] = ()
 
     def agent_args(self) -> list[str]:

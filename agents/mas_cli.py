@@ -10,7 +10,7 @@ import argparse
 import logging
 import sys
 
-from agents.agent_cli import add_agent_parser, option_literals
+from agents.agent_cli import add_agent_parser, project_option_literals
 from agents.environment import add_bridge_arguments
 from agents.keys_cli import add_keys_parser
 from agents.router import add_router_parser
@@ -55,7 +55,7 @@ def build_local_mas(project, printer=None, bridges: dict | None = None):
     runtime.trusted_senders = set(project.agent_names())
     runtime.source_dirs = list(project.source_dirs)
     programs: dict[str, object] = {}
-    for decl in project.agents:
+    for decl, (beliefs, goals) in zip(project.agents, project_option_literals(project)):
         if decl.source not in programs:
             try:
                 text = read_source(decl.source)
@@ -64,8 +64,6 @@ def build_local_mas(project, printer=None, bridges: dict | None = None):
                 raise SourceError(f"agent '{decl.name}': cannot read {decl.source}: {exc.strerror or exc}",
                                   project.file) from None
             programs[decl.source] = text
-        beliefs = option_literals(decl.options.get("beliefs"), project.file)
-        goals = option_literals(decl.options.get("goals"), project.file)
         for name in decl.instance_names():
             # each instance gets its own parse: plans hold per-agent labels and state
             program = cached_program(programs[decl.source], decl.source, tuple(project.source_dirs))
