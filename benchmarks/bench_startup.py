@@ -5,7 +5,7 @@ timed from outside: wall seconds and CPU seconds (user + system of the child, fr
 median of the runs; on a busy shared machine the CPU column is the steadier one, so the ratios are given
 for both. All sides run in this one benchmark, interleaved, so the ratios compare like with like:
 
-* ``python -c pass`` (the floor: this venv's interpreter, with the ROS wheels' re-exec), ``faultmas --help``
+* ``python -c pass`` (the floor: this venv's interpreter), ``faultmas --help``
   and ``faultmas asl run hello.asl`` against the issue's targets (0.08 s and 0.10 s);
 * every program of the shared AgentSpeak benchmarks as ``faultmas mas run X.mas2j`` against
   python-agentspeak's ``pyagentspeak_run.py X.asl`` (same sizes; quick mode scales them down);
@@ -19,6 +19,14 @@ from the parse cache (``agentspeak/parse_cache.py``, as a user's second run of a
 (parsed, with the tables kept) has its own line too. The children run without
 ``PYTHONDONTWRITEBYTECODE`` (a user's Python writes ``.pyc`` files, and pip writes them at install): with it
 set, as in some sandboxes, every faultmas module would be compiled from source on every start.
+
+Every child starts as from a user's shell: without the ROS 2 wheels' ``_ROS_WHEELS_BOOTSTRAP_COMPLETE`` and
+``LD_LIBRARY_PATH``, which this process may have and children would inherit (then no child would pay what a
+user's start pays). So the faultmas rows, ``python -c pass`` and the python-sat script (all this venv's
+interpreter) start alike: once, as ``_faultmas_ros_libraries.pth`` keeps the ROS wheels' bootstrapper from
+re-executing a process that never imports ROS; with ``FAULTMAS_ROS_REEXEC=1`` in the environment every one
+of them pays the re-exec again (the way before it). python-agentspeak runs in its own venv, which has no ROS
+wheels and never re-executed.
 """
 from __future__ import annotations
 
@@ -72,8 +80,18 @@ class Timing:
 
 
 def user_env() -> dict[str, str]:
-    """This environment as a user's shell has it: bytecode caches written (see the module doc)."""
-    return {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    """This environment as a user's shell has it: bytecode caches written, no ROS bootstrap variables (see the
+    module doc)."""
+    return {k: v for k, v in os.environ.items()
+            if k not in ("PYTHONDONTWRITEBYTECODE", "_ROS_WHEELS_BOOTSTRAP_COMPLETE", "LD_LIBRARY_PATH")}
+
+
+def reexec_state() -> str:
+    """Whether this venv's interpreter re-executes itself at start (the ROS wheels' bootstrapper), as a child
+    started from a user's shell finds out."""
+    child = run_child([sys.executable, "-c", "import os; print(os.environ.get('_ROS_WHEELS_BOOTSTRAP_COMPLETE'))"],
+                      env=user_env())
+    return "re-executed at start (ROS wheels)" if child.stdout.strip() == "1" else "started once"
 
 
 def _ratio_cells(ours: Timing, theirs: Timing) -> tuple[float | None, str]:
@@ -215,7 +233,7 @@ def run(quick: bool = False) -> str:
     with tempfile.TemporaryDirectory(prefix="faultmas-bench-startup-") as name:
         tmp = Path(name)
         lines = [f"whole process, {repeats} runs each, interleaved; seconds: wall / CPU (user + system), medians; "
-                 f"load average at start {os.getloadavg()[0]:.1f}"]
+                 f"load average at start {os.getloadavg()[0]:.1f}; this venv's interpreter: {reexec_state()}"]
         lines += _startup_rows(tmp, repeats)
         lines.append("")
         if (ASL_DIR / "README.md").exists():
