@@ -1,5 +1,3 @@
-import sys
+from agents.cli import console_main
 
-from agents.cli import main
-
-sys.exit(main())
+console_main()
