@@ -115,7 +115,32 @@ def at(ctx, when, event):
     literal = resolve(trigger.literal, ctx.b)
     if trigger.kind == ACHIEVE and trigger.op == ADD and isinstance(literal, Literal):
         literal = agent._fresh_goal(literal, {})
-    agent.add_timer(_at_seconds(when), lambda: agent.post_external(Trigger(trigger.op, trigger.kind, literal), force=True))
+    pending = _AtEvent(agent, Trigger(trigger.op, trigger.kind, literal))
+    ats = getattr(agent, "at_events", None)
+    if ats is None:
+        ats = agent.at_events = set()
+    ats.add(pending)
+    agent.add_timer(_at_seconds(when), pending)
+
+
+class _AtEvent:
+    """An event ``.at`` posts when its time comes, unless cancelled first (``.drop_all_intentions``)."""
+    __slots__ = ("agent", "trigger", "cancelled")
+
+    def __init__(self, agent, trigger: Trigger) -> None:
+        self.agent, self.trigger, self.cancelled = agent, trigger, False
+
+    def __call__(self) -> None:
+        self.agent.at_events.discard(self)
+        if not self.cancelled:
+            self.agent.post_external(self.trigger, force=True)
+
+
+def cancel_ats(agent) -> None:
+    """Forget the events ``.at`` would post (Jason's ``at.cancelAts``)."""
+    for pending in getattr(agent, "at_events", None) or ():
+        pending.cancelled = True
+    agent.at_events = set()
 
 
 def _types(x) -> list[str]:
