@@ -469,7 +469,7 @@ class _ToProgram(Transformer):
         self.line = tok.line
         if tok.type == "NS_SEP":
             return ""
-        if tok.type == "ATOM":
+        if tok.type == "ATOM" or tok.type == "LOCAL_NS":
             return tok.value
         return self._var(tok.value)
 
