@@ -305,3 +305,25 @@ def test_contract_net_in_modules_end_to_end(tmp_path):
     assert sorted(said("cheap")) == sorted(f"won paint({r}) in {r}" for r in ("hall", "kitchen", "garden"))
     assert sorted(said("dear")) == sorted(f"lost paint({r}) in {r}" for r in ("hall", "kitchen", "garden"))
     assert "Traceback" not in done.stderr
+
+
+def test_messages_keep_their_name_spaces():
+    # kqmlPlans.asl handles `NS::Content` for tell, untell, achieve and askOne: the receiver's belief, goal
+    # or answer is of the sender's name space
+    from tests.agentspeak.harness import run_mas
+    out = run_mas({
+        "a": asl("""
+            !go.
+            +!go <- .send(b, tell, [ns::v(1), v(2)]); .send(b, achieve, ns::g);
+                .send(b, askOne, ns::v(X), A); .print(asked(A));
+                .send(b, untell, ns::v(1)); .send(b, askOne, ns::v(_), A2); .print(asked_again(A2)).
+        """),
+        "b": asl("""
+            +!ns::g[source(S)] <- .print(goal_from(S)).
+            +N::v(X)[source(S)] <- .print(told(N, X, S)).
+            -ns::v(X) <- .print(untold(X)).
+        """),
+    }, timeout=10)
+    assert "[a] asked(ns::v(1)[source(b)[source(a)]])" in out and "[a] asked_again(false)" in out
+    assert [line for line in out if line.startswith("[b]")] == [
+        "[b] told(ns,1,a)", "[b] told(default,2,a)", "[b] goal_from(a)", "[b] untold(1)"]
