@@ -21,9 +21,8 @@ import itertools
 from agentspeak.program import Plan, PlanTerm, Rule, Trigger, map_body, with_sub_plans
 from agentspeak.terms import (
     DEFAULT_NS_NAME, LOCAL_NS_PREFIX, NS_SEP, And, AnnotatedVar, Arith, Cons, Func, Literal, Not, NsTerm, Or, Rel,
-    Term, in_ns,
+    Term, in_ns, ns_atom,
 )
-from agentspeak.unify import ns_atom
 
 _ids = itertools.count(1)
 

@@ -15,8 +15,8 @@ import operator
 from typing import Iterator, Protocol
 
 from agentspeak.terms import (
-    _EXACT, INT_OPS, And, AnnotatedVar, Arith, ArithmeticError_, Cons, Func, Literal, Not, NsTerm, Or, Rel, Term, Var, compare, deref, in_ns, split_ns,
-    is_list, list_items, make_list, resolve, to_str,
+    _EXACT, INT_OPS, And, AnnotatedVar, Arith, ArithmeticError_, Cons, Func, Literal, Not, NsTerm, Or, Rel, Term, Var,
+    compare, deref, in_ns, is_list, list_items, make_list, resolve, split_ns, to_str,
 )
 from agentspeak.copier import rule_copier
 from agentspeak.unify import undo, unify, unify_annots_all

@@ -452,6 +452,19 @@ def in_ns(ns: str, name: str) -> str:
     return name if ns == DEFAULT_NS_NAME else ns + NS_SEP + name
 
 
+_NS_ATOMS: dict = {}
+
+
+def ns_atom(name: str) -> "Literal":
+    """The atom naming a name space (one object per name, the table bounded)."""
+    found = _NS_ATOMS.get(name)
+    if found is None:
+        found = Literal(name)
+        if len(_NS_ATOMS) < 10_000:
+            _NS_ATOMS[name] = found
+    return found
+
+
 class NsTerm:
     """``NS::lit`` where the name space ``NS`` is a variable (or ``ns::X``, a variable in a name space).
 
@@ -459,7 +472,8 @@ class NsTerm:
     Resolved with ``NS`` bound to an atom it is the plain ``Literal`` of that name space. It unifies with
     a literal of any name space, binding ``NS`` to that name space (``default`` for a literal without
     one) and the body to the literal without its name space (a variable's value carries no name space,
-    as in Jason). A variable never takes a local name space (``#1priv``): it stays private to its module."""
+    as in Jason). A variable never takes a local name space (``#1priv``): it stays private to its module.
+    Unification: ``agentspeak.unify.unify_ns``."""
 
     __slots__ = ("ns", "body")
     annots = None   # the solver asks a query for its annotations (NsTerm goals match them by unification)
@@ -483,10 +497,6 @@ class NsTerm:
 
     def subterms(self) -> list:
         return [self.ns, self.body]
-
-    def unify_with(self, other: Term, b: Bindings, trail: list) -> bool:
-        from agentspeak.unify import unify_ns
-        return unify_ns(self, other, b, trail, True)
 
     def __eq__(self, other: object) -> bool:
         return type(other) is NsTerm and other.ns == self.ns and other.body == self.body

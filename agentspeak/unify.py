@@ -13,7 +13,7 @@ from typing import Iterator
 
 from agentspeak.terms import (
     LOCAL_NS_PREFIX, NIL, And, AnnotatedVar, Arith, Bindings, Cons, Func, Literal, Not, NsTerm, Or, Rel, Term, Var,
-    list_items, make_list, split_ns,
+    list_items, make_list, ns_atom, split_ns,
 )
 
 
@@ -168,19 +168,6 @@ def _unify_general(a: Term, c: Term, b: Bindings, trail: list) -> bool:
         if x != y:
             return False
     return True
-
-
-_NS_ATOMS: dict = {}
-
-
-def ns_atom(name: str) -> Literal:
-    """The atom naming a name space (one object per name, the table bounded)."""
-    found = _NS_ATOMS.get(name)
-    if found is None:
-        found = Literal(name)
-        if len(_NS_ATOMS) < 10_000:
-            _NS_ATOMS[name] = found
-    return found
 
 
 def unify_ns(x: NsTerm, other: Term, b: Bindings, trail: list, x_left: bool) -> bool:
