@@ -327,3 +327,14 @@ def test_messages_keep_their_name_spaces():
     assert "[a] asked(ns::v(1)[source(b)[source(a)]])" in out and "[a] asked_again(false)" in out
     assert [line for line in out if line.startswith("[b]")] == [
         "[b] told(ns,1,a)", "[b] told(default,2,a)", "[b] goal_from(a)", "[b] untold(1)"]
+
+
+def test_an_unbound_name_space_fails_the_formula_with_a_reason():
+    out = run_asl(asl("""
+        !g. !h. !k.
+        +!g <- +N::b(1).
+        +!h <- !N::x.
+        +!k <- ?N::nothing(1).
+        -!G[error(E)] <- .print(failed(G, E)).
+    """))
+    assert sorted(out) == ["failed(g,wrong_arguments)", "failed(h,wrong_arguments)", "failed(k,test_goal_failed)"]
