@@ -338,3 +338,13 @@ def test_an_unbound_name_space_fails_the_formula_with_a_reason():
         -!G[error(E)] <- .print(failed(G, E)).
     """))
     assert sorted(out) == ["failed(g,wrong_arguments)", "failed(h,wrong_arguments)", "failed(k,test_goal_failed)"]
+
+
+def test_abolish_removes_the_beliefs_of_a_name_space():
+    out = run_asl(asl("""
+        b(10). b(20). ns3::b(30). ns3::c. default::b(40). other::b(50).
+        !g.
+        +!g <- .abolish(ns3::_); .findall(X, N::b(X), L); .print(L);
+            .abolish(N::b(50)); .findall(X, N::b(X), L2); .print(L2).
+    """))
+    assert out == ["[10,20,40,50]", "[10,20,40]"]
