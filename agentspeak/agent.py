@@ -30,7 +30,7 @@ from agentspeak.program import ACHIEVE, ADD, BEL, DEL, META, Plan, Program, Trig
 from agentspeak.solver import SolveError, _true_k, solve_first
 from agentspeak.stdlib.registry import STDLIB, IAError, Registry, Suspend, yields_solutions
 from agentspeak.terms import (
-    _EXACT, INT_OPS, Arith, ArithmeticError_, Literal, Term, Var, rename, resolve, to_str, variables,
+    _EXACT, INT_OPS, Arith, ArithmeticError_, Literal, NsTerm, Term, Var, rename, resolve, to_str, variables,
 )
 from agentspeak.unify import unify
 
@@ -1166,6 +1166,8 @@ class Agent:
                 value = value.add_annot(SOURCE_SELF)
         elif type(value) is Var:
             raise IAError("wrong_arguments", f"unbound variable {value.name} used as a goal")
+        elif type(value) is NsTerm:
+            raise IAError("wrong_arguments", f"the name space of the goal {to_str(value)} is unbound")
         return value
 
     def intentions(self) -> list[Intention]:

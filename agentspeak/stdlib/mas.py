@@ -354,18 +354,16 @@ def drop_event(ctx, goal):
 
 # ---------------------------------------------------------------------- name spaces
 def _namespaces(agent) -> list[str]:
-    seen = {"default": None}
-    for lit in agent.bb.literals():
-        if "::" in lit.functor:
-            seen.setdefault(lit.functor.split("::", 1)[0], None)
-    for ns in getattr(agent, "namespace_props", {}):
-        seen.setdefault(ns, None)
-    return list(seen)
+    """The agent's name spaces: those of its beliefs and rules, ``default``, and ``kqml`` (Jason's
+    ``kqmlPlans.asl`` keeps its rules there; here they are Python, the name space is listed as Jason lists it)."""
+    return ["kqml"] + [ns for ns in agent.bb.namespaces() if ns != "kqml"]
 
 
 @internal_action(".namespace", args=1)
 def namespace(ctx, ns):
-    """``.namespace(NS)``: NS is a name space of the agent's beliefs (backtracks when NS is free)."""
+    """``.namespace(NS)``: NS is a name space of the agent (backtracks over them when NS is free)."""
+    if not isinstance(ns, Var) and not (isinstance(ns, Literal) and not ns.args):
+        raise wrong_arguments(".namespace: the argument must be an atom or a variable")
     for name in _namespaces(ctx.agent):
         mark = len(ctx.trail)
         if ctx.unify(ns, Literal(name)):
