@@ -362,11 +362,23 @@ class Agent:
             self.timer_busy = busy
             clock = now - self.timer_lag
             if timers[0][0] <= clock:
+                if not busy and clock > timers[0][0] and self.clock is time.monotonic:
+                    # an idle agent found its timer late (the process ran other agents or got no CPU): on a
+                    # thread of its own it would have gone on at the deadline, so that wait is lag too.
+                    # The timer itself ends now; the agent's later ones keep their order after it (a .wait
+                    # due 10 ms after an .at ends after the .at's plan ran, as in Jason). Wall time only:
+                    # an environment's clock is polled (CLOCK_POLL_S), lateness there is no lost CPU.
+                    lag = self.timer_lag + clock - timers[0][0]
+                    self.timer_lag = lag if lag < TIMER_MAX_LAG else TIMER_MAX_LAG
+                    clock = now - self.timer_lag
                 due = []
                 while timers and timers[0][0] <= clock:
                     due.append(heapq.heappop(timers)[2])
                 for callback in due:  # a callback may set a timer due at once: it runs next cycle
                     callback()
+                # busy from now on if a timer gave it work (a wait ended): until its next cycle it is
+                # an agent with work that gets no CPU, whose lost time is lag as well
+                self.timer_busy = bool(self.running or self.events or self.feedback)
                 did = True
         if self.mailbox:
             receive_message(self, self.mailbox.popleft())
