@@ -197,7 +197,8 @@ class PlanLibrary:
     def _build(self) -> dict:
         index: dict[tuple, list[Plan]] = {}
         var_plans: dict[tuple, list[Plan]] = {}
-        ns_plans: dict[tuple, list[Plan]] = {}  # `+N::b(X)`: by (op, kind, negated, name, arity), any name space
+        # `+N::b(X)`: by (op, kind, negated, name, arity), of any name space; `+!ns::G`: by (op, kind, ns)
+        ns_plans: dict[tuple, list[Plan]] = {}
         for p in self.plans:
             key = p.trigger.key
             if key is None:
@@ -206,6 +207,8 @@ class PlanLibrary:
                     body = lit.body
                     ns_plans.setdefault((p.trigger.op, p.trigger.kind, body.neg, body.functor, len(body.args)),
                                         []).append(p)
+                elif type(lit) is NsTerm and type(lit.ns) is Literal:  # `-!G[error(E)]` of a module in ns
+                    ns_plans.setdefault((p.trigger.op, p.trigger.kind, lit.ns.functor), []).append(p)
                 else:
                     var_plans.setdefault((p.trigger.op, p.trigger.kind), []).append(p)
             else:
@@ -228,7 +231,9 @@ class PlanLibrary:
         """The plans with a variable trigger or a variable name space that an event of ``key`` may match."""
         extra = list(self._var_plans.get((key[0], key[1]), ()))
         if self._ns_plans:
-            extra += self._ns_plans.get((key[0], key[1], key[2], split_ns(key[3])[1], key[4]), ())
+            ns, name = split_ns(key[3])
+            extra += self._ns_plans.get((key[0], key[1], key[2], name, key[4]), ())
+            extra += self._ns_plans.get((key[0], key[1], ns), ())
         return extra
 
     def relevant(self, trigger: Trigger) -> list[Plan]:

@@ -21,7 +21,7 @@ import itertools
 from agentspeak.program import Plan, PlanTerm, Rule, Trigger, map_body, with_sub_plans
 from agentspeak.terms import (
     DEFAULT_NS_NAME, LOCAL_NS_PREFIX, NS_SEP, And, AnnotatedVar, Arith, Cons, Func, Literal, Not, NsTerm, Or, Rel,
-    Term, in_ns, ns_atom,
+    Term, Var, in_ns, ns_atom,
 )
 
 _ids = itertools.count(1)
@@ -156,7 +156,14 @@ class NsScope:
         if tt is Func:
             return Func(t.name, tuple(self.term(a, DEFAULT_NS_NAME, False) for a in t.args), t.spec)
         if tt is AnnotatedVar:
-            return AnnotatedVar(t.var, tuple(self.term(a, DEFAULT_NS_NAME, False) for a in t.annots), t.annot_tail)
+            t = AnnotatedVar(t.var, tuple(self.term(a, DEFAULT_NS_NAME, False) for a in t.annots), t.annot_tail)
+        if (tt is Var or tt is AnnotatedVar) and formula and cur != DEFAULT_NS_NAME:
+            # a variable written as a formula is of the module's name space, as Jason's `var(NS)`: a catch-all
+            # `-!G[error(E)]` of a module handles the failures of its goals only, and `!G` posts a goal of it
+            # (mapped when the name space is local, where Jason's parser keeps the written name)
+            return NsTerm(ns_atom(self.local.get(cur, cur)), t)
+        if tt is AnnotatedVar:
+            return t
         if tt is NsTerm:
             return self._ns_term(t)
         if tt is PlanTerm:

@@ -487,6 +487,8 @@ class NsTerm:
         if type(ns) is Literal and not ns.args:
             if type(body) is Literal:
                 name = split_ns(body.functor)[1]
+                if "." in name and name[0] != "'":
+                    return body   # an internal action has no name space (a variable bound to `.print(x)`)
                 return Literal(in_ns(ns.functor, name), body.args, body.annots, body.neg, body.annot_tail)
             if type(body) is not Var and type(body) is not AnnotatedVar:
                 return body   # a number, a string, a list: no name space to give

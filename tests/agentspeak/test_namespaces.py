@@ -348,3 +348,25 @@ def test_abolish_removes_the_beliefs_of_a_name_space():
             .abolish(N::b(50)); .findall(X, N::b(X), L2); .print(L2).
     """))
     assert out == ["[10,20,40,50]", "[10,20,40]"]
+
+
+def test_a_variable_formula_of_a_module_is_of_its_name_space(tmp_path):
+    # Jason's parser gives a variable written as a formula the current name space (`var(NS)`): a module's
+    # catch-all failure plan handles its own goals only, and `!G` posts a goal of the module
+    (tmp_path / "mod.asl").write_text(asl("""
+        +!run(G) <- !G.
+        +!ok <- .print(ok_in(this_ns)).
+        -!G[error(E)] <- .print(module_caught(G, E)).
+    """))
+    main = tmp_path / "main.asl"
+    main.write_text(asl("""
+        { include("mod.asl", m) }
+        !go.
+        +!go <- !m::run(ok); !m::run(missing); !elsewhere.
+        -!G[error(E)] <- .print(main_caught(G, E)).
+    """))
+    lines: list[str] = []
+    runtime = LocalRuntime(printer=lambda name, text: lines.append(text))
+    runtime.add_agent("ag", main.read_text(), source_file=str(main))
+    runtime.run(timeout=10, stop_when_idle=True)
+    assert lines == ["ok_in(m)", "module_caught(missing,no_relevant)", "main_caught(elsewhere,no_relevant)"]
