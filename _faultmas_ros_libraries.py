@@ -117,7 +117,11 @@ def _create_module_loading_ros(self: ExtensionFileLoader, spec):  # type: ignore
     except ImportError as error:
         if _done or _missing_library(error, library_dirs()) is None:
             raise
-    load_ros_libraries()
+        try:
+            load_ros_libraries()
+        except OSError as failure:      # still an ImportError: callers test optional imports with that
+            raise ImportError(f"{error} (loading the ROS 2 wheels' libraries failed: {failure})",
+                              name=spec.name) from failure
     return _create_module(self, spec)
 
 
