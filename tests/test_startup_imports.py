@@ -6,6 +6,7 @@ from coming back, in a fresh interpreter as a user's ``faultmas`` runs.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -13,7 +14,8 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 
 
-def _imported_by(argv: list[str], watched: tuple[str, ...]) -> tuple[int, str, list[str]]:
+def _imported_by(argv: list[str], watched: tuple[str, ...], env: dict[str, str] | None = None) \
+        -> tuple[int, str, list[str]]:
     """Run ``faultmas ARGV`` in a new interpreter: (exit status, its output, the ``watched`` modules it imported)."""
     code = ("import contextlib, io, json, sys\n"
             "from agents.cli import main\n"
@@ -24,7 +26,8 @@ def _imported_by(argv: list[str], watched: tuple[str, ...]) -> tuple[int, str, l
             "except SystemExit as exc:\n"        # --help
             "    status = exc.code\n"
             f"print(json.dumps([status, out.getvalue(), sorted(m for m in {watched!r} if m in sys.modules)]))\n")
-    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=120)
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=120,
+                          env=None if env is None else {**os.environ, **env})
     assert done.returncode == 0, done.stderr
     status, output, imported = json.loads(done.stdout.splitlines()[-1])
     return status, output, imported
@@ -69,3 +72,23 @@ def test_a_project_without_environment_does_not_load_the_bridge_registry(tmp_pat
                                             ("robot_bridge.registry", "importlib.metadata"))
     assert (status, output.strip().splitlines()[-1]) == (0, "[hello] hello world")
     assert "robot_bridge.registry" not in imported
+
+
+def test_a_sub_commands_help_imports_no_shutil():
+    """argparse's formatter imports shutil for the terminal width, in every sub-command's parser too."""
+    status, output, imported = _imported_by(["diagnose", "--help"], ("shutil",))
+    assert status == 0 and "--max-card" in output
+    assert imported == []
+
+
+def test_a_projects_option_literals_come_from_the_parse_cache_when_run_again(tmp_path):
+    """``beliefs=`` options are parsed once: run again, the project imports neither Lark nor the parser."""
+    (tmp_path / "ring.asl").write_text("!go.\n+!go : next(N) <- .print(N).\n")
+    (tmp_path / "ring.mas2j").write_text('MAS ring {\n    agents:\n        a ring.asl [beliefs="next(b)"];\n'
+                                         '        b ring.asl [beliefs="next(a)"];\n}\n')
+    env = {"FAULTMAS_CACHE_DIR": str(tmp_path / "cache")}
+    runs = [_imported_by(["mas", "run", str(tmp_path / "ring.mas2j")], ("lark", "agentspeak.parser"), env)
+            for _ in range(2)]
+    for status, output, _ in runs:
+        assert status == 0 and sorted(output.split()) == ["[a]", "[b]", "a", "b"]
+    assert runs[0][2] == ["agentspeak.parser", "lark"] and runs[1][2] == []
