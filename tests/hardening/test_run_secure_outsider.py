@@ -58,6 +58,7 @@ def test_an_outsider_cannot_tell_achieve_teach_ask_stop_or_forge_progress_in_a_s
     try:
         log = run_agent_processes(scenario, ["--bridge", "zenoh"], 180.0, world=world, err=err, serve=serve,
                                   secure=True)
+        outsiders[0].wait(timeout=60)   # it has sent everything (or failed) by now
     finally:
         for bridge in bridges.values():
             bridge.shutdown()
@@ -65,11 +66,9 @@ def test_an_outsider_cannot_tell_achieve_teach_ask_stop_or_forge_progress_in_a_s
             outsider.kill()
     result = RunResult(scenario, log.results(), log.marks, log.done.is_set(), world, list(log.died),
                        list(log.frozen))
-    outsider = outsiders[0]
-    outsider.wait(timeout=30)
-    assert said.get(timeout=5).strip() == "SENT", outsider.stderr.read()[-2000:]
     logged = err.getvalue()
     assert result.outcome == "correct", (result.outcome, [r.diagnosis for r in result.robots], logged[-3000:])
+    assert said.get(timeout=5).strip() == "SENT", outsiders[0].stderr.read()[-2000:]
     assert result.robots[0].diagnosis == "encoders"
     # the run's hub: the stops and the forged progress reports on the control key
     assert dict(hubs[0].dropped) == {
