@@ -116,3 +116,30 @@ def test_an_answer_sent_before_the_askers_timeout_is_taken_though_read_after_it(
         clock.now += 10.0  # the asker gets the CPU again long after its deadline
         cycles("a", 5)
         assert lines == [expected]
+
+
+# -- .drop_all_intentions (stdlib/drop_all_intentions.java; Jason's suite: stdlib/drop_all_intentions.asl) --
+def test_drop_all_intentions_keeps_the_calling_intention():
+    # Circumstance.clearRunningIntentions empties I, and the intention running the formula is not in I
+    # (Agent.selectIntention polls it; TransitionSystem requeues it after the formula): "all intentions
+    # except the one where .drop_all_intentions appears are dropped". Jason's suite asserts after it.
+    out = run_asl(asl("""
+        !start.
+        +!start <- !!g(1); !!g(2); .wait(20);
+                   .drop_all_intentions;
+                   .findall(T, .intention(_, _, [im(_, {+!T[_]}, _, _)]), L); .print(L); .print(after).
+        +!g(X) <- .wait(300); .print(never(X)).
+    """), timeout=2.0)
+    assert out == ["[start]", "after"]
+
+
+def test_drop_all_intentions_cancels_the_events_at_would_post():
+    # at.cancelAts (called by drop_all_intentions and so by drop_all_desires); a !!goal's event stays: it
+    # belongs to no intention (Event.isInternal is false), as the environment's and messages' events
+    out = run_asl(asl("""
+        !start.
+        +!start <- .at("now +100 ms", {+!late}); .drop_all_intentions; !!next; .wait(300); .print(done).
+        +!late <- .print(late).
+        +!next <- .print(next).
+    """), timeout=2.0)
+    assert out == ["next", "done"]
