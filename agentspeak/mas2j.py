@@ -9,7 +9,6 @@ gives every agent a robot through that bridge: ``agents.environment`` reads ``en
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
 from pathlib import Path
 
 from typing import TYPE_CHECKING
@@ -30,13 +29,36 @@ _GRAMMAR = Path(__file__).with_name("mas2j.lark")
 _PARSER: Lark | None = None
 
 
-@dataclass
-class AgentDecl:
-    name: str
-    source: str                       # path of the .asl file
-    options: dict = field(default_factory=dict)
-    instances: int = 0                # 0: a single agent named `name`
-    token: object = field(default=None, repr=False, compare=False)  # the name as written (line, column)
+class _Record:
+    """Fields compared and shown as a dataclass does them (not ``dataclasses`` itself: its import, with
+    ``inspect`` and ``ast``, was a twentieth of a short ``faultmas mas run``, issue 23)."""
+
+    _FIELDS: tuple[str, ...] = ()
+    _HIDDEN: tuple[str, ...] = ()        # neither compared nor shown
+
+    def __eq__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        return all(getattr(self, f) == getattr(other, f) for f in self._FIELDS if f not in self._HIDDEN)
+
+    __hash__ = None  # type: ignore[assignment]      # mutable, as the dataclasses were
+
+    def __repr__(self) -> str:
+        shown = ", ".join(f"{f}={getattr(self, f)!r}" for f in self._FIELDS if f not in self._HIDDEN)
+        return f"{type(self).__name__}({shown})"
+
+
+class AgentDecl(_Record):
+    _FIELDS = ("name", "source", "options", "instances", "token")
+    _HIDDEN = ("token",)
+
+    def __init__(self, name: str, source: str, options: dict | None = None, instances: int = 0,
+                 token: object = None) -> None:
+        self.name = name
+        self.source = source              # path of the .asl file
+        self.options = {} if options is None else options
+        self.instances = instances        # 0: a single agent named `name`
+        self.token = token                # the name as written (line, column)
 
     def instance_names(self) -> list[str]:
         if self.instances <= 0:
@@ -44,20 +66,26 @@ class AgentDecl:
         return [f"{self.name}{i}" for i in range(1, self.instances + 1)]
 
 
-@dataclass
-class MasProject:
-    name: str
-    agents: list[AgentDecl]
-    environment: str | None = None
-    environment_args: list[str] = field(default_factory=list)
-    """The environment's arguments as written (strings unquoted): ``environment: sim("seed=3")``."""
-    environment_line: int | None = None
-    infrastructure: str | None = None
-    source_paths: list[str] = field(default_factory=list)
-    file: str = ""
-    source_dirs: list[str] = field(default_factory=list)
-    """Where includes and ``.create_agent`` look (absolute): each ``aslSourcePath`` entry against the
-    working directory (as Jason), then against the project file's folder, then that folder."""
+class MasProject(_Record):
+    _FIELDS = ("name", "agents", "environment", "environment_args", "environment_line", "infrastructure",
+               "source_paths", "file", "source_dirs")
+
+    def __init__(self, name: str, agents: list[AgentDecl], environment: str | None = None,
+                 environment_args: list[str] | None = None, environment_line: int | None = None,
+                 infrastructure: str | None = None, source_paths: list[str] | None = None, file: str = "",
+                 source_dirs: list[str] | None = None) -> None:
+        self.name = name
+        self.agents = agents
+        self.environment = environment
+        self.environment_args = [] if environment_args is None else environment_args
+        """The environment's arguments as written (strings unquoted): ``environment: sim("seed=3")``."""
+        self.environment_line = environment_line
+        self.infrastructure = infrastructure
+        self.source_paths = [] if source_paths is None else source_paths
+        self.file = file
+        self.source_dirs = [] if source_dirs is None else source_dirs
+        """Where includes and ``.create_agent`` look (absolute): each ``aslSourcePath`` entry against the
+        working directory (as Jason), then against the project file's folder, then that folder."""
 
     def agent_names(self) -> list[str]:
         return [n for a in self.agents for n in a.instance_names()]
