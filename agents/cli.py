@@ -179,8 +179,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
 
 
-GC_THRESHOLD = 20_000
-"""Allocations between two runs of the cyclic garbage collector's youngest generation (Python's default: 700)."""
+GC_THRESHOLD = 100_000
+"""Allocations between two runs of the cyclic garbage collector's youngest generation (Python's default: 700).
+Filling 10,000 beliefs: 4 % less CPU than with 20,000; what cycles there are (a few per intention) wait at most
+this many allocations, some MB, before they are freed."""
 
 
 def console_main() -> None:
