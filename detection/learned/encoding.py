@@ -15,12 +15,11 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from detection.taps.ros2_take import HEAD_BYTES     # a type that ``reads_heads`` is read from this many bytes
+
 SIZE_COLUMN = "size"
 SMALL_ARRAY = 9
 SKIPPED_TYPES = {("builtin_interfaces", "msg", "Time")}
-HEAD_BYTES = 65536
-"""A message type whose numbers all come before its bulk (``CdrColumns.reads_heads``) is read from
-this many first bytes of a longer message: far more than any header's strings, far less than an image."""
 
 
 class EncodingError(ValueError):

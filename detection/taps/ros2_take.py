@@ -20,6 +20,10 @@ import logging
 
 log = logging.getLogger("faultmas.detection")
 
+HEAD_BYTES = 65536
+"""What a consumer that needs only a message's first bytes asks for (``TopicReader.subscribe(head=)``):
+far more than any header with its strings, far less than an image."""
+
 RCL_RET_OK = 0
 RCL_RET_SUBSCRIPTION_TAKE_FAILED = 401      # nothing to take: not an error
 
