@@ -208,9 +208,7 @@ class TopicReader:
         a ``ros2_take.Taker``, when there is one, else through rclpy)."""
         with sub.handle:
             if taker is not None:
-                pointer = sub.handle.pointer
-                while (taken := taker.take(pointer, head)) is not None:
-                    out.append((taken[0] or time.time_ns(), topic, taken[1]))
+                taker.drain(sub.handle.pointer, topic, head, out)
                 return
             take, cls = sub.handle.take_message, sub.msg_type
             while (taken := take(cls, True)) is not None:

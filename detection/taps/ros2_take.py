@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import ctypes
 import logging
+import time
 
 log = logging.getLogger("faultmas.detection")
 
@@ -59,9 +60,8 @@ def _libraries():
     from rclpy.impl.implementation_singleton import rclpy_implementation  # noqa: F401  (loads librcl)
 
     rcl, rcutils = ctypes.CDLL("librcl.so"), ctypes.CDLL("librcutils.so")
-    take = rcl.rcl_take_serialized_message
-    take.argtypes = [ctypes.c_void_p, ctypes.POINTER(_Uint8Array), ctypes.POINTER(_MessageInfo), ctypes.c_void_p]
-    take.restype = ctypes.c_int
+    take = rcl.rcl_take_serialized_message   # (subscription, buffer, info, allocation): given as ctypes
+    take.restype = ctypes.c_int                 # objects, no argtypes (their conversion doubles a call's cost)
     rcutils.rcutils_get_default_allocator.restype = _Allocator
     rcutils.rcutils_uint8_array_init.argtypes = [ctypes.POINTER(_Uint8Array), ctypes.c_size_t,
                                                  ctypes.POINTER(_Allocator)]
@@ -83,6 +83,7 @@ class Taker:
             raise MemoryError("rcutils_uint8_array_init failed")
         self._info = _MessageInfo()
         self._buffer_ref, self._info_ref = ctypes.byref(self._buffer), ctypes.byref(self._info)
+        self._view_at, self._view = None, memoryview(b"")      # the buffer's bytes, seen without a copy
 
     @classmethod
     def create(cls) -> "Taker | None":
@@ -93,24 +94,33 @@ class Taker:
             log.info("ROS 2 reader: taking through rclpy (rcl's C API not usable: %s)", exc)
             return None
 
-    def take(self, subscription_pointer: int, head: int | None = None) -> tuple[int, bytes] | None:
-        """The next message of the ``rcl_subscription_t`` at ``subscription_pointer`` as (receive time
-        in ns, its bytes), or None when there is none. With ``head``, a message longer than ``head``
-        bytes comes as a ``MessageHead`` of its first ``head`` bytes. The caller holds the
-        subscription's handle (``with sub.handle:``) so that it cannot be destroyed meanwhile."""
-        ret = self._take(subscription_pointer, self._buffer_ref, self._info_ref, None)
-        if ret == RCL_RET_SUBSCRIPTION_TAKE_FAILED:
-            return None
-        if ret != RCL_RET_OK:
-            raise RuntimeError(f"rcl_take_serialized_message failed ({ret})")
-        size = self._buffer.buffer_length
-        if head is not None and size > head:
-            data = MessageHead(ctypes.string_at(self._buffer.buffer, head), size)
-        else:
-            data = ctypes.string_at(self._buffer.buffer, size)
-        return self._info.received_timestamp, data
+    def drain(self, subscription_pointer: int, topic: str, head: int | None, out: list) -> None:
+        """Append every message waiting on the ``rcl_subscription_t`` at ``subscription_pointer`` to ``out``
+        as (receive time in ns, ``topic``, its bytes). With ``head``, a message longer than ``head`` bytes
+        comes as a ``MessageHead`` of its first ``head`` bytes. The caller holds the subscription's handle
+        (``with sub.handle:``) so that it cannot be destroyed meanwhile. One call per subscription, the
+        loop inside: a Python call per message would cost more than rclpy's own take."""
+        take, buffer, info = self._take, self._buffer, self._info
+        subscription, buffer_ref, info_ref = ctypes.c_void_p(subscription_pointer), self._buffer_ref, self._info_ref
+        while True:
+            ret = take(subscription, buffer_ref, info_ref, None)
+            if ret != RCL_RET_OK:
+                if ret == RCL_RET_SUBSCRIPTION_TAKE_FAILED:
+                    return
+                raise RuntimeError(f"rcl_take_serialized_message failed ({ret})")
+            size = buffer.buffer_length
+            if buffer.buffer != self._view_at or buffer.buffer_capacity != len(self._view):
+                self._view_at = buffer.buffer       # the middleware grew the buffer: view it anew
+                self._view = memoryview((ctypes.c_char * buffer.buffer_capacity).from_address(buffer.buffer)).cast("B")
+            if head is not None and size > head:
+                data = MessageHead(self._view[:head], size)
+            else:
+                data = bytes(self._view[:size])     # cheaper than ctypes.string_at
+            out.append((info.received_timestamp or time.time_ns(), topic, data))
 
     def close(self) -> None:
         """Free the buffer (idempotent)."""
         if self._buffer.buffer:
+            self._view.release()
+            self._view_at, self._view = None, memoryview(b"")
             self._rcutils.rcutils_uint8_array_fini(self._buffer_ref)
