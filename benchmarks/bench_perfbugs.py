@@ -99,7 +99,7 @@ def _watch_child(domain: int, models_dir: str, seconds: float, observers: str = 
 @dataclass
 class Share:
     """One child's CPU over the window, as shares of one core (the process, of which Fast DDS's
-    threads; the rest is ours: the ticks, encoding, and taking the messages with the reader's loop)."""
+    threads; the rest is ours: the ticks, encoding, and the rest: taking the messages)."""
 
     team: str
     kind: str
@@ -116,7 +116,8 @@ class Share:
         return self.whole - self.dds
 
     @property
-    def taking(self) -> float:
+    def rest(self) -> float:
+        """Taking the messages (the reader's loop and rcl's take), and the hz observers where they run."""
         return self.ours - self.ticks - self.encoding
 
 
@@ -172,13 +173,14 @@ def _live_table(shares: list[Share], profile: str) -> list[str]:
     """Side by side: the whole process, Fast DDS's threads, ours and its parts; with and without cameras."""
     lines = [f"online observer, CPU share of one core over {LIVE_S:.0f} s, {profile} models, target <= 2 %:",
              f"  {'team':<11} {'watching':<31} {'msg/s':>6} {'whole':>7} {'FastDDS':>8} {'ours':>7} "
-             f"{'ticks':>7} {'taking':>7} {'encoding':>8}"]
+             f"{'ticks':>7} {'encoding':>8} {'rest':>7}"]
     for s in shares:
         lines.append(f"  {s.team:<11} {KINDS[s.kind]:<31} {s.messages_per_s:>6.0f} {s.whole * 100:>6.2f}% "
-                     f"{s.dds * 100:>7.2f}% {s.ours * 100:>6.2f}% {s.ticks * 100:>6.2f}% {s.taking * 100:>6.2f}% "
-                     f"{s.encoding * 100:>7.2f}%")
+                     f"{s.dds * 100:>7.2f}% {s.ours * 100:>6.2f}% {s.ticks * 100:>6.2f}% {s.encoding * 100:>7.2f}% "
+                     f"{s.rest * 100:>6.2f}%")
     lines.append("  (whole: CPU time of the observer's process; FastDDS: its dds.* threads; ours = whole - FastDDS:")
-    lines.append("   ticks = psutil counters + features + models; encoding = the learned tap's batches; taking = the rest)")
+    lines.append("   ticks = psutil counters + features + models; encoding = the learned tap's batches; rest = taking the")
+    lines.append("   messages (reader loop, rcl take), plus the hz observers' work in their rows)")
     for s in shares:
         lines.append(f"  threads, {s.team}, {KINDS[s.kind]}: {s.threads}")
     return lines
