@@ -11,7 +11,7 @@ import itertools
 from typing import Iterable, Iterator
 
 from agentspeak.program import Rule
-from agentspeak.terms import Literal, Term, Var, resolve
+from agentspeak.terms import DEFAULT_NS_NAME, Literal, Term, Var, resolve, split_ns
 
 _SOURCE = "source"
 
@@ -173,6 +173,23 @@ class BeliefBase:
         s = bucket._sorted
         return s if s is not None else bucket.all()
 
+    def in_every_ns(self, body: Term) -> tuple[list[Literal], list[Rule]]:
+        """The beliefs and rules of every name space that ``NS::body`` may match (``body`` a literal without
+        a name space, or a variable: then every belief)."""
+        if type(body) is not Literal:
+            return list(self.literals()), []
+        want = (body.neg, body.functor, len(body.args))
+        facts = [lit for key, bucket in self._facts.items() if _same_but_ns(key, want) for lit in bucket.all()]
+        rules = [r for key, rs in self._rules.items() if _same_but_ns(key, want) for r in rs]
+        return facts, rules
+
+    def namespaces(self) -> list[str]:
+        """The name spaces of the beliefs and rules, ``default`` first (Jason's ``getNameSpaces``)."""
+        seen = {DEFAULT_NS_NAME: None}
+        for key in itertools.chain(self._facts, self._rules):
+            seen.setdefault(split_ns(key[1])[0], None)
+        return list(seen)
+
     def literals(self) -> Iterator[Literal]:
         for bucket in self._facts.values():
             yield from bucket.all()
@@ -218,6 +235,10 @@ class BeliefBase:
 
     def __len__(self) -> int:
         return self.size
+
+
+def _same_but_ns(key: tuple, want: tuple) -> bool:
+    return key[0] == want[0] and key[2] == want[2] and split_ns(key[1])[1] == want[1]
 
 
 SELF = Literal("self")

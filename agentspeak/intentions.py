@@ -15,7 +15,7 @@ from collections import deque
 from typing import Iterator
 
 from agentspeak.program import ACHIEVE, ADD, BEL, DEL, Plan, Trigger
-from agentspeak.terms import Literal, Term
+from agentspeak.terms import Literal, NsTerm, Term, split_ns
 
 _intention_ids = itertools.count(1)
 
@@ -128,6 +128,8 @@ class PlanLibrary:
         self.plans: list[Plan] = []
         self._index: dict[tuple, list[Plan]] | None = None
         self._var_plans: dict[tuple, list[Plan]] = {}
+        self._ns_plans: dict[tuple, list[Plan]] = {}
+        self._plan_order: dict[int, int] = {}
         self.kqml_override = False  # a plan is relevant to +!kqml_received/4 (valid while _index is)
         self.has_meta = False       # a ^!g plan exists: the agent posts goal-state meta events
         self.has_goal_conditions = False  # a `+!g <: C` plan exists: C is checked every cycle
@@ -195,23 +197,44 @@ class PlanLibrary:
     def _build(self) -> dict:
         index: dict[tuple, list[Plan]] = {}
         var_plans: dict[tuple, list[Plan]] = {}
+        # `+N::b(X)`: by (op, kind, negated, name, arity), of any name space; `+!ns::G`: by (op, kind, ns)
+        ns_plans: dict[tuple, list[Plan]] = {}
         for p in self.plans:
             key = p.trigger.key
             if key is None:
-                var_plans.setdefault((p.trigger.op, p.trigger.kind), []).append(p)
+                lit = p.trigger.literal
+                if type(lit) is NsTerm and type(lit.body) is Literal:
+                    body = lit.body
+                    ns_plans.setdefault((p.trigger.op, p.trigger.kind, body.neg, body.functor, len(body.args)),
+                                        []).append(p)
+                elif type(lit) is NsTerm and type(lit.ns) is Literal:  # `-!G[error(E)]` of a module in ns
+                    ns_plans.setdefault((p.trigger.op, p.trigger.kind, lit.ns.functor), []).append(p)
+                else:
+                    var_plans.setdefault((p.trigger.op, p.trigger.kind), []).append(p)
             else:
                 index.setdefault(key, []).append(p)
-        if var_plans:  # merge variable-trigger plans into every list, keeping source order
-            order = {id(p): i for i, p in enumerate(self.plans)}
+        self._var_plans = var_plans
+        self._ns_plans = ns_plans
+        if var_plans or ns_plans:  # merge variable-trigger plans into every list, keeping source order
+            order = self._plan_order = {id(p): i for i, p in enumerate(self.plans)}
             for key, plans in index.items():
-                extra = var_plans.get((key[0], key[1]))
+                extra = self._unkeyed(key)
                 if extra:
                     plans.extend(extra)
                     plans.sort(key=lambda p: order[id(p)])
-        self._var_plans = var_plans
-        self.kqml_override = bool(index.get(KQML_RECEIVED_KEY) or var_plans.get((ADD, ACHIEVE)))
+        self.kqml_override = bool(index.get(KQML_RECEIVED_KEY) or var_plans.get((ADD, ACHIEVE))
+                                  or ns_plans.get(KQML_RECEIVED_KEY))
         self._index = index
         return index
+
+    def _unkeyed(self, key: tuple) -> list:
+        """The plans with a variable trigger or a variable name space that an event of ``key`` may match."""
+        extra = list(self._var_plans.get((key[0], key[1]), ()))
+        if self._ns_plans:
+            ns, name = split_ns(key[3])
+            extra += self._ns_plans.get((key[0], key[1], key[2], name, key[4]), ())
+            extra += self._ns_plans.get((key[0], key[1], ns), ())
+        return extra
 
     def relevant(self, trigger: Trigger) -> list[Plan]:
         index = self._index if self._index is not None else self._build()
@@ -221,6 +244,13 @@ class PlanLibrary:
             return [p for p in self.plans if p.trigger.op == trigger.op and p.trigger.kind == trigger.kind]
         found = index.get(key)
         if found is not None:
+            return found
+        if self._ns_plans:  # an event of a name space no plan names: the plans of any name space
+            found = self._unkeyed(key)
+            if len(found) > 1:
+                order = self._plan_order
+                found.sort(key=lambda p: order[id(p)])
+            index[key] = found
             return found
         return self._var_plans.get((trigger.op, trigger.kind), [])
 

@@ -61,9 +61,9 @@ def cached_program(text: str, source_file: str = "<string>", source_path: tuple 
     return copy_program(program)
 
 
-def _parse(text: str, source_file: str, source_path: tuple = ()) -> Program:
+def _parse(text: str, source_file: str, source_path: tuple = (), namespace: str = "default") -> Program:
     from agentspeak.parser import parse_program
-    return parse_program(text, source_file, source_path=source_path)
+    return parse_program(text, source_file, source_path=source_path, namespace=namespace)
 
 
 set_program_reader(_parse)   # ``.include`` in an agent whose program came from the cache: the parser, when needed

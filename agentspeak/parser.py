@@ -16,6 +16,7 @@ from lark import Lark, Token, Transformer
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from agentspeak.errors import AslSyntaxError
+from agentspeak.namespaces import NsError, NsScope, needs_scope, unique_ns_id
 from agentspeak.ground_terms import read_ground_term
 from agentspeak.source_text import read_source
 from agentspeak.nesting import MAX_NESTING, first_too_deep_bracket, nesting_depth, too_deep_message
@@ -29,7 +30,7 @@ from agentspeak.patterns import PATTERNS, PatternError, apply_pattern
 from agentspeak.stdlib.functions import FUNCTIONS, check_function_name, rule_function
 from agentspeak.stdlib.registry import set_program_reader
 from agentspeak.terms import (
-    And, AnnotatedVar, Arith, ArithmeticError_, Func, Literal, Not, Or, Rel, Term, Var, is_ground, make_list,
+    DEFAULT_NS_NAME, And, AnnotatedVar, Arith, ArithmeticError_, Func, Literal, Not, NsTerm, Or, Rel, Term, Var, is_ground, make_list,
     resolve,
 )
 
@@ -461,13 +462,29 @@ class _ToProgram(Transformer):
         # a quoted atom keeps its quotes, as in Jason: 'a b' prints quoted and 'abc' is not abc
         return text
 
-    def ns_functor(self, c):
-        """``ns::name`` is the functor ``ns::name`` (name spaces are kept in the name; ``::name`` and
-        ``default::name`` are the default name space, i.e. plain ``name``)."""
-        tok = c[-1]
+    # name spaces: the functor keeps the name space as written (``tv::cfp``, ``::cfp``, ``default::cfp``) and a
+    # variable name space is an NsTerm; agentspeak.namespaces resolves both once the clause is complete
+    def ns_prefix(self, c):
+        tok = c[0]
         self.line = tok.line
-        ns = c[0].value if len(c) == 3 else "default"
-        return tok.value if ns == "default" else f"{ns}::{tok.value}"
+        if tok.type == "NS_SEP":
+            return ""
+        if tok.type == "ATOM" or tok.type == "LOCAL_NS":
+            return tok.value
+        return self._var(tok.value)
+
+    def ns_literal(self, c, neg: bool = False):
+        ns, lit = c[0], _not_function(c[-1])
+        if type(ns) is str:
+            return Literal(f"{ns}::{lit.functor}", lit.args, lit.annots, neg or lit.neg, lit.annot_tail)
+        return NsTerm(ns, Literal(lit.functor, lit.args, lit.annots, neg, lit.annot_tail) if neg else lit)
+
+    def ns_neg_literal(self, c):
+        return self.ns_literal(c, True)
+
+    def ns_var_literal(self, c):
+        ns, body = c[0], self.var_literal(c[1:])
+        return NsTerm(Literal(ns) if type(ns) is str else ns, body)
 
     def annotations(self, c):
         items, tail = self._items(c)
@@ -534,7 +551,7 @@ class _BadInput(Exception):
 
 
 def parse_program(text: str, source_file: str = "<string>", base_dir: str | None = None,
-                  _seen: set | None = None, source_path: tuple = ()) -> Program:
+                  _seen: set | None = None, source_path: tuple = (), namespace: str = DEFAULT_NS_NAME) -> Program:
     """Parse a whole agent program; raise ``AslSyntaxError`` at the first error.
 
     A file without includes is parsed once per process: later calls with the same text get a copy
@@ -542,13 +559,18 @@ def parse_program(text: str, source_file: str = "<string>", base_dir: str | None
     100 agents of one source share one set of compiled contexts (and stay in the CPU's caches)."""
     # the functions known decide whether `ns.f(...)` is a call: a function registered later must not
     # meet a parse made before it
-    key = (text, source_file, len(FUNCTIONS.functions))
+    key = (text, source_file, len(FUNCTIONS.functions), namespace)
     cached = _PARSED.get(key) or _PARSED.get(key + (tuple(source_path),))
     if cached is not None:
         return copy_program(cached)
-    program, errors = _parse(text, source_file, stop_at_first=True)
+    program, errors = _parse(text, source_file, stop_at_first=True, namespace=namespace)
     if errors:
         raise errors[0]
+    if program.__dict__.pop("local_namespaces", False):
+        # its local name spaces (#<n>ns) are new at each parse: each inclusion has private ones (not cached)
+        if program.__dict__.get("includes"):
+            program = _expand_includes(program, source_file, base_dir, _seen, source_path)
+        return program
     if program.__dict__.get("includes"):
         # the included files are read now; the expanded program is kept like any other (100 agents that
         # include the same library parse it once)
@@ -585,8 +607,9 @@ _CLAUSE_START = re.compile(r"^(?=[+\-@!^a-z~{])", re.M)
 MAX_ERRORS = 100
 
 
-def _parse(text: str, source_file: str, stop_at_first: bool) -> tuple[Program, list]:
+def _parse(text: str, source_file: str, stop_at_first: bool, namespace: str = DEFAULT_NS_NAME) -> tuple[Program, list]:
     program = Program(source_file=source_file)
+    scope = NsScope(namespace) if needs_scope(text, namespace) else None
     errors: list[AslSyntaxError] = []
     too_deep = first_too_deep_bracket(text)
     if too_deep is not None:  # refused before the parser spends seconds on it (agentspeak/nesting.py)
@@ -601,7 +624,7 @@ def _parse(text: str, source_file: str, stop_at_first: bool) -> tuple[Program, l
     while True:
         try:
             items = _parse_items(remaining, source_file)
-            _collect(items, program, offset_line)
+            scope = _collect(items, program, offset_line, scope)
             break
         except (UnexpectedInput, _BadInputAt) as exc:
             err = _to_syntax_error(exc, text, remaining, source_file, offset_line)
@@ -671,11 +694,34 @@ def _parse_items(text: str, source_file: str) -> list:
             raise _BadInputAt(too_deep_message(), t.line) from None
 
 
-def _collect(items, program: Program, offset_line: int) -> None:
+def _collect(items, program: Program, offset_line: int, scope: NsScope | None = None) -> NsScope | None:
+    """Put the parsed clauses into ``program`` (resolving name spaces with ``scope``, made at the first
+    namespace directive if the text needed none before); returns the scope."""
     previous = None
     target = program  # inside `{ begin pattern(...) } ... { end }`: the block's own program
-    blocks: list = []  # (directive, line, the program around the block)
+    blocks: list = []  # (directive, line, the program around the block); directive None: a name-space block
     for kind, value, line in items:
+        if scope is not None:
+            value = scope.clause(kind, value)
+        if kind in ("directive", "begin") and _is_namespace_directive(value):
+            if scope is None:
+                scope = NsScope()
+            try:
+                if kind == "begin":
+                    scope.begin(value)
+                    blocks.append((None, line, target))
+                else:
+                    scope.declare(value)
+            except NsError as exc:
+                raise _BadInputAt(str(exc), line) from None
+            program.__dict__["local_namespaces"] = program.__dict__.get("local_namespaces") or scope.declared_local
+            continue
+        if kind == "end" and blocks and blocks[-1][0] is None:
+            blocks.pop()
+            scope.end()
+            continue
+        if kind == "directive" and isinstance(value, Literal) and value.functor == "include":
+            value = _include_ns(value, scope)
         if kind == "sub_plans":  # Jason(ER): the block belongs to the plan just before it
             if previous != "plan":
                 raise _BadInputAt("a block of sub-plans '{ +!g <- ... }' must follow a plan", line)
@@ -722,13 +768,31 @@ def _collect(items, program: Program, offset_line: int) -> None:
             target = _end_block(blocks.pop(), target, offset_line)
     if blocks:
         directive, line, _ = blocks[-1]
-        raise _BadInputAt(f"'{{ begin {directive} }}' has no '{{ end }}'", line)
+        raise _BadInputAt(f"'{{ begin {directive if directive is not None else 'namespace(...)'} }}' has no "
+                          f"'{{ end }}'", line)
+    return scope
+
+
+def _is_namespace_directive(value) -> bool:
+    return isinstance(value, Literal) and value.functor == "namespace"
+
+
+def _include_ns(lit: Literal, scope: NsScope | None) -> Literal:
+    """``{ include("f.asl"[, NS]) }`` with its name space: the given atom, a new one for a variable
+    (Jason: ``ns<N>``), else the current name space of the including file."""
+    args = lit.args
+    if len(args) >= 2:
+        ns = args[1]
+        if type(ns) is Var:
+            ns = Literal(f"ns{unique_ns_id()}")
+        elif not (type(ns) is Literal and not ns.args):
+            raise _BadInput(f"the name space of {lit} must be an atom or a variable")
+        return Literal(lit.functor, (args[0], ns) + args[2:])
+    current = scope.current if scope is not None else DEFAULT_NS_NAME
+    return Literal(lit.functor, args + (Literal(current),)) if args else lit
 
 
 def _unknown_begin(value) -> str:
-    if isinstance(value, Literal) and value.functor == "namespace":
-        return ("'{ begin namespace(...) }' (Jason's modules) is not supported yet; "
-                "write the name space in each literal (ns::lit)")
     return f"unknown directive '{{ begin {value} }}'; expected one of {', '.join(PATTERNS)} (Jason's goal patterns)"
 
 
@@ -760,7 +824,8 @@ def program_directive(program: Program, lit: Literal, line: int) -> None:
     if isinstance(lit, Literal) and lit.functor == "include" and lit.args and isinstance(lit.args[0], str):
         # where the directive stands: the included clauses go there, in source order (as Jason)
         at = (len(program.beliefs), len(program.rules), len(program.plans), len(program.goals))
-        program.__dict__.setdefault("includes", []).append((lit.args[0], line, at))
+        ns = lit.args[1].functor if len(lit.args) > 1 and isinstance(lit.args[1], Literal) else DEFAULT_NS_NAME
+        program.__dict__.setdefault("includes", []).append((lit.args[0], line, at, ns))
     else:
         program.warnings.append(f"{program.source_file}:{line}: unknown directive '{lit}' ignored")
 
@@ -777,20 +842,22 @@ def _expand_includes(program: Program, source_file: str, base_dir: str | None, s
     seen.add(os.path.abspath(source_file))
     base = base_dir or (os.path.dirname(source_file) if source_file and not source_file.startswith("<") else ".")
     inserted = [0, 0, 0, 0]  # clauses inserted so far into each list (the later positions move)
-    for rel, line, at in includes:
+    for rel, line, at, ns in includes:
         path = find_source(rel, base, source_path)
         if path is None:
             where = ", ".join([base or "."] + list(source_path))
             raise AslSyntaxError(f"cannot include '{rel}': no such file (looked in {where})", source_file, line)
-        if os.path.abspath(path) in seen:
+        once = os.path.abspath(path) if ns == DEFAULT_NS_NAME else (os.path.abspath(path), ns)
+        if once in seen:  # a file is included once per name space (bob.asl includes a module twice)
             continue
+        seen.add(once)
         try:
             text = read_source(path)
         except OSError as exc:
             raise AslSyntaxError(f"cannot include '{rel}': {exc.strerror or exc}", source_file, line) from exc
         except ValueError as exc:  # not UTF-8 (a SourceError), or a NUL byte in the path
             raise AslSyntaxError(f"cannot include {rel!r}: {exc}", source_file, line) from None
-        sub = parse_program(text, path, os.path.dirname(path), seen, source_path)
+        sub = parse_program(text, path, os.path.dirname(path), seen, source_path, namespace=ns)
         for k, (target, items) in enumerate(((program.beliefs, sub.beliefs), (program.rules, sub.rules),
                                              (program.plans, sub.plans), (program.goals, sub.goals))):
             pos = at[k] + inserted[k]

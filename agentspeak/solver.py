@@ -15,8 +15,8 @@ import operator
 from typing import Iterator, Protocol
 
 from agentspeak.terms import (
-    _EXACT, INT_OPS, And, AnnotatedVar, Arith, ArithmeticError_, Cons, Func, Literal, Not, Or, Rel, Term, Var, compare, deref,
-    is_list, list_items, make_list, resolve, to_str,
+    _EXACT, INT_OPS, And, AnnotatedVar, Arith, ArithmeticError_, Cons, Func, Literal, Not, NsTerm, Or, Rel, Term, Var,
+    compare, deref, in_ns, is_list, list_items, make_list, resolve, split_ns, to_str,
 )
 from agentspeak.copier import rule_copier
 from agentspeak.unify import undo, unify, unify_annots_all
@@ -144,6 +144,19 @@ def solve(kb: KnowledgeBase, formula: Term, b: dict, trail: list | None = None) 
                 if facts:
                     choices.append((1, goal, facts, 0, [], 0, cont, len(trail), None))
                 ok = False
+            elif tg is NsTerm:
+                # `NS::b(X)`: with NS bound, the literal of that name space; free, b(X) in every name space
+                value = resolve(goal, b)
+                if type(value) is Literal:
+                    cont = _Cont(value, cont)
+                    continue
+                if type(value) is not NsTerm:
+                    raise SolveError("wrong_arguments", f"'{to_str(goal)}' is not a formula")
+                bb = getattr(kb, "bb", None)
+                facts, rules = bb.in_every_ns(value.body) if bb is not None else ([], [])
+                if facts or rules:
+                    choices.append((1, value, facts, 0, rules, 0, cont, len(trail), None))
+                ok = False
             elif tg is str or tg is int or tg is float or tg is Cons:
                 raise SolveError("wrong_arguments", f"'{to_str(goal)}' is not a formula")
             else:
@@ -159,16 +172,18 @@ def solve(kb: KnowledgeBase, formula: Term, b: dict, trail: list | None = None) 
             kind = cp[0]
             if kind == 1:
                 _, goal, facts, fi, rules, ri, ccont, mark, annot_gen = cp
-                undo(b, trail, mark)
                 if annot_gen is not None:
-                    # more ways to match annotations of the same belief
+                    # more ways to match annotations of the same belief: the generator undoes what was bound
+                    # after its own marks (the continuation's bindings too); the arguments' stay bound
                     try:
                         next(annot_gen)
                         cont = ccont
                         break
                     except StopIteration:
+                        undo(b, trail, mark)
                         choices[-1] = (1, goal, facts, fi, rules, ri, ccont, mark, None)
                         continue
+                undo(b, trail, mark)
                 matched = False
                 while fi < len(facts):
                     fact = facts[fi]
@@ -300,9 +315,10 @@ def _univ(left: Term, right: Term, b: dict, trail: list) -> bool:
     """``p(1,2)[a] =.. [default, p, [1,2], [a]]`` (Jason 3; a 3-element list is accepted)."""
     if isinstance(left, Literal):
         annots = make_list(left.annots or ())
-        functor = Literal(("~" if left.neg else "") + left.functor) if True else None
-        lst = make_list([DEFAULT_NS, Literal(left.functor) if not left.neg else Literal("~" + left.functor),
-                         make_list(left.args), annots])
+        ns, name = split_ns(left.functor)
+        functor = Literal(("~" if left.neg else "") + name)
+        lst = make_list([DEFAULT_NS if ns == DEFAULT_NS.functor else Literal(ns), functor, make_list(left.args),
+                         annots])
         if is_list(right):
             items = _items(right)
             if items is not None and len(items) == 3:
@@ -317,19 +333,22 @@ def _univ(left: Term, right: Term, b: dict, trail: list) -> bool:
         body = term(body=plan.body, bare=True)
         return unify(make_list([label, trigger, plan.context if plan.context is not None else _TRUE_ATOM, body]),
                      right, b, trail)
-    if type(left) is Var:
+    if type(left) is Var or type(left) is NsTerm:
         items = _items(right)
         if items is None or len(items) not in (3, 4):
             raise ArithmeticError_(f"=.. needs [Namespace, Functor, Args, Annots], got {to_str(right)}")
+        ns = DEFAULT_NS
         if len(items) == 4:
-            items = items[1:]
+            ns, items = items[0], items[1:]
+            if not (isinstance(ns, Literal) and not ns.args):
+                raise ArithmeticError_(f"=..: the name space must be an atom, got {to_str(ns)}")
         f, args, annots = items
         if not isinstance(f, Literal):
             raise ArithmeticError_(f"=..: functor must be an atom, got {to_str(f)}")
         name, neg = f.functor, False
         if name.startswith("~"):
             name, neg = name[1:], True
-        lit = Literal(name, tuple(list_items(args)), tuple(list_items(annots)) or None, neg)
+        lit = Literal(in_ns(ns.functor, name), tuple(list_items(args)), tuple(list_items(annots)) or None, neg)
         return unify(left, lit, b, trail)
     return False
 

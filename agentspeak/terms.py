@@ -428,7 +428,91 @@ class Func:
     __str__ = __repr__
 
 
-EXPRESSION_TYPES = (Arith, Rel, And, Or, Not, Func)
+# -- name spaces (Jason's modules) ------------------------------------------------------------
+DEFAULT_NS_NAME = "default"
+NS_SEP = "::"
+LOCAL_NS_PREFIX = "#"
+"""A local name space is named ``#<n><name>`` (Jason's ``NameSpace.LOCAL_PREFIX``): unique per inclusion."""
+
+
+def split_ns(functor: str) -> tuple[str, str]:
+    """``"tv::cfp"`` -> ``("tv", "cfp")``; a functor without a name space is in ``default``.
+
+    A literal of a constant name space keeps it in its functor's text (``tv::cfp``): the belief base and
+    plan library index it apart and unification compares it with the functor, at no cost; only a name
+    space that is a variable needs a term of its own (``NsTerm``)."""
+    if NS_SEP in functor and functor[0] != "'":
+        ns, _, name = functor.partition(NS_SEP)
+        return ns, name
+    return DEFAULT_NS_NAME, functor
+
+
+def in_ns(ns: str, name: str) -> str:
+    """The functor of ``name`` in name space ``ns`` (``default`` adds nothing)."""
+    return name if ns == DEFAULT_NS_NAME else ns + NS_SEP + name
+
+
+_NS_ATOMS: dict = {}
+
+
+def ns_atom(name: str) -> "Literal":
+    """The atom naming a name space (one object per name, the table bounded)."""
+    found = _NS_ATOMS.get(name)
+    if found is None:
+        found = Literal(name)
+        if len(_NS_ATOMS) < 10_000:
+            _NS_ATOMS[name] = found
+    return found
+
+
+class NsTerm:
+    """``NS::lit`` where the name space ``NS`` is a variable (or ``ns::X``, a variable in a name space).
+
+    ``body`` is the literal (its functor without a name space), a ``Var`` or an ``AnnotatedVar``.
+    Resolved with ``NS`` bound to an atom it is the plain ``Literal`` of that name space. It unifies with
+    a literal of any name space, binding ``NS`` to that name space (``default`` for a literal without
+    one) and the body to the literal without its name space (a variable's value carries no name space,
+    as in Jason). A variable never takes a local name space (``#1priv``): it stays private to its module.
+    Unification: ``agentspeak.unify.unify_ns``."""
+
+    __slots__ = ("ns", "body")
+    annots = None   # the solver asks a query for its annotations (NsTerm goals match them by unification)
+
+    def __init__(self, ns: Term, body: Term) -> None:
+        self.ns, self.body = ns, body
+
+    def resolve(self, b: Bindings) -> Term:
+        ns = resolve(self.ns, b)
+        body = resolve(self.body, b)
+        if type(ns) is Literal and not ns.args:
+            if type(body) is Literal:
+                name = split_ns(body.functor)[1]
+                if "." in name and name[0] != "'":
+                    return body   # an internal action has no name space (a variable bound to `.print(x)`)
+                return Literal(in_ns(ns.functor, name), body.args, body.annots, body.neg, body.annot_tail)
+            if type(body) is not Var and type(body) is not AnnotatedVar:
+                return body   # a number, a string, a list: no name space to give
+        return NsTerm(ns, body)
+
+    def rename(self, mapping: dict) -> "NsTerm":
+        return NsTerm(rename(self.ns, mapping), rename(self.body, mapping))
+
+    def subterms(self) -> list:
+        return [self.ns, self.body]
+
+    def __eq__(self, other: object) -> bool:
+        return type(other) is NsTerm and other.ns == self.ns and other.body == self.body
+
+    def __hash__(self) -> int:
+        return hash(("ns", self.ns, self.body))
+
+    def __repr__(self) -> str:
+        return to_str(self)
+
+    __str__ = __repr__
+
+
+EXPRESSION_TYPES = (Arith, Rel, And, Or, Not, Func, NsTerm)
 
 
 # -- binding access -------------------------------------------------------------------------
@@ -896,6 +980,9 @@ def to_str(t: Term, b: Bindings | None = None) -> str:
         out = "~" + t.functor if t.neg else t.functor
         if t.functor and not _plain_atom(t.functor) and t.functor[0] != "'":
             out = ("~" if t.neg else "") + "'" + t.functor + "'"
+        elif t.neg and NS_SEP in t.functor:  # Jason writes the name space first: `ns::~p`
+            ns, _, name = t.functor.partition(NS_SEP)
+            out = ns + "::~" + name
         if t.args:
             out += "(" + ",".join(to_str(a) for a in t.args) + ")"
         if t.annots or t.annot_tail is not None:
@@ -928,6 +1015,8 @@ def to_str(t: Term, b: Bindings | None = None) -> str:
         return f"not ({to_str(t.arg)})"
     if tt is Func:
         return t.name + ("(" + ",".join(to_str(a) for a in t.args) + ")" if t.args else "")
+    if tt is NsTerm:
+        return to_str(t.ns) + NS_SEP + to_str(t.body)
     return str(t)
 
 
@@ -939,10 +1028,14 @@ def _plain_atom(name: str) -> bool:
     if not name:
         return False
     c = name[0]
+    if c == "#" and "::" in name:
+        c = "a"
     if not (c.islower() or c == "."):
         return False
-    if "::" in name:  # a name space: `family::brother`
+    if "::" in name:  # a name space: `family::brother`, a local one `#1priv::state`
         ns, _, rest = name.partition("::")
+        if ns.startswith(LOCAL_NS_PREFIX):
+            ns = ns.lstrip(LOCAL_NS_PREFIX + "0123456789")
         return _plain_atom(ns) and _plain_atom(rest)
     return all(ch.isalnum() or ch in "_." for ch in name)
 

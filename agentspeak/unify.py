@@ -12,7 +12,8 @@ from __future__ import annotations
 from typing import Iterator
 
 from agentspeak.terms import (
-    NIL, And, AnnotatedVar, Arith, Bindings, Cons, Func, Literal, Not, Or, Rel, Term, Var, list_items, make_list,
+    LOCAL_NS_PREFIX, NIL, And, AnnotatedVar, Arith, Bindings, Cons, Func, Literal, Not, NsTerm, Or, Rel, Term, Var,
+    list_items, make_list, ns_atom, split_ns,
 )
 
 
@@ -95,6 +96,8 @@ def _unify_general(a: Term, c: Term, b: Bindings, trail: list) -> bool:
             continue
         if tx is Literal:
             if ty is not Literal:
+                if ty is NsTerm and unify_ns(y, x, b, trail, False):
+                    continue
                 return False
             if x.functor != y.functor or x.neg != y.neg or len(x.args) != len(y.args):
                 return False
@@ -112,6 +115,10 @@ def _unify_general(a: Term, c: Term, b: Bindings, trail: list) -> bool:
             continue
         if (tx is int or tx is float) and (ty is int or ty is float):
             if x != y:
+                return False
+            continue
+        if tx is NsTerm or ty is NsTerm:  # a variable name space (never reached by two plain literals)
+            if not (unify_ns(x, y, b, trail, True) if tx is NsTerm else unify_ns(y, x, b, trail, False)):
                 return False
             continue
         if tx is str or ty is str:
@@ -161,6 +168,38 @@ def _unify_general(a: Term, c: Term, b: Bindings, trail: list) -> bool:
         if x != y:
             return False
     return True
+
+
+def unify_ns(x: NsTerm, other: Term, b: Bindings, trail: list, x_left: bool) -> bool:
+    """``NS::body = other`` (``x_left``: x is the left side, whose annotations must be a subset). With
+    ``other`` a literal, NS unifies with its name space (``default`` when it has none) and the body with
+    it without the name space; a variable never takes a local name space (Jason's ``#1priv`` stays in its
+    module). A number, string or list unifies with a variable body (Jason: ``ns::A = 10``)."""
+    def pair(p, q):
+        return unify(p, q, b, trail) if x_left else unify(q, p, b, trail)
+
+    if type(other) is NsTerm:
+        return pair(x.ns, other.ns) and pair(x.body, other.body)
+    if type(other) is Literal:
+        ns_name, name = split_ns(other.functor)
+        ns = x.ns
+        while type(ns) is Var:
+            v = b.get(ns)
+            if v is None:
+                break
+            ns = v
+        if type(ns) is Var:
+            if ns_name.startswith(LOCAL_NS_PREFIX):
+                return False
+            bind(ns, ns_atom(ns_name), b, trail)
+        elif type(ns) is not Literal or ns.args or ns.functor != ns_name:
+            return False
+        plain = other if name == other.functor else Literal(name, other.args, other.annots, other.neg,
+                                                              other.annot_tail)
+        return pair(x.body, plain)
+    if type(x.body) is Var:
+        return pair(x.body, other)
+    return False
 
 
 def _unify_annotated_var(x: Term, y: Term, b: Bindings, trail: list) -> bool:

@@ -168,28 +168,34 @@ def drop_desire_(ctx, goal):
     return Suspend(reason="dropped") if drop_desire(ctx.agent, goal, ctx.intention) else True
 
 
-@internal_action(".drop_all_desires", args=0)
-def drop_all_desires(ctx):
+def _drop_other_intentions(ctx) -> None:
+    """Jason's drop_all_intentions: every intention but the calling one (Jason runs it outside the queue
+    it empties), the events those intentions posted, and the events ``.at`` would post (``cancelAts``).
+    A ``!!g``'s event stays, as the environment's and messages' do: it belongs to no intention."""
+    from agentspeak.stdlib.mas import cancel_ats
     agent = ctx.agent
-    agent.events.clear()
     for i in agent.intentions():
         if i is not ctx.intention:
             agent.drop_intention(i)
-    # the calling intention goes on (Jason: drop_all_desires removes the other desires)
-    return True
+    kept = [ev for ev in agent.events if ev.intention is None or ev.intention is ctx.intention]
+    if len(kept) != len(agent.events):
+        agent.events.clear()
+        agent.events.extend(kept)
+    cancel_ats(agent)
+
+
+@internal_action(".drop_all_desires", args=0)
+def drop_all_desires(ctx):
+    """Jason's drop_all_intentions and every event (the calling intention goes on)."""
+    _drop_other_intentions(ctx)
+    ctx.agent.events.clear()
 
 
 @internal_action(".drop_all_intentions", args=0)
 def drop_all_intentions(ctx):
-    """Drop every intention (the calling one too) but keep the pending events (Jason 3)."""
-    agent = ctx.agent
-    for i in agent.intentions():
-        if i is not ctx.intention:
-            agent.drop_intention(i)
-    if ctx.intention is not None:
-        agent.drop_intention(ctx.intention)
-        return Suspend(reason="dropped")
-    return True
+    """Drop every intention but the calling one, their events and the pending ``.at`` events (Jason 3.3:
+    "all intentions except the one where .drop_all_intentions appears are dropped")."""
+    _drop_other_intentions(ctx)
 
 
 @internal_action(".drop_all_events", args=0)

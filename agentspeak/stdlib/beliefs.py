@@ -41,10 +41,12 @@ def count(ctx, query, result):
 def abolish(ctx, pattern):
     """Remove every belief that unifies with ``pattern`` (posting -b events)."""
     agent = ctx.agent
-    from agentspeak.terms import AnnotatedVar
+    from agentspeak.terms import AnnotatedVar, NsTerm
     from agentspeak.unify import unifies
     if isinstance(pattern, AnnotatedVar):  # `_[source(a)]`: any belief with these annotations
         facts = list(agent.bb.literals())
+    elif isinstance(pattern, NsTerm):  # `ns::_`, `N::b(_)`: the beliefs of a name space, of every one
+        facts = agent.bb.in_every_ns(pattern.body)[0]
     elif isinstance(pattern, Literal):
         facts = list(agent.bb.candidates(pattern, {}))
     else:

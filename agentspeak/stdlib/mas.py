@@ -115,7 +115,32 @@ def at(ctx, when, event):
     literal = resolve(trigger.literal, ctx.b)
     if trigger.kind == ACHIEVE and trigger.op == ADD and isinstance(literal, Literal):
         literal = agent._fresh_goal(literal, {})
-    agent.add_timer(_at_seconds(when), lambda: agent.post_external(Trigger(trigger.op, trigger.kind, literal), force=True))
+    pending = _AtEvent(agent, Trigger(trigger.op, trigger.kind, literal))
+    ats = getattr(agent, "at_events", None)
+    if ats is None:
+        ats = agent.at_events = set()
+    ats.add(pending)
+    agent.add_timer(_at_seconds(when), pending)
+
+
+class _AtEvent:
+    """An event ``.at`` posts when its time comes, unless cancelled first (``.drop_all_intentions``)."""
+    __slots__ = ("agent", "trigger", "cancelled")
+
+    def __init__(self, agent, trigger: Trigger) -> None:
+        self.agent, self.trigger, self.cancelled = agent, trigger, False
+
+    def __call__(self) -> None:
+        self.agent.at_events.discard(self)
+        if not self.cancelled:
+            self.agent.post_external(self.trigger, force=True)
+
+
+def cancel_ats(agent) -> None:
+    """Forget the events ``.at`` would post (Jason's ``at.cancelAts``)."""
+    for pending in getattr(agent, "at_events", None) or ():
+        pending.cancelled = True
+    agent.at_events = set()
 
 
 def _types(x) -> list[str]:
@@ -329,18 +354,16 @@ def drop_event(ctx, goal):
 
 # ---------------------------------------------------------------------- name spaces
 def _namespaces(agent) -> list[str]:
-    seen = {"default": None}
-    for lit in agent.bb.literals():
-        if "::" in lit.functor:
-            seen.setdefault(lit.functor.split("::", 1)[0], None)
-    for ns in getattr(agent, "namespace_props", {}):
-        seen.setdefault(ns, None)
-    return list(seen)
+    """The agent's name spaces: those of its beliefs and rules, ``default``, and ``kqml`` (Jason's
+    ``kqmlPlans.asl`` keeps its rules there; here they are Python, the name space is listed as Jason lists it)."""
+    return ["kqml"] + [ns for ns in agent.bb.namespaces() if ns != "kqml"]
 
 
 @internal_action(".namespace", args=1)
 def namespace(ctx, ns):
-    """``.namespace(NS)``: NS is a name space of the agent's beliefs (backtracks when NS is free)."""
+    """``.namespace(NS)``: NS is a name space of the agent (backtracks over them when NS is free)."""
+    if not isinstance(ns, Var) and not (isinstance(ns, Literal) and not ns.args):
+        raise wrong_arguments(".namespace: the argument must be an atom or a variable")
     for name in _namespaces(ctx.agent):
         mark = len(ctx.trail)
         if ctx.unify(ns, Literal(name)):

@@ -142,10 +142,12 @@ def set_program_reader(reader: Callable[[str, str], Any]) -> None:
     _program_reader = reader
 
 
-def read_program(text: str, file: str) -> Any:
-    """Parse AgentSpeak text with the parser registered by ``agentspeak.parser``."""
+def read_program(text: str, file: str, namespace: str = "default") -> Any:
+    """Parse AgentSpeak text with the parser registered by ``agentspeak.parser`` (into a name space: a module)."""
     if _program_reader is None:
         raise IAError("no AgentSpeak parser loaded (import agentspeak.parser)")
+    if namespace != "default":
+        return _program_reader(text, file, namespace=namespace)
     return _program_reader(text, file)
 internal_action = STDLIB.internal_action
 

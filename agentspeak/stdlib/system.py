@@ -5,8 +5,8 @@ import random as _random
 import time        # not datetime: its import is a noticeable part of a hello world's start (issue 23)
 
 from agentspeak.program import PlanTerm
-from agentspeak.stdlib.registry import Suspend, internal_action, wrong_arguments
-from agentspeak.terms import normalise_number
+from agentspeak.stdlib.registry import IAError, Suspend, internal_action, wrong_arguments
+from agentspeak.terms import Literal, Var, normalise_number
 
 
 @internal_action(".time", args=(3, 4))
@@ -163,14 +163,38 @@ def stop_mas(ctx, delay=0, code=0):
 
 @internal_action(".include", args=(1, 2))
 def include(ctx, path, namespace=None):
-    """Load an .asl file now (beliefs, rules, plans, goals)."""
+    """``.include(File[, NS])``: load an .asl file now (beliefs, rules, plans, goals), found beside the agent's
+    source, then along the project's source path. With NS, into that name space (Jason's modules); an
+    unbound NS gets a new name space ``ns<N>``."""
     import os
+    from agentspeak.namespaces import unique_ns_id
+    from agentspeak.sources import find_source
     from agentspeak.stdlib.registry import read_program
     if not isinstance(path, str):
         raise wrong_arguments(".include needs a file name")
-    base = os.path.dirname(ctx.agent.source_file) if ctx.agent.source_file else "."
-    full = path if os.path.isabs(path) else os.path.join(base, path)
-    with open(full) as f:
-        ctx.agent.load(read_program(f.read(), full))
+    if namespace is not None and not (isinstance(namespace, Var) or (isinstance(namespace, Literal) and not namespace.args)):
+        raise wrong_arguments("the second argument of .include (the name space) must be an atom or a variable")
+    agent = ctx.agent
+    base = os.path.dirname(agent.source_file) if agent.source_file else "."
+    source_dirs = getattr(getattr(agent.arch, "runtime", None), "source_dirs", ())
+    full = find_source(path, base, tuple(source_dirs)) or (path if os.path.isabs(path) else os.path.join(base, path))
+    ns = "default"
+    if isinstance(namespace, Var):
+        ns = f"ns{unique_ns_id()}"
+        if not ctx.unify(namespace, Literal(ns)):
+            return False
+    elif namespace is not None:
+        ns = namespace.functor
+    try:
+        with open(full, encoding="utf-8") as f:
+            text = f.read()
+    except OSError as exc:
+        raise IAError("ia_failed", f".include: cannot read {path} ({exc.strerror or exc})") from None
+    from agentspeak.errors import AslSyntaxError
+    try:
+        program = read_program(text, full, ns)
+    except AslSyntaxError as exc:
+        raise IAError("ia_failed", f".include: {exc}") from None
+    agent.load(program)
 
 

@@ -89,6 +89,7 @@ class ZenohTap(LiveTap):
         self.keys = ZenohKeys(session=session, connect=connect)
         self.session = self.keys.session
         self._alive: set[str] = set()
+        self._tokens = threading.Lock()    # token changes come on Zenoh's threads: one at a time, in order
         self._stop = threading.Event()
         self._timer: threading.Thread | None = None
 
@@ -97,17 +98,18 @@ class ZenohTap(LiveTap):
         for topic in self.config.topics:
             self.keys.subscribe(key_of(topic), lambda key, payload, t=topic: self.feed(t, raw=payload, decode=json.loads))
         if self.config.nodes:
-            self.keys.liveliness("**", self._on_token)
+            # nothing alive yet, said before the subscriber exists: its history may come at once on
+            # another thread, and an empty graph said after it would hide those tokens until one changes
             self.graph(frozenset())
+            self.keys.liveliness("**", self._on_token)
         self._timer = threading.Thread(target=self._ticks, daemon=True, name="faultmas-zenoh-tap")
         self._timer.start()
         return self
 
     def _on_token(self, key: str, alive: bool) -> None:
-        with self._lock:
+        with self._tokens:
             (self._alive.add if alive else self._alive.discard)(key)
-            names = frozenset(n for k in self._alive for n in ("/" + k, "/" + k.rsplit("/", 1)[-1]))
-        self.graph(names)
+            self.graph(frozenset(n for k in self._alive for n in ("/" + k, "/" + k.rsplit("/", 1)[-1])))
 
     def _ticks(self) -> None:
         period = 0.5 / max(self.config.rate_hz, 1.0)

@@ -39,6 +39,9 @@ from robot_bridge.sim.kobuki import wheels_to_twist  # noqa: E402
 RELIABLE = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 SENSOR_STALE_S = 0.5
 """Without encoder data for this long, a running motion fails with ``timeout``."""
+FIRST_SENSOR_WAIT_S = 5.0
+"""How long a motion waits for the base's very first report: a node just started may not yet have
+discovered the base's topic (seconds on a busy machine), which is not a dead base."""
 
 
 def base_percepts(odom: dead_reckoning.Odometry, over_current: int,
@@ -69,6 +72,9 @@ class MotionDecomposer(Node):
         self.over_current = 0
         self._last_stamp: int | None = None
         self._last_sensor = -1.0
+        self._motion_since = 0.0
+        self._before_base: tuple[str, tuple, tuple[float, float]] | None = None
+        """A motion asked for before the base's first report: started when that report comes."""
         self._motion: motion.MotionState | None = None
         self._motion_request: ActionRequest | None = None
         self._cmd = self.create_publisher(Twist, "commands/velocity_raw", 10)
@@ -112,8 +118,12 @@ class MotionDecomposer(Node):
         current = (self._motion.linear, self._motion.angular) if self._motion else (0.0, 0.0)
         if self._motion_request is not None:
             self._answer(self._motion_request, Completion.failure("preempted", f"by {request.action_name}"))
-        self._motion = motion.start(kind, args, self.odom, now, current)
+        self._motion_since = now
         self._motion_request = request
+        if self._last_sensor < 0:
+            self._motion, self._before_base = None, (kind, args, current)
+        else:
+            self._motion, self._before_base = motion.start(kind, args, self.odom, now, current), None
 
     def _request_fault(self, request: ActionRequest, args: tuple) -> None:
         kind, fraction = args
@@ -151,19 +161,37 @@ class MotionDecomposer(Node):
         self._last_sensor = time.monotonic()
 
     def _control(self) -> None:
+        now = time.monotonic()
+        if self._before_base is not None and not self._await_base(now):
+            return
         if self._motion is None:
             return
-        now = time.monotonic()
         if now - self._last_sensor > SENSOR_STALE_S:
             command, completion, nxt = None, Completion.failure("timeout", "no encoder data from the base"), None
         else:
             nxt, command, completion = motion.control(self._motion, self.odom, now, self.dt)
         if command is not None:
             self._cmd.publish(twist(*wheels_to_twist(command)))
+        self._complete(completion)
+        self._motion = nxt
+
+    def _await_base(self, now: float) -> bool:
+        """True once the base has reported and the waiting motion has started (its progress and time
+        bounds count from then); a base silent for ``FIRST_SENSOR_WAIT_S`` fails it with ``timeout``."""
+        if self._last_sensor >= 0:
+            kind, args, current = self._before_base
+            self._motion, self._before_base = motion.start(kind, args, self.odom, now, current), None
+            return True
+        if now - self._motion_since > FIRST_SENSOR_WAIT_S:
+            self._before_base = None
+            self._complete(Completion.failure(
+                "timeout", f"no encoder data from the base in {FIRST_SENSOR_WAIT_S:g} s"))
+        return False
+
+    def _complete(self, completion: Completion | None) -> None:
         if completion is not None and self._motion_request is not None:
             self._answer(self._motion_request, completion)
             self._motion_request = None       # answered; a rotate goes on turning until preempted
-        self._motion = nxt
 
     def _publish_percepts(self) -> None:
         if self._last_sensor < 0:

@@ -148,6 +148,7 @@ def test_a_run_ends_at_its_limit_in_simulated_time():
     assert marks_of(result, "help_requested") and not marks_of(result, "undiagnosed")
 
 
+@pytest.mark.slow   # ~30 s; the team of two at the default seed runs the same in agent processes, `faultmas eval` teams in-process
 def test_six_robots_two_of_them_faulty_diagnose_concurrently():
     scenario = team_scenario(6, 2, seed=1)
     result = run_scenario(scenario, processes=True, timeout=180)
@@ -159,6 +160,7 @@ def test_six_robots_two_of_them_faulty_diagnose_concurrently():
     assert helpers and not helpers & {r.name for r in broken}        # self-suspects never help
 
 
+@pytest.mark.slow   # ~70 s; agents on the ROS 2 bridge with real nodes also run in tests/detection/learned/test_agents_run.py
 def test_the_same_plans_diagnose_through_the_ros2_bridge_with_real_rclpy_nodes():
     pytest.importorskip("rclpy")
     from agents.ros2_run import run_on_ros2

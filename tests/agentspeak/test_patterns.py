@@ -111,7 +111,8 @@ def test_sga_adopts_goals_one_at_a_time():
 
 
 @pytest.mark.parametrize("text, line, message", [
-    ("{ begin namespace(x) }\nb.\n{ end }\n", 1, "namespace"),
+    ("{ begin namespace(x, private) }\nb.\n{ end }\n", 1, "must be local or global"),
+    ("{ begin namespace(x) }\nb.\n", 1, "has no '{ end }'"),
     ("b.\n{ begin logger }\n{ end }\n", 2, "unknown directive"),
     ("{ begin dg(a) }\nb.\n", 1, "has no '{ end }'"),
     ("b.\n{ end }\n", 2, "without a '{ begin"),

@@ -77,3 +77,28 @@ def test_zenoh_key_expressions_and_liveliness(write):
         if pub.poll() is None:
             pub.kill()
             pub.wait()
+
+
+def test_tokens_alive_before_the_tap_starts_are_not_hidden(write):
+    """A token already alive when the tap starts comes in the subscriber's history, possibly on Zenoh's
+    thread before ``start`` returns; the tap's initial empty graph must not overwrite it (CI saw
+    ``activated(zpub)`` stay false for 20 s with the publisher alive), nor may two token changes on two
+    threads overtake each other."""
+    from detection.taps.zenoh import ZenohTap, zenoh_config
+
+    session = zenoh.open(zenoh_config())
+    tokens = [session.liveliness().declare_token(f"faultmas/test/alive/{name}") for name in ("zpub", "other")]
+    try:
+        for _ in range(3):              # the race is decided by thread timing: give it more than one chance
+            config = load_observers(write("obs.yaml", CONFIG))
+            pipeline = Pipeline()
+            tap = ZenohTap(config, config.build(), pipeline.observe, session=session).start()
+            try:
+                assert wait_for(lambda: "activated(zpub)" in pipeline.observations
+                                and pipeline.observations["activated(zpub)"].holds, 5), pipeline.observations
+            finally:
+                tap.close()
+    finally:
+        for token in tokens:
+            token.undeclare()
+        session.close()

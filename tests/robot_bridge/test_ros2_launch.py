@@ -39,7 +39,7 @@ def test_launched_nodes_serve_a_bridge_and_stop_cleanly():
         bridge.setup(timeout=15)
         try:           # the fault given at launch (a -p parameter) is in force in the child processes
             completion = bridge.act(Action("move", (0.3,))).result(timeout=20)
-            assert (completion.ok, completion.reason) == (False, "no_progress")
+            assert (completion.ok, completion.reason) == (False, "no_progress"), completion.detail
         finally:
             bridge.shutdown()
     finally:

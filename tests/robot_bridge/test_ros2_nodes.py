@@ -134,6 +134,32 @@ def test_a_robot_that_never_answers_gives_timeout(graph):
         bridge.shutdown()
 
 
+def test_a_move_sent_before_the_base_first_reports_waits_for_it(graph):
+    """A decomposer that has not yet heard from its base (just started; discovery takes seconds on a
+    busy machine) lets a move wait for the base's first report instead of failing at once with
+    ``timeout`` (CI saw that in ``test_ros2_launch``). A base silent for 5 s still fails it with ``timeout``."""
+    import time
+
+    from robot_bridge.ros2.bridge import Ros2Bridge
+    from robot_bridge.ros2.fault_injector import FaultInjector
+    from robot_bridge.ros2.kobuki_sim import KobukiSim
+    from robot_bridge.ros2.motion_decomposer import MotionDecomposer
+    ros, _ = graph
+    ros.add(MotionDecomposer("/late", context=ros.context))
+    ros.add(FaultInjector("/late", context=ros.context))
+    bridge = Ros2Bridge("late", domain_id=DOMAIN)
+    bridge.setup(timeout=15.0)
+    try:
+        pending = bridge.act(Action("move", (0.2,)))
+        time.sleep(1.0)
+        assert not pending.done(), pending.result().detail
+        ros.add(KobukiSim("/late", context=ros.context, x=-3.0, y=-3.0, yaw=0.0, seed=5))
+        completion = pending.result(timeout=30)
+        assert completion.ok, completion.detail
+    finally:
+        bridge.shutdown()
+
+
 def test_setup_names_the_topic_nobody_listens_on():
     from robot_bridge.ros2.bridge import Ros2Bridge
     bridge = Ros2Bridge("nobody", domain_id=DOMAIN)
