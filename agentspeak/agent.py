@@ -362,11 +362,23 @@ class Agent:
             self.timer_busy = busy
             clock = now - self.timer_lag
             if timers[0][0] <= clock:
+                if not busy and clock > timers[0][0] and self.clock is time.monotonic:
+                    # an idle agent found its timer late (the process ran other agents or got no CPU): on a
+                    # thread of its own it would have gone on at the deadline, so that wait is lag too.
+                    # The timer itself ends now; the agent's later ones keep their order after it (a .wait
+                    # due 10 ms after an .at ends after the .at's plan ran, as in Jason). Wall time only:
+                    # an environment's clock is polled (CLOCK_POLL_S), lateness there is no lost CPU.
+                    lag = self.timer_lag + clock - timers[0][0]
+                    self.timer_lag = lag if lag < TIMER_MAX_LAG else TIMER_MAX_LAG
+                    clock = now - self.timer_lag
                 due = []
                 while timers and timers[0][0] <= clock:
                     due.append(heapq.heappop(timers)[2])
                 for callback in due:  # a callback may set a timer due at once: it runs next cycle
                     callback()
+                # busy from now on if a timer gave it work (a wait ended): until its next cycle it is
+                # an agent with work that gets no CPU, whose lost time is lag as well
+                self.timer_busy = bool(self.running or self.events or self.feedback)
                 did = True
         if self.mailbox:
             receive_message(self, self.mailbox.popleft())
@@ -415,20 +427,20 @@ class Agent:
         self.current_intention = intention  # what .intention(..., current) means in a plan context
         if self.bb.select_option:
             return self._select_option_bb(ev)
-        if self.plans.has_sub_plans:  # Jason(ER): only agents with sub-plans pay for these checks
+        plans = self.plans
+        if plans.has_sub_plans:  # Jason(ER): only agents with sub-plans pay for these checks
             if intention is not None:
                 if intention.stack:
                     top_plan = intention.stack[-1].plan
                     if top_plan.sub_library is not None or top_plan.scope is not None:
                         return self._deliberate_in_scope(ev)
-            elif self.plans.has_update_sub_plans and trigger.kind == BEL and trigger.op != META:
+            elif plans.has_update_sub_plans and trigger.kind == BEL and trigger.op != META:
                 self._branch_for_update(trigger)
         lit = trigger.literal
         if type(lit) is Literal:
             # PlanLibrary.relevant, inlined; every plan listed under the key has the event's
             # functor and arity, or a variable trigger (whose matcher has no variables tuple)
             args = lit.args
-            plans = self.plans
             index = plans._index if plans._index is not None else plans._build()
             relevant = index.get((trigger.op, trigger.kind, lit.neg, lit.functor, len(args)))
             if relevant is None:
@@ -439,7 +451,7 @@ class Agent:
                     break
         else:
             args = None
-            relevant = self.plans.relevant(trigger)
+            relevant = plans.relevant(trigger)
         if not relevant:
             self._no_plan(ev, "no_relevant", f"found a goal for which there is no relevant plan: {trigger}")
             return True
@@ -488,7 +500,7 @@ class Agent:
             else:
                 self.push_im(ev, plan, b)
             if trigger.op == ADD and trigger.kind == ACHIEVE:
-                if self.plans.has_meta:
+                if plans.has_meta:
                     self.goal_state(trigger, "executing")
                 if type(lit) is Literal and lit.annots is not None and len(lit.annots) > 1:
                     self._check_deadline(lit, intention if intention is not None else self.running[-1])

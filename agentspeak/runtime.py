@@ -329,13 +329,11 @@ class LocalRuntime:
                 # no lock: a wake from another thread in between either finds the agent still marked
                 # ready (and the has_work() check after its turn sees the news) or queues it again.
                 # Woken agents first, but a busy one gets every fourth turn (none starves).
-                if ready:
-                    if busy and woken_turns >= 3:
-                        agent = busy.popleft()
-                        woken_turns = 0
-                    else:
-                        agent = ready.popleft()
-                        woken_turns += 1
+                if not busy:  # (the usual case first: a message or a due timer woke it)
+                    agent = ready.popleft()
+                elif ready and woken_turns < 3:
+                    agent = ready.popleft()
+                    woken_turns += 1
                 else:
                     agent = busy.popleft()
                     woken_turns = 0

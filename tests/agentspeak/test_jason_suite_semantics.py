@@ -63,13 +63,13 @@ def _agents(monkeypatch, sources: dict[str, str]):
     agents = {name: runtime.add_agent(name, text) for name, text in sources.items()}
 
     def cycles(name: str, n: int, per_cycle: float = 0.0, idle: float | None = None) -> None:
-        """``n`` cycles of one agent; each takes ``per_cycle`` s, or ``idle`` s if the agent was idle."""
+        """``n`` cycles of one agent; the next comes ``per_cycle`` s later, or ``idle`` s later if the agent
+        has nothing to do (it waits for a timer: the process comes back to it that much later)."""
         ag = agents[name]
         CURRENT.agent = ag
         for _ in range(n):
-            busy = bool(ag.running or ag.events)
             ag.cycle()
-            clock.now += per_cycle if busy or idle is None else idle
+            clock.now += per_cycle if ag.has_work() or idle is None else idle
     return clock, lines, cycles
 
 
@@ -97,8 +97,41 @@ def test_the_time_a_busy_agent_lost_is_not_taken_from_its_later_waits(monkeypatc
         +!chain(6).
         +!chain(I) <- .wait(50); +step(I); .print(I); .print(I); !!chain(I+1).
     """)})
-    cycles("ag", 1000, per_cycle=0.05, idle=0.001)
+    cycles("ag", 2000, per_cycle=0.05, idle=0.001)
     assert lines[-1] == "ag: steps(6)"
+
+
+def test_the_time_an_idle_agent_waits_for_the_cpu_after_its_deadline_is_not_taken_from_its_later_waits(monkeypatch):
+    # The same chain, but the agent is idle during each .wait(50) and the process comes back to it only
+    # 90 ms later (it ran other agents, or got no CPU). On a thread of its own the agent would have gone
+    # on at each deadline: the .wait(500) begun with the chain must still end after the sixth step.
+    _, lines, cycles = _agents(monkeypatch, {"ag": asl("""
+        !start.
+        +!start <- !!chain(0); .wait(500); .count(step(_), N); .print(steps(N)).
+        +!chain(6).
+        +!chain(I) <- .wait(50); +step(I); !!chain(I+1).
+    """)})
+    cycles("ag", 200, per_cycle=0.0005, idle=0.09)
+    assert lines == ["ag: steps(6)"]
+
+
+def test_a_timer_found_late_is_not_delayed_itself_and_later_ones_keep_their_order(monkeypatch):
+    # ... and that time never delays the timer found late itself, nor makes a timer end before its time:
+    # .at's event (due at 100 ms, found at 140) comes at once, the .wait(110) after it, not earlier than
+    # 110 ms, and after the at's plan ran (as on a thread of its own: 10 ms after the at)
+    clock, lines, cycles = _agents(monkeypatch, {"ag": asl("""
+        !start.
+        +!start <- .at("now +100 ms", {+!at}); .wait(110); .print(waited).
+        +!at <- .print(at).
+    """)})
+    when = {}
+    for _ in range(40):
+        now = clock.now
+        cycles("ag", 1, per_cycle=0.0, idle=0.07)
+        for line in lines:
+            when.setdefault(line, round((now - 1000.0) * 1000))
+    assert lines == ["ag: at", "ag: waited"]
+    assert when["ag: at"] == 140 and when["ag: waited"] >= 110
 
 
 def test_an_answer_sent_before_the_askers_timeout_is_taken_though_read_after_it(monkeypatch):

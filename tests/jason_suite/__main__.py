@@ -58,9 +58,9 @@ def main(argv: list[str] | None = None) -> int:
     if (executed != passed or not executed) and load > 1.5:
         # the scheduler and the timers keep the order an agent on a thread of its own sees (docs/language.md,
         # Timing), but deadlines that need a share of the CPU the machine does not give can still be missed
-        print("(the machine is loaded: the suite's tests with deadlines in real time, at (.at within 200 ms), "
-              "queueplan (six .wait(50) within 500 ms), resume, send (an answer within an ask's 200 ms), "
-              "may fail for that alone)")
+        print("(the machine is loaded: the suite's tests with deadlines in real time between agents, at (.at "
+              "within 200 ms), send (a mock's answer within an ask's 200 ms), and, when the process gets the "
+              "CPU only every second or so, queueplan and resume, may fail for that alone: docs/language.md, Timing)")
     return 0 if executed > 0 and executed == passed else 1
 
 
