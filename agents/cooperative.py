@@ -451,8 +451,15 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
 
         def on_control(message: dict) -> None:
             report = ProgressReport.from_message(message)
-            if report is not None:
-                log.record(report)
+            if report is None:
+                return
+            if hub.identity is not None and not ProgressReport.proved(message):
+                # the secure profile: a report not signed by the robot it names (an outsider's, or a
+                # member's forged for another) must not decide the run's outcome
+                reason = "unsigned" if message.get("by") is None else "bad_signature"   # signed, by another
+                hub.report_control_refused(message, reason)
+                return
+            log.record(report)
         hub.on_control(on_control)
         from robot_bridge.processes import FreezeWatch
         watch = FreezeWatch(lambda: {**launcher.children, **(other_processes() if other_processes else {})})

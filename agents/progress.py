@@ -4,7 +4,8 @@ A plan marks the steps worth timing (``.progress(fault_detected, no_progress)``)
 the agents stamps each report with simulated and wall time (``faultmas run`` builds its latency table
 from them). The agent's architecture decides where a report goes: ``arch.progress(agent, step, detail)``
 when the architecture has that hook (a network agent publishes it on the MAS's control key as
-``{"command": "progress", "agent", "step", "detail"}``), else one INFO log line. It never fails a plan.
+``{"command": "progress", "by", "agent", "step", "detail"}``, signed by the agent in the secure profile,
+so a run counts only reports its members signed), else one INFO log line. It never fails a plan.
 """
 from __future__ import annotations
 
@@ -30,6 +31,10 @@ class ProgressReport:
     def to_fields(self) -> dict:
         return {"agent": self.agent, "step": self.step, "detail": self.detail}
 
+    def to_control(self) -> dict:
+        """The control message's fields: ``by`` is the agent, so the secure profile signs it as the agent."""
+        return {"by": self.agent, **self.to_fields()}
+
     @classmethod
     def from_message(cls, message: dict) -> "ProgressReport | None":
         """The report in a control message, or None when it is not a well-formed progress report."""
@@ -37,6 +42,13 @@ class ProgressReport:
         if message.get("command") != COMMAND or not all(isinstance(f, str) for f in fields) or not fields[1]:
             return None
         return cls(*fields)
+
+    @staticmethod
+    def proved(message: dict) -> bool:
+        """Whether the report is signed by the agent it names. Only meaningful where the transport checks
+        signatures (the secure profile): it keeps ``by`` only on a control message its signer's key proved,
+        and drops it from an unsigned one."""
+        return message.get("by") == message.get("agent")
 
 
 @internal_action(".progress", args=(1, 2))

@@ -105,8 +105,9 @@ class NetworkArch(LocalArch):
         return NetworkArch(runtime, bridge) if body is None else EmbodiedNetworkArch(runtime, bridge, body)
 
     def progress(self, agent: Agent, report) -> None:
-        """``.progress``: published on the MAS's control key for the process that runs the MAS."""
-        self.bridge.transport.publish_control("progress", **report.to_fields())
+        """``.progress``: published on the MAS's control key for the process that runs the MAS (signed by
+        the agent in the secure profile)."""
+        self.bridge.transport.publish_control("progress", **report.to_control())
 
     def all_names(self, agent: Agent) -> list[str]:
         return self.bridge.all_names()

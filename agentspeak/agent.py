@@ -1110,6 +1110,15 @@ class Agent:
         heapq.heappush(self.timers, (now - self.timer_lag + max(0.0, seconds), next(_seq), callback))
         self.arch.wake(self)
 
+    def hold_timers(self, seconds: float) -> None:
+        """The agent was held (a debugger's pause) for ``seconds``: its timers' time stood still, so a
+        wait begun before the hold has as long left after it, and the hold is no lateness (the timer
+        clock's lag rules above then see nothing late; a timer set just after still runs this cycle).
+        Wall time only: an environment's clock (a simulated robot's) went on without the agent."""
+        if self.timers and seconds > 0.0 and self.clock is time.monotonic:
+            self.timer_lag += seconds
+            self.timer_seen += seconds
+
     def post_feedback(self, callback: Callable[[], None]) -> None:
         """Run ``callback`` in this agent's next sense phase (safe to call from any thread)."""
         self.feedback.append(callback)

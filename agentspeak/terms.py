@@ -516,6 +516,14 @@ EXPRESSION_TYPES = (Arith, Rel, And, Or, Not, Func, NsTerm)
 
 
 # -- binding access -------------------------------------------------------------------------
+#: The deepest term an agent may build at run time (``resolve``): rules, loops and goals can nest a term
+#: level after level (``!g(N-1, f(T))``) past what any parsed clause may (``nesting.MAX_NESTING``). Walked
+#: by the compiled interpreter, a term 19,000 deep overflowed the C stack (SIGSEGV, the agent gone without
+#: a log line); from source Python's recursion limit stops it near 950 levels. 1,000 levels keep both
+#: builds alike and leave the walkers (printing, hashing, comparing) well inside a 2 MiB thread stack.
+MAX_TERM_DEPTH = 1000
+
+
 def deref(t: Term, b: Bindings) -> Term:
     """Follow variable bindings until a non-variable or an unbound variable."""
     while type(t) is Var:
@@ -526,8 +534,14 @@ def deref(t: Term, b: Bindings) -> Term:
     return t
 
 
-def resolve(t: Term, b: Bindings) -> Term:
-    """Apply bindings everywhere in ``t`` and evaluate ground arithmetic (Jason's ``capply``)."""
+def resolve(t: Term, b: Bindings, depth: int = 0) -> Term:
+    """Apply bindings everywhere in ``t`` and evaluate ground arithmetic (Jason's ``capply``).
+
+    ``depth``: how deep ``t`` sits in the term being resolved. Past ``MAX_TERM_DEPTH`` it raises
+    ``RecursionError`` (the intention fails: "a term too deep or cyclic to work with"), compiled or not.
+    Every term an agent builds at run time goes through here, so none gets deeper than that."""
+    if depth > MAX_TERM_DEPTH:
+        raise RecursionError(f"a term nested deeper than {MAX_TERM_DEPTH} levels")
     tt = type(t)
     if tt is Var:
         while True:  # follow a chain of variables in a loop (rules can build chains 100,000 long)
@@ -535,7 +549,7 @@ def resolve(t: Term, b: Bindings) -> Term:
             if v is None:
                 return t
             if type(v) is not Var:
-                return resolve(v, b)
+                return resolve(v, b, depth)
             t = v
     if tt is Literal:
         if not t.args and t.annots is None and t.annot_tail is None:
@@ -557,16 +571,16 @@ def resolve(t: Term, b: Bindings) -> Term:
                         out.append(v)
                         continue
                     a = v
-                out.append(resolve(a, b))
+                out.append(resolve(a, b, depth + 1))
             args = tuple(out)
         else:
             args = ()
         annots = t.annots
         tail = t.annot_tail
         if annots is not None or tail is not None:
-            items = [resolve(a, b) for a in annots] if annots else []
+            items = [resolve(a, b, depth + 1) for a in annots] if annots else []
             if tail is not None:
-                tv = resolve(tail, b)
+                tv = resolve(tail, b, depth + 1)
                 if type(tv) is Var:
                     tail = tv
                 else:
@@ -588,9 +602,9 @@ def resolve(t: Term, b: Bindings) -> Term:
                 continue
             if type(cur) is not Cons:
                 break
-            heads.append(resolve(cur.head, b))
+            heads.append(resolve(cur.head, b, depth + 1))
             cur = cur.tail
-        tail_value = resolve(cur, b) if cur is not NIL else NIL
+        tail_value = resolve(cur, b, depth) if cur is not NIL else NIL
         for h in reversed(heads):
             tail_value = Cons(h, tail_value)
         return tail_value
@@ -599,13 +613,13 @@ def resolve(t: Term, b: Bindings) -> Term:
         if type(left) is Var:
             left = b.get(left, left)
         if type(left) is not int and type(left) is not float:
-            left = resolve(left, b)
+            left = resolve(left, b, depth + 1)
         right = t.right
         if right is not None:
             if type(right) is Var:
                 right = b.get(right, right)
             if type(right) is not int and type(right) is not float:
-                right = resolve(right, b)
+                right = resolve(right, b, depth + 1)
             if type(left) is int and type(right) is int:  # the common case, without eval_arith
                 int_op = INT_OPS.get(t.op)
                 if int_op is not None:
@@ -617,13 +631,13 @@ def resolve(t: Term, b: Bindings) -> Term:
         check_operands(t.op, left, right)
         return Arith(t.op, left, right)
     if tt is Rel:
-        return Rel(t.op, resolve(t.left, b), resolve(t.right, b))
+        return Rel(t.op, resolve(t.left, b, depth + 1), resolve(t.right, b, depth + 1))
     if tt is And:
-        return And(resolve(t.left, b), resolve(t.right, b))
+        return And(resolve(t.left, b, depth + 1), resolve(t.right, b, depth + 1))
     if tt is Or:
-        return Or(resolve(t.left, b), resolve(t.right, b))
+        return Or(resolve(t.left, b, depth + 1), resolve(t.right, b, depth + 1))
     if tt is Not:
-        return Not(resolve(t.arg, b))
+        return Not(resolve(t.arg, b, depth + 1))
     resolver = getattr(t, "resolve", None)
     if resolver is not None:
         return resolver(b)

@@ -46,6 +46,9 @@ ENTRY_KEYS = {
     "movement": ("source_a", "source_b", "differentiate", "filter", "states", *COMMON),
 }
 SOURCE_KEYS = ("topic", "field", "msg_type")
+#: The largest count a configuration may give (a filter's window, a state's number): a million samples is
+#: minutes of a 1 kHz topic, far beyond any observer's need, and far below what a deque can hold.
+MAX_COUNT = 1_000_000
 FILTER_KEYS = ("type", "window_size", "decay_rate", "k_size", "deviation_type")
 STATE_KEYS = ("state", "number", "healthy")
 
@@ -92,7 +95,7 @@ class _Loader:
             self.s.error(node, f"{what} must be a {'positive ' if positive else ''}finite number, not {text!r}")
         return x
 
-    def integer(self, node: Node, what: str, minimum: int) -> int:
+    def integer(self, node: Node, what: str, minimum: int, maximum: int = MAX_COUNT) -> int:
         text = self.s.scalar(node, what)
         try:
             n = int(text)
@@ -100,6 +103,8 @@ class _Loader:
             self.s.error(node, f"{what} must be a whole number, not {text!r}")
         if n < minimum:
             self.s.error(node, f"{what} must be at least {minimum}, not {n}")
+        if n > maximum:  # a window of 10**400 samples raised OverflowError in the filter (issue 22's fuzzing)
+            self.s.error(node, f"{what} must be at most {maximum}, not {text[:20]}{'...' if len(text) > 20 else ''}")
         return n
 
     def boolean(self, node: Node, what: str) -> bool:

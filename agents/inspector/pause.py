@@ -11,6 +11,7 @@ Agents of one ``LocalRuntime`` share a thread, so pausing one holds its process-
 from __future__ import annotations
 
 import threading
+import time
 from typing import Any, Callable
 
 POLL = 0.05
@@ -72,8 +73,10 @@ class PauseGate:
                 self._armed = False
                 return
             self._blocked.set()
+            held = time.monotonic()
             while self._wanted and self._steps == 0 and not self.stopping():
                 self._changed.wait(POLL)
+            self.agent.hold_timers(time.monotonic() - held)
             if self._steps and self._wanted:
                 self._steps -= 1
                 self.agent.add_timer(0.0, self._rearm)

@@ -4,7 +4,8 @@ Per agent: a subscriber on ``faultmas/<mas>/agent/<name>/inbox`` and a livelines
 ``faultmas/<mas>/alive/<name>`` (declared after the subscriber, so whoever sees the token can already
 reach the inbox). Per process: a liveliness subscriber with history (presence), a subscriber on
 ``faultmas/<mas>/control``, one on ``faultmas/<mas>/status/*`` and a queryable there that answers
-with the latest status of the local agents. Messages are put reliably with congestion control
+with the latest status of the local agents (in the secure profile a status is signed by its agent and a
+receiver refuses any other). Messages are put reliably with congestion control
 BLOCK on a cached publisher per receiver (a burst from the agents' thread in batches, see
 ``outbox``); agents of this process are served without the network.
 """
@@ -172,11 +173,38 @@ class ZenohTransport(Transport):
 
     def _on_status(self, sample: Any) -> None:
         try:
-            status = AgentStatus.decode(sample.payload.to_bytes())
+            status = self._open_status(sample.payload.to_bytes())
+        except BadMessage as bad:
+            self._drop(bad.reason, str(sample.key_expr), bad.sender, bad.detail)
+            return
         except ValueError as exc:
             self._drop("bad_status", str(sample.key_expr), None, str(exc)[:80])
             return
         self._status_received(status)
+
+    def _open_status(self, payload: bytes) -> AgentStatus:
+        """The status in ``payload``. In the secure profile it must be signed by the agent it is about and
+        fresh (``BadMessage`` otherwise): a forged 'idle' could end a ``mas run`` while its agents work."""
+        if self.identity is None:
+            return AgentStatus.decode(payload)
+
+        def agent_of(document: bytes) -> Any:
+            try:
+                data = json.loads(document)
+            except (ValueError, RecursionError) as exc:
+                raise BadMessage("not_json", str(exc)[:80]) from None
+            return data.get("agent") if isinstance(data, dict) else None
+
+        document, seq = self.identity.open(payload, agent_of)
+        status = AgentStatus.decode(document)
+        self.identity.check_fresh(status.agent, "status", seq)
+        return status
+
+    def _sealed_status(self, status: AgentStatus) -> bytes:
+        """``status`` as published: signed by its agent in the secure profile (a fresh seq each time)."""
+        if self.identity is not None and self.identity.can_sign(status.agent):
+            return self.identity.seal(status.agent, status.encode())
+        return status.encode()
 
     def _on_status_query(self, query: Any) -> None:
         import zenoh
@@ -186,7 +214,7 @@ class ZenohTransport(Transport):
             key = keys.status_key(self.mas, agent)
             if asked.intersects(zenoh.KeyExpr(key)):
                 status = self._statuses.get(agent) or self.status_of(agent, busy=False)
-                query.reply(key, status.encode())
+                query.reply(key, self._sealed_status(status))
 
     # -- control and status ----------------------------------------------------------------------
     def _publish_control(self, message: dict[str, Any]) -> None:
@@ -197,7 +225,7 @@ class ZenohTransport(Transport):
 
     def _publish_status(self, status: AgentStatus) -> None:
         self._statuses[status.agent] = status
-        self.session.put(keys.status_key(self.mas, status.agent), status.encode())
+        self.session.put(keys.status_key(self.mas, status.agent), self._sealed_status(status))
 
     def collect_status(self, timeout: float = 1.0) -> list[AgentStatus]:
         statuses = {}
@@ -205,7 +233,10 @@ class ZenohTransport(Transport):
             if reply.ok is None:
                 continue
             try:
-                status = AgentStatus.decode(reply.ok.payload.to_bytes())
+                status = self._open_status(reply.ok.payload.to_bytes())
+            except BadMessage as bad:
+                self._drop(bad.reason, str(reply.ok.key_expr), bad.sender, bad.detail)
+                continue
             except ValueError as exc:
                 log.warning("ignored a bad status reply on %s: %s", reply.ok.key_expr, exc)
                 continue

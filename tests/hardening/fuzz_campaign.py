@@ -3,7 +3,8 @@ turn gets ``--chunk`` mutated inputs (the strategy of ``test_fuzz_boundaries``, 
 round) until ``--minutes`` have passed. It prints a line per boundary and round with the totals so far
 and, at the end, the inputs and CPU seconds per boundary. Every input that raised anything but the
 boundary's own errors is saved under ``--found`` (for the corpus). The fuzzing runs in a worker process:
-one that crashes (the C stack) is replaced, and the input it died on is kept (``crash-N.<boundary>``). A
+one that crashes (the C stack) is replaced, and the input it died on is kept (``crash-N.<boundary>``), with
+the Python stack faulthandler wrote as it died (``crash-N.<boundary>.stack``). A
 hang is bounded by ``--input-seconds`` of CPU per input (SIGPROF: on a machine shared with other work,
 wall time would call slowness a hang).
 
@@ -67,7 +68,12 @@ def fuzz_round(name: str, chunk: int, input_seconds: int, found: list, current: 
 
 
 def worker(minutes: float, chunk: int, input_seconds: int, folder: Path) -> int:
-    """Fuzz every boundary in turn for ``minutes``; a JSON line per round with the totals so far."""
+    """Fuzz every boundary in turn for ``minutes``; a JSON line per round with the totals so far. A fatal
+    signal (SIGSEGV) writes the Python stack where it struck to ``current.stack`` (faulthandler)."""
+    import faulthandler
+
+    stack_file = open(folder / "current.stack", "w")
+    faulthandler.enable(file=stack_file, all_threads=False)
     signal.signal(signal.SIGPROF, _on_alarm)
     totals = {name: {"inputs": 0, "cpu_s": 0.0} for name in BOUNDARIES}
     found: list = []
@@ -130,7 +136,11 @@ def main(argv: list[str] | None = None) -> int:
             boundary = (folder / "current.boundary").read_text() if (folder / "current.boundary").exists() else "?"
             kept = folder / f"crash-{crashes}.{boundary}"
             (folder / "current.input").replace(kept)
-            print(f"CRASH {boundary}: the worker died by signal {-code}; its input is {kept}", flush=True)
+            stack = folder / "current.stack"
+            if stack.exists():
+                stack.replace(kept.with_name(kept.name + ".stack"))
+            print(f"CRASH {boundary}: the worker died by signal {-code}; its input is {kept} "
+                  f"(where it struck: {kept.name}.stack)", flush=True)
     print(json.dumps({"summary": {name: {"inputs": t["inputs"], "cpu_s": round(t["cpu_s"], 1)}
                                   for name, t in grand.items()}, "escaped": escaped, "crashes": crashes,
                       "minutes": args.minutes}), flush=True)

@@ -146,6 +146,36 @@ def _next_task(n: int, world, bridges, hub, mas: str, rng: random.Random, timeou
     return faulty, fault, unturned
 
 
+def _kept_by_simulator(world) -> dict:
+    """What the simulator holds that may grow with time, so a RSS step can be told from a leak: the camera
+    renderers' static layers (bounded, 32 poses each), the trajectory rows kept, Python's gc objects."""
+    import gc
+
+    renderers = _renderers_alive()
+    layers = sum(len(r._static) for r in renderers)
+    layer_bytes = sum(kept[1].nbytes + kept[2].nbytes for r in renderers for kept in list(r._static.values()))
+    rows = sum(len(robot.trajectory) for robot in world._robots.values())
+    return {"static_layers": layers, "static_layers_mib": round(layer_bytes / 2 ** 20, 1),
+            "trajectory_rows": rows, "gc_objects": len(gc.get_objects())}
+
+
+def _renderers_alive() -> list:
+    """The camera renderers this process made (one per rig and sensor, cached)."""
+    import gc
+
+    from robot_bridge.sim.camera.renderer import _Renderer
+
+    return [o for o in gc.get_objects() if isinstance(o, _Renderer)]
+
+
+def _type_counts() -> dict[str, int]:
+    """Live gc-tracked objects by type name (compared first task against last: what grows)."""
+    import collections
+    import gc
+
+    return dict(collections.Counter(type(o).__qualname__ for o in gc.get_objects()))
+
+
 def _declared(hub) -> int:
     """Zenoh publishers and subscribers this process's hub holds (per receiver and agent)."""
     return len(hub._publishers) + len(hub._declared)
@@ -209,11 +239,15 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
                    "agents": {a: {k: s.get(k) for k in ("intentions", "events", "beliefs")} for a, s in states.items()},
                    "agent_processes": processes, "ended_agents": ended_agents,
                    "soak_rss_mib": round(me.memory_info().rss / 2 ** 20, 1), "soak_threads": threading.active_count(),
-                   "soak_os_threads": me.num_threads(), "soak_fds": me.num_fds(), "hub_declared": _declared(hub)}
+                   "soak_os_threads": me.num_threads(), "soak_fds": me.num_fds(), "hub_declared": _declared(hub),
+                   **_kept_by_simulator(world)}
+            if n == 1:
+                type_counts["first"] = _type_counts()
             rows.append(row)
             emit(row)
             why = limit_reached()
             if why is not None or len(row["agent_processes"]) < len(robots):
+                type_counts["last"] = _type_counts()
                 hold_state["ended_by"] = why or "an agent process ended"
                 return
             n += 1
@@ -221,13 +255,20 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
             faulty = _next_task(n, world, bridges, hub, scenario.mas, rng, task_timeout)
 
     hold_state: dict = {}
+    type_counts: dict = {}
     launched: dict = {}
     try:
         run = run_agent_processes(scenario, ["--bridge", "zenoh"], task_timeout, world=world, serve=serve, hold=hold)
     finally:
         for bridge in bridges.values():
             bridge.shutdown()
-    return summarize(rows, hold_state.get("ended_by", "the first task failed"), run.died, run.frozen, started)
+    summary = summarize(rows, hold_state.get("ended_by", "the first task failed"), run.died, run.frozen, started)
+    if "first" in type_counts and "last" in type_counts:
+        first, last = type_counts["first"], type_counts["last"]
+        growth = {t: last.get(t, 0) - first.get(t, 0) for t in set(first) | set(last)}
+        summary["gc_types_grown_task1_to_last"] = dict(sorted(((t, g) for t, g in growth.items() if g > 0),
+                                                              key=lambda tg: -tg[1])[:15])
+    return summary
 
 
 def _slope(xs: list[float], ys: list[float]) -> float:
@@ -240,6 +281,8 @@ def _slope(xs: list[float], ys: list[float]) -> float:
 def summarize(rows: list[dict], ended_by: str, died, frozen, started: float) -> dict:
     settled = rows[1:] or rows  # the first task loads the interpreter, models, Zenoh and caches: not a leak
     hours = [r["sim_total_s"] / 3600 for r in settled]
+    half_time = (settled[0]["sim_total_s"] + settled[-1]["sim_total_s"]) / 2 if settled else 0.0
+    second_half = [r for r in settled if r["sim_total_s"] >= half_time]
     agents = sorted({a for r in rows for a in r["agent_processes"]})
 
     def first_last(key):
@@ -257,6 +300,10 @@ def summarize(rows: list[dict], ended_by: str, died, frozen, started: float) -> 
         "max_settle_s": max((r["settle_s"] for r in rows), default=None),
         "soak_rss_mib_first_last": first_last("soak_rss_mib"),
         "soak_rss_slope_mib_per_sim_hour": round(_slope(hours, [r["soak_rss_mib"] for r in settled]), 2),
+        "soak_rss_slope_second_half_mib_per_sim_hour": round(_slope(
+            [r["sim_total_s"] / 3600 for r in second_half], [r["soak_rss_mib"] for r in second_half]), 2),
+        "static_layers_mib_first_last": first_last("static_layers_mib"),
+        "gc_objects_first_last": first_last("gc_objects"),
         "soak_threads_first_last": first_last("soak_os_threads"),
         "soak_fds_first_last": first_last("soak_fds"),
         "hub_declared_first_last": first_last("hub_declared"),
@@ -264,6 +311,10 @@ def summarize(rows: list[dict], ended_by: str, died, frozen, started: float) -> 
                                          next(r["agent_processes"][a]["rss_mib"] for r in reversed(settled) if a in r["agent_processes"])]
                                      for a in agents} if settled else {},
         "agent_rss_slope_mib_per_sim_hour": per_agent_slope,
+        "agent_rss_slope_second_half_mib_per_sim_hour": {
+            a: round(_slope([r["sim_total_s"] / 3600 for r in second_half if a in r["agent_processes"]],
+                            [r["agent_processes"][a]["rss_mib"] for r in second_half if a in r["agent_processes"]]), 2)
+            for a in agents},
         "agent_threads_first_last": {a: [next(r["agent_processes"][a]["threads"] for r in settled if a in r["agent_processes"]),
                                          next(r["agent_processes"][a]["threads"] for r in reversed(settled) if a in r["agent_processes"])]
                                      for a in agents} if settled else {},

@@ -23,7 +23,8 @@ EXAMPLES = {"short": 40, "campaign": int(os.environ.get("FAULTMAS_FUZZ_EXAMPLES"
 BY_EXTENSION = {".asl": "asl", ".mas2j": "mas2j", ".txt": None, ".json": None, ".yaml": "yaml_model", ".npy": "depth"}
 CORPUS_BOUNDARY = {"deep_content.txt": "content", "duplicate_from.json": "envelope",
                    "huge_integer_content.txt": "content", "huge_integer_observation.json": "observations",
-                   "deep_json.json": "observations", "deep_formula.txt": "formula"}
+                   "deep_json.json": "observations", "deep_formula.txt": "formula",
+                   "huge_window_observers.yaml": "observer_config"}
 GRAMMAR_BYTES = b"()[]{}<>!?~+-*/=&|:;.,\"'\\@#$%^_ \n\t0123456789aXzAB\x00\xe9\xff"
 
 

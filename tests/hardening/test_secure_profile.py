@@ -157,3 +157,46 @@ def test_mas_run_processes_in_the_secure_profile_talks_and_a_missing_private_key
     run = mas_run(tmp_path / "team.mas2j", "--processes", "--timeout", "20", cwd=tmp_path)
     assert run.finish(timeout=150) != 0
     assert any("bob.key: cannot read the key" in line for line in run.err), run.err[-20:]
+
+
+def test_a_forged_agent_status_is_refused_in_the_secure_profile(tmp_path):
+    """A status says an agent is idle and what it sent and received: ``mas run`` ends when all are idle, so a
+    forged 'idle' could end the MAS while its agents work. In the secure profile a status is signed by the
+    agent it is about; an unsigned one, or one signed by another key, is refused with a reason, whether it
+    is put on the status key or given as an answer to a status query."""
+    import time
+
+    from agents.transport.keys import status_key
+    from agents.transport.status import AgentStatus
+
+    generate_keys(tmp_path / "keys", ["alice", "bob"])
+    generate_keys(tmp_path / "outside", ["mallory"])
+    public = {n: tmp_path / "keys" / f"{n}.pub" for n in ("alice", "bob")}
+    alice_identity = Identity.from_files(public, {"alice": tmp_path / "keys" / "alice.key"})
+    observer_identity = Identity.from_files(public)
+    from agents.transport.identity import load_private_key
+    mallory_key = load_private_key(tmp_path / "outside" / "mallory.key")
+    as_bob = Identity({"bob": mallory_key.public_key()}, {"bob": mallory_key})  # bob's name, mallory's key
+    mas, endpoint = unique_mas(), loopback_endpoint()
+    forged = AgentStatus("bob", False, 0, 0).encode()
+    seen: list = []
+    with ZenohTransport(mas, ZenohOptions(listen=(endpoint,)), identity=observer_identity) as observer, \
+            ZenohTransport(mas, ZenohOptions(mode="client", connect=(endpoint,)), identity=alice_identity) as alice, \
+            ZenohTransport(mas, ZenohOptions(mode="client", connect=(endpoint,))) as outsider:
+        observer.on_status(seen.append)
+        alice.register("alice", lambda envelope: None)
+        assert observer.wait_for_agents(["alice"], timeout=30)
+        answer = outsider.session.declare_queryable(  # an outsider answering status queries for bob
+            status_key(mas, "bob"), lambda query: query.reply(status_key(mas, "bob"), forged))
+        time.sleep(0.5)
+        alice.publish_status("alice", busy=True)                                  # signed by alice
+        outsider.session.put(status_key(mas, "bob"), forged)                      # unsigned
+        outsider.session.put(status_key(mas, "bob"), as_bob.seal("bob", forged))  # bob's name, another key
+        deadline = time.monotonic() + 20
+        while (not seen or sum(observer.dropped.values()) < 2) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        collected = observer.collect_status(timeout=3.0)
+        answer.undeclare()
+    assert [(s.agent, s.busy) for s in seen] == [("alice", True)]
+    assert [(s.agent, s.busy) for s in collected] == [("alice", True)]   # alice's answer, signed; not bob's
+    assert dict(observer.dropped) == {"unsigned": 2, "bad_signature": 1}   # the put and the query's answer

@@ -1,0 +1,67 @@
+"""An outsider process against a ``faultmas run --secure`` team (tests/hardening/test_run_secure_outsider.py).
+
+It knows what anyone on the host can read (the MAS name and the hub's endpoint from the agents' command
+lines, the envelope and control formats) and has a key pair of its own (``--key``, not in the project). Once
+the robots are up it tries, each as a separate network message, against every robot: an unsigned tell, an
+unsigned goal under another member's name, its own signed tell/achieve/tellHow/askOne, a tell under another
+member's name signed with its own key; on the control key: stops (unsigned under a member's name, signed by
+itself, claiming to be the launcher) and forged ``.progress`` reports that would end the run with a wrong
+diagnosis (unsigned under the faulty robot's name, signed by itself, and under the faulty robot's name
+signed with its own key). Prints ``READY`` once connected and ``SENT`` when done."""
+from __future__ import annotations
+
+import argparse
+import time
+
+from agents.transport import Envelope, ZenohOptions, ZenohTransport
+from agents.transport.identity import Identity, load_private_key
+from agents.transport.keys import control_key, inbox_key
+
+EVIL_PLAN = "{+!evil <- +evil_ran.}"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--mas", required=True)
+    parser.add_argument("--connect", required=True)
+    parser.add_argument("--key", required=True, help="the outsider's own private key (PEM)")
+    parser.add_argument("--robots", required=True, help="the robots' agent names, comma-separated")
+    parser.add_argument("--faulty", required=True, help="the faulty robot, whose diagnosis is forged")
+    parser.add_argument("--wrong", required=True, help="the wrong diagnosis the forged reports claim")
+    args = parser.parse_args()
+    mas, robots = args.mas, args.robots.split(",")
+    own_key = load_private_key(args.key)
+    mallory = Identity({"mallory": own_key.public_key()}, {"mallory": own_key})
+    as_faulty = Identity({args.faulty: own_key.public_key()}, {args.faulty: own_key})  # a forged name, own key
+
+    with ZenohTransport(mas, ZenohOptions(mode="client", connect=(args.connect,))) as transport:
+        session = transport.session
+        print("READY", flush=True)
+        assert transport.wait_for_agents(robots, timeout=120), "the robots never appeared"
+        for robot in robots:
+            other = next(r for r in robots if r != robot)
+            put = lambda payload, robot=robot: session.put(inbox_key(mas, robot), payload)  # noqa: E731
+            as_other = Identity({other: own_key.public_key()}, {other: own_key})
+
+            def env(sender: str, performative: str, content: str, robot=robot) -> Envelope:
+                return Envelope(mas, sender, (robot,), performative, content)
+            put(env("mallory", "tell", "evil_unsigned").encode())                       # unsigned
+            put(env(other, "achieve", "evil_goal").encode())                            # unsigned, a member's name
+            for performative, content in (("tell", "evil_signed"), ("achieve", "evil_goal"),
+                                          ("tellHow", EVIL_PLAN), ("askOne", "destination(X)")):
+                put(mallory.seal("mallory", env("mallory", performative, content).encode()))  # key not listed
+            put(as_other.seal(other, env(other, "tell", "evil_forged").encode()))      # a member's name, own key
+        progress = {"command": "progress", "agent": args.faulty, "step": "diagnosed", "detail": args.wrong}
+        control = control_key(mas)
+        session.put(control, b'{"command":"stop","by":"%s","delay":0}' % robots[0].encode())  # unsigned
+        session.put(control, mallory.seal_control({"command": "stop", "by": "mallory", "delay": 0}))
+        transport.publish_control("stop", by="launcher", delay=0.0)                    # without its token
+        transport.publish_control(**{**progress, "by": args.faulty})                   # unsigned
+        session.put(control, mallory.seal_control({**progress, "by": "mallory"}))      # signed by itself
+        session.put(control, as_faulty.seal_control({**progress, "by": args.faulty}))  # faulty's name, own key
+        time.sleep(0.5)  # let the puts leave before the session closes
+    print("SENT", flush=True)
+
+
+if __name__ == "__main__":
+    main()

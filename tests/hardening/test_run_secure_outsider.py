@@ -1,0 +1,84 @@
+"""Issue 22: a real outsider process against a ``faultmas run --secure`` pair (the run's own code path:
+``run_agent_processes(..., secure=True)`` on the embedded simulator, agents in processes of their own).
+
+The outsider (tests/hardening/run_outsider.py) reads the MAS name and the hub's endpoint as anyone on the
+host could, has a key of its own, and tries tell, achieve, tellHow and askOne against both robots, stops,
+and ``.progress`` reports that claim a wrong diagnosis for the faulty robot. Every attempt is refused with a
+log line (the robots' in their stderr, the run's hub in its ``dropped`` counters), and the run still ends
+with its correct diagnosis. Before ``.progress`` was signed, the forged report ended the run ``wrong``."""
+from __future__ import annotations
+
+import io
+import os
+import queue
+import re
+import subprocess
+import sys
+import threading
+from collections import Counter
+from pathlib import Path
+
+from agents.cooperative import RunResult, build_world, paper_scenario, run_agent_processes, PROCESS_BUSY_CAP
+from agents.transport.identity import generate_keys
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def _lines(stream, into: queue.Queue) -> None:
+    for line in stream:
+        into.put(line)
+
+
+def test_an_outsider_cannot_tell_achieve_teach_ask_stop_or_forge_progress_in_a_secure_run(tmp_path):
+    from robot_bridge.sim.server import SimServer
+
+    generate_keys(tmp_path, ["mallory"])
+    scenario = paper_scenario("encoders", seed=3)
+    world, bridges = build_world(scenario, busy_cap=PROCESS_BUSY_CAP)
+    robots = [r.name for r in scenario.robots]
+    hubs, outsiders = [], []
+    said: queue.Queue = queue.Queue()
+
+    def serve(hub):
+        """Start the simulator's server, then the outsider, connected before the robots start."""
+        hubs.append(hub)
+        stop_sim = SimServer(hub.session, scenario.mas, bridges).start().stop
+        outsider = subprocess.Popen(
+            [sys.executable, "-m", "tests.hardening.run_outsider", "--mas", scenario.mas, "--connect",
+             hub.endpoints[0], "--key", str(tmp_path / "mallory.key"), "--robots", ",".join(robots),
+             "--faulty", "faulty", "--wrong", "wheels"],
+            cwd=REPO, env=dict(os.environ, PYTHONPATH=str(REPO), PYTHONUNBUFFERED="1"),
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        outsiders.append(outsider)
+        threading.Thread(target=_lines, args=(outsider.stdout, said), daemon=True).start()
+        assert said.get(timeout=60).strip() == "READY", outsider.stderr.read()[-2000:]
+        return stop_sim
+
+    err = io.StringIO()
+    try:
+        log = run_agent_processes(scenario, ["--bridge", "zenoh"], 180.0, world=world, err=err, serve=serve,
+                                  secure=True)
+        outsiders[0].wait(timeout=60)   # it has sent everything (or failed) by now
+    finally:
+        for bridge in bridges.values():
+            bridge.shutdown()
+        for outsider in outsiders:
+            outsider.kill()
+    result = RunResult(scenario, log.results(), log.marks, log.done.is_set(), world, list(log.died),
+                       list(log.frozen))
+    logged = err.getvalue()
+    assert result.outcome == "correct", (result.outcome, [r.diagnosis for r in result.robots], logged[-3000:])
+    assert said.get(timeout=5).strip() == "SENT", outsiders[0].stderr.read()[-2000:]
+    assert result.robots[0].diagnosis == "encoders"
+    # the run's hub: the stops and the forged progress reports on the control key
+    assert dict(hubs[0].dropped) == {
+        "not_a_member": 2,      # an unsigned stop naming a member (a mere claim), the 'launcher' without its token
+        "unknown_sender": 2,    # the outsider's own signed stop and progress report
+        "unsigned": 1,          # a progress report naming the faulty robot, unsigned
+        "bad_signature": 1,     # a progress report as the faulty robot, signed with the outsider's key
+    }, logged[-3000:]
+    # each robot's process: one log line per refused message, by reason (the drop log's format)
+    reasons = Counter(m.group(1) for m in re.finditer(r"dropped message on .+? from [^:\n]+: ([a-z_]+)", logged))
+    per_robot = {"unsigned": 2, "unknown_sender": 4 + 2, "bad_signature": 1 + 1, "not_a_member": 2}
+    assert reasons == Counter({reason: n * len(robots) for reason, n in per_robot.items()}), logged[-3000:]
+    assert "evil" not in "".join(str(m) for m in result.marks)
