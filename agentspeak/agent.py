@@ -333,6 +333,18 @@ class Agent:
     # -- sense
     def sense(self) -> bool:
         did = False
+        timers = self.timers
+        if timers and not (self.running or self.events) and self.clock == time.monotonic:
+            # an idle agent comes to a due timer late (the process ran other agents or got no CPU): on a
+            # thread of its own it would have gone on at the deadline, so that wait is lag too. The
+            # timer itself ends now; the agent's later ones keep their order after it (a .wait due 10 ms
+            # after an .at ends after the .at's plan ran, as in Jason). Measured before this cycle does
+            # anything (a timer it sets now is due by the clock it sees now). Wall time only: an
+            # environment's clock is polled (CLOCK_POLL_S), lateness there is no lost CPU.
+            late = self.clock() - self.timer_lag - timers[0][0]
+            if late > 0.0:
+                lag = self.timer_lag + late
+                self.timer_lag = lag if lag < TIMER_MAX_LAG else TIMER_MAX_LAG
         perceive = self._perceive
         if perceive is not None:
             percepts = perceive(self)
@@ -362,15 +374,6 @@ class Agent:
             self.timer_busy = busy
             clock = now - self.timer_lag
             if timers[0][0] <= clock:
-                if not busy and clock > timers[0][0] and self.clock is time.monotonic:
-                    # an idle agent found its timer late (the process ran other agents or got no CPU): on a
-                    # thread of its own it would have gone on at the deadline, so that wait is lag too.
-                    # The timer itself ends now; the agent's later ones keep their order after it (a .wait
-                    # due 10 ms after an .at ends after the .at's plan ran, as in Jason). Wall time only:
-                    # an environment's clock is polled (CLOCK_POLL_S), lateness there is no lost CPU.
-                    lag = self.timer_lag + clock - timers[0][0]
-                    self.timer_lag = lag if lag < TIMER_MAX_LAG else TIMER_MAX_LAG
-                    clock = now - self.timer_lag
                 due = []
                 while timers and timers[0][0] <= clock:
                     due.append(heapq.heappop(timers)[2])

@@ -183,6 +183,10 @@ class BeliefBase:
         rules = [r for key, rs in self._rules.items() if _same_but_ns(key, want) for r in rs]
         return facts, rules
 
+    def in_namespace(self, ns: str) -> list[Literal]:
+        """The beliefs of one name space (what a free variable as a query ranges over)."""
+        return [lit for key, bucket in self._facts.items() if split_ns(key[1])[0] == ns for lit in bucket.all()]
+
     def namespaces(self) -> list[str]:
         """The name spaces of the beliefs and rules, ``default`` first (Jason's ``getNameSpaces``)."""
         seen = {DEFAULT_NS_NAME: None}

@@ -30,8 +30,8 @@ from agentspeak.patterns import PATTERNS, PatternError, apply_pattern
 from agentspeak.stdlib.functions import FUNCTIONS, check_function_name, rule_function
 from agentspeak.stdlib.registry import set_program_reader
 from agentspeak.terms import (
-    DEFAULT_NS_NAME, And, AnnotatedVar, Arith, ArithmeticError_, Func, Literal, Not, NsTerm, Or, Rel, Term, Var, is_ground, make_list,
-    resolve,
+    DEFAULT_NS_NAME, And, AnnotatedVar, Arith, ArithmeticError_, Func, Literal, Not, NsTerm, Or, Rel, Term, Var,
+    is_ground, make_list, resolve,
 )
 
 _GRAMMAR = Path(__file__).with_name("agentspeak.lark")

@@ -85,7 +85,13 @@ def solve(kb: KnowledgeBase, formula: Term, b: dict, trail: list | None = None) 
                 goal = deref(goal, b)
                 tg = type(goal)
                 if tg is Var:
-                    raise SolveError("wrong_arguments", f"unbound variable {goal.name} used as a formula")
+                    # `X` free as a query: each belief of the default name space, with its annotations
+                    # (Jason's VarTerm.logicalConsequence; `.findall(X, X, L)`)
+                    bb = getattr(kb, "bb", None)
+                    facts = bb.in_namespace(DEFAULT_NS.functor) if bb is not None else []
+                    if facts:
+                        choices.append((1, goal, facts, 0, (), 0, cont, len(trail), None))
+                    tg = _AnyBelief
             if tg is And:
                 cont = _Cont(goal.left, _Cont(goal.right, cont))
                 continue
@@ -157,6 +163,8 @@ def solve(kb: KnowledgeBase, formula: Term, b: dict, trail: list | None = None) 
                 if facts or rules:
                     choices.append((1, value, facts, 0, rules, 0, cont, len(trail), None))
                 ok = False
+            elif tg is _AnyBelief:
+                ok = False  # its choice point is made: backtracking tries the beliefs
             elif tg is str or tg is int or tg is float or tg is Cons:
                 raise SolveError("wrong_arguments", f"'{to_str(goal)}' is not a formula")
             else:
@@ -243,6 +251,10 @@ def solve(kb: KnowledgeBase, formula: Term, b: dict, trail: list | None = None) 
             choices.pop()
             cont = _Cont(right, ccont)
             break
+
+
+class _AnyBelief:
+    """The type the machine gives a free variable used as a query once its choice point is made."""
 
 
 def _annots_have_vars(goal: Literal) -> bool:

@@ -33,6 +33,7 @@ class Var:
     """A logic variable. Identity is the variable; ``name`` is only for printing."""
 
     __slots__ = ("name",)
+    annots = None   # a free variable as a query matches beliefs whole (agentspeak.solver reads a goal's annots)
 
     def __init__(self, name: str = "_") -> None:
         self.name = name

@@ -5,11 +5,13 @@ Training: ``detection.learned.evaluate.train_models`` on the paper data set when
 the smoke data set (CPU seconds). Scoring: a recorded run replayed through the online observer
 (``LearnedResourceObserver``, features + model, counters given) per component per tick, in CPU
 time of the observer's thread (wall time on a shared machine measures the neighbours), target
-≤ 1 ms; reading one process's counters with psutil is listed apart. Live: the team's ROS 2 nodes (no
-camera) with the usual workload, the observer in a child process of its own; its CPU time over the
-window divided by the wall time, target ≤ 2 % of one core (skipped with --quick), split into Fast DDS's
-receive threads, the ticks and the rest (the reader taking and encoding the messages). CPU time, not
-wall time: a busy machine does not add to it (beyond colder caches).
+≤ 1 ms; reading one process's counters with psutil is listed apart. Live: the team's ROS 2 nodes with
+the usual workload, launched as the data set was recorded (with cameras for the paper data) and then
+without cameras, the observer in a child process of its own, alone and beside hz observers sharing its
+reader; its CPU time over the window divided by the wall time, target ≤ 2 % of one core (skipped with
+--quick), side by side: the whole process, Fast DDS's receive threads (what any subscriber of these
+topics pays), and ours: the ticks, encoding, and taking the messages. CPU time, not wall time: a busy
+machine does not add to it (beyond colder caches).
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -47,11 +50,10 @@ def _hz_config(models) -> str:
 
 
 def _watch_child(domain: int, models_dir: str, seconds: float, observers: str = "") -> None:
-    """In the child: watch the team for ``seconds`` after a warm-up; print CPU seconds and ticks.
+    """In the child: watch the team for ``seconds`` after a warm-up; print CPU seconds (the process, Fast
+    DDS's threads, the ticks, encoding), ticks and messages, then the split by thread.
     ``observers``: '' the learned detector alone; 'shared' with hz observers on its topics through one
     reader (one subscription per topic); 'separate' the same with a participant each (as before)."""
-    import psutil
-
     from detection.config import load_observers
     from detection.learned.observer import load_models
     from detection.learned.scenario import ROBOTS
@@ -67,20 +69,26 @@ def _watch_child(domain: int, models_dir: str, seconds: float, observers: str = 
         tap = Ros2Tap(config, config.build(), lambda obs: None, domain_id=domain)
     live = LiveLearnedObserver(models, [f"/{r}" for r in ROBOTS], lambda obs: None, domain,
                                reader=tap.reader if observers == "shared" else None)
+    encoding = [0.0]
+    listener, encode = live.tap._listener, live.tap._listener.on_batch
+
+    def timed(batch) -> None:                   # the learned tap's part of a batch: encoding + buffers
+        started = time.thread_time()
+        encode(batch)
+        encoding[0] += time.thread_time() - started
+    listener.on_batch = timed
     if tap is not None:
         tap.start()
     try:
         time.sleep(3.0)
-        me = psutil.Process()
-        before, ticks, received = me.cpu_times(), len(live.observer.tick_seconds), live.tap.received
-        before_threads, before_tick = thread_cpu(), sum(live.observer.tick_cpu_seconds)
+        before, ticks, received = time.process_time(), len(live.observer.tick_seconds), live.tap.received
+        before_threads, before_tick, before_encoding = thread_cpu(), sum(live.observer.tick_cpu_seconds), encoding[0]
         time.sleep(seconds)
-        after, after_threads = me.cpu_times(), thread_cpu()
-        cpu = (after.user + after.system) - (before.user + before.system)
+        cpu, after_threads = time.process_time() - before, thread_cpu()
         dds = sum(v - before_threads.get(k, 0.0) for k, v in after_threads.items() if k.startswith("dds."))
         tick = sum(live.observer.tick_cpu_seconds) - before_tick
-        print(f"{cpu} {len(live.observer.tick_seconds) - ticks} {live.tap.received - received} {dds} {tick}",
-              flush=True)
+        print(f"{cpu} {len(live.observer.tick_seconds) - ticks} {live.tap.received - received} {dds} {tick} "
+              f"{encoding[0] - before_encoding}", flush=True)
         print(thread_shares(before_threads, after_threads, seconds), flush=True)
     finally:
         live.close()
@@ -88,21 +96,49 @@ def _watch_child(domain: int, models_dir: str, seconds: float, observers: str = 
             tap.close()
 
 
-def _live_share(models, seconds: float, camera: bool, observers: tuple[str, ...] = ("",)) -> list[tuple]:
-    """The team is launched as the models' data set was recorded (``camera``): models of the camera
-    nodes refuse a team without them, and models without them would not watch the images."""
+@dataclass
+class Share:
+    """One child's CPU over the window, as shares of one core (the process, of which Fast DDS's
+    threads; the rest is ours: the ticks, encoding, and the rest: taking the messages)."""
+
+    team: str
+    kind: str
+    whole: float
+    dds: float
+    ticks: float
+    encoding: float
+    messages_per_s: float
+    tick_count: int
+    threads: str
+
+    @property
+    def ours(self) -> float:
+        return self.whole - self.dds
+
+    @property
+    def rest(self) -> float:
+        """Taking the messages (the reader's loop and rcl's take), and the hz observers where they run."""
+        return self.ours - self.ticks - self.encoding
+
+
+def _live_share(models, seconds: float, camera: bool, observers: tuple[str, ...] = ("",)) -> list[Share]:
+    """The team is launched with or without its cameras; the models of nodes not launched are left out
+    (they would refuse a team without their component), as are the agents' (no agents here)."""
     import rclpy
 
     from detection.learned.scenario import ROBOTS, Workload
     from robot_bridge.ros2.launch import Supervisor, plan
+    from robot_bridge.ros2.perfbugs import component_name
     from robot_bridge.ros2.runtime import RosContext, loopback_env
 
+    specs = plan(list(ROBOTS), camera=camera)
+    launched = {component_name(spec.robot, spec.node) for spec in specs}
     domain = 201 + os.getpid() % 30
     with tempfile.TemporaryDirectory() as tmp:
         for name, model in models.items():
-            if not name.endswith("_agent"):        # the agents are not launched here: their models would
-                model.save(Path(tmp) / f"{name}.npz")   # wait for them and refuse (the nodes' models do not)
-        supervisor = Supervisor(plan(list(ROBOTS), camera=camera), domain)
+            if name in launched:
+                model.save(Path(tmp) / f"{name}.npz")
+        supervisor = Supervisor(specs, domain)
         supervisor.start()
         try:
             if supervisor.wait_ready(90):
@@ -111,20 +147,43 @@ def _live_share(models, seconds: float, camera: bool, observers: tuple[str, ...]
                 Workload(work.add(rclpy.create_node("bench_workload", context=work.context)), ROBOTS, seed=3)
                 children = [subprocess.run([sys.executable, "-c", "import sys; from benchmarks.bench_perfbugs import "
                                             f"_watch_child; _watch_child({domain}, {tmp!r}, {seconds}, {kind!r})"],
-                                           capture_output=True, text=True, env=loopback_env(), timeout=seconds + 120,
+                                           capture_output=True, text=True, env=loopback_env(), timeout=seconds + 180,
                                            cwd=Path(__file__).resolve().parents[1])
                             for kind in observers]
         finally:
             supervisor.stop()
     results = []
-    for child in children:
+    for kind, child in zip(observers, children):
         if child.returncode != 0:
             raise RuntimeError(child.stderr[-2000:])
         figures, threads = child.stdout.strip().splitlines()[-2:]
-        cpu, ticks, messages, dds, tick = figures.split()
-        results.append((float(cpu) / seconds, int(ticks), int(messages), float(dds) / seconds, float(tick) / seconds,
-                        threads))
+        cpu, ticks, messages, dds, tick, encoding = figures.split()
+        results.append(Share("cameras" if camera else "no cameras", kind, float(cpu) / seconds, float(dds) / seconds,
+                             float(tick) / seconds, float(encoding) / seconds, int(messages) / seconds, int(ticks),
+                             threads))
     return results
+
+
+LIVE_S = 45.0
+KINDS = {"": "learned alone", "shared": "+ hz observers, shared reader",
+         "separate": "+ hz observers, own participant"}
+
+
+def _live_table(shares: list[Share], profile: str) -> list[str]:
+    """Side by side: the whole process, Fast DDS's threads, ours and its parts; with and without cameras."""
+    lines = [f"online observer, CPU share of one core over {LIVE_S:.0f} s, {profile} models, target <= 2 %:",
+             f"  {'team':<11} {'watching':<31} {'msg/s':>6} {'whole':>7} {'FastDDS':>8} {'ours':>7} "
+             f"{'ticks':>7} {'encoding':>8} {'rest':>7}"]
+    for s in shares:
+        lines.append(f"  {s.team:<11} {KINDS[s.kind]:<31} {s.messages_per_s:>6.0f} {s.whole * 100:>6.2f}% "
+                     f"{s.dds * 100:>7.2f}% {s.ours * 100:>6.2f}% {s.ticks * 100:>6.2f}% {s.encoding * 100:>7.2f}% "
+                     f"{s.rest * 100:>6.2f}%")
+    lines.append("  (whole: CPU time of the observer's process; FastDDS: its dds.* threads; ours = whole - FastDDS:")
+    lines.append("   ticks = psutil counters + features + models; encoding = the learned tap's batches; rest = taking the")
+    lines.append("   messages (reader loop, rcl take), plus the hz observers' work in their rows)")
+    for s in shares:
+        lines.append(f"  threads, {s.team}, {KINDS[s.kind]}: {s.threads}")
+    return lines
 
 
 def run(quick: bool = False) -> str:
@@ -145,10 +204,10 @@ def run(quick: bool = False) -> str:
     replay(observer, dataset.path / f"run-{parts[3][0]:03d}.npz")
     per_tick = np.array(observer.tick_cpu_seconds[1:]) / len(models) * 1000.0
     me = psutil.Process()
-    started = time.perf_counter()
+    started = time.process_time()
     for _ in range(200):
         read_counters(me)
-    psutil_ms = (time.perf_counter() - started) / 200 * 1000.0
+    psutil_ms = (time.process_time() - started) / 200 * 1000.0
 
     lines = [f"{'what':<58} {'measured':>14} {'target':>10}",
              f"{f'training, {profile} data ({len(models)} components, {samples} ticks in partition 1)':<58} "
@@ -156,23 +215,14 @@ def run(quick: bool = False) -> str:
              f"{'scoring per component per tick, CPU, median (features+model)':<58} {np.median(per_tick):>11.3f} ms "
              f"{'<= 1 ms':>10}",
              f"{'scoring per component per tick, CPU, worst':<58} {per_tick.max():>11.3f} ms {'':>10}",
-             f"{'reading one process counters (psutil)':<58} {psutil_ms:>11.3f} ms {'':>10}"]
+             f"{'reading one process counters (psutil), CPU':<58} {psutil_ms:>11.3f} ms {'':>10}"]
     if quick:
         lines.append(f"{'online observer CPU share, live team':<58} {'(skipped: --quick)':>14}")
     else:
         from detection.learned.scenario import PROFILES
-        kinds = ("", "separate", "shared")
-        results = _live_share(models, 30.0, PROFILES[profile].camera, kinds)
-        share, ticks, messages, dds, tick, threads = results[0]
-        lines.append(f"{f'online observer CPU share, live team, {profile} models ({messages / 30:.0f} msg/s, {ticks} ticks)':<58} "
-                     f"{share * 100:>12.2f} % {'<= 2 %':>10}")
-        lines.append(f"{'  of which Fast DDS receive threads':<58} {dds * 100:>12.2f} %")
-        lines.append(f"{'  of which ticks (psutil counters + features + models)':<58} {tick * 100:>12.2f} %")
-        lines.append(f"{'  of which taking + encoding the messages (rest)':<58} {(share - dds - tick) * 100:>12.2f} %")
-        lines.append(f"  by thread: {threads}")
-        for kind, (share, _, _, dds, _, threads) in zip(kinds[1:], results[1:]):
-            what = {"separate": "hz observers on its topics too, a participant each",
-                    "shared": "hz observers on its topics too, one subscription per topic"}[kind]
-            lines.append(f"{'  + ' + what:<58} {share * 100:>12.2f} % {'':>10}")
-            lines.append(f"      Fast DDS {dds * 100:.2f} %; by thread: {threads}")
+        shares = []
+        if PROFILES[profile].camera:            # the team as recorded, then without its cameras
+            shares += _live_share(models, LIVE_S, True, ("", "shared"))
+        shares += _live_share(models, LIVE_S, False, ("", "shared"))
+        lines += _live_table(shares, profile)
     return "\n".join(lines)

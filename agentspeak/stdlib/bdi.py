@@ -172,7 +172,6 @@ def _drop_other_intentions(ctx) -> None:
     """Jason's drop_all_intentions: every intention but the calling one (Jason runs it outside the queue
     it empties), the events those intentions posted, and the events ``.at`` would post (``cancelAts``).
     A ``!!g``'s event stays, as the environment's and messages' do: it belongs to no intention."""
-    from agentspeak.stdlib.mas import cancel_ats
     agent = ctx.agent
     for i in agent.intentions():
         if i is not ctx.intention:
@@ -181,7 +180,9 @@ def _drop_other_intentions(ctx) -> None:
     if len(kept) != len(agent.events):
         agent.events.clear()
         agent.events.extend(kept)
-    cancel_ats(agent)
+    for pending in getattr(agent, "at_events", None) or ():  # Jason's at.cancelAts (.at: stdlib/mas.py)
+        pending.cancelled = True
+    agent.at_events = set()
 
 
 @internal_action(".drop_all_desires", args=0)

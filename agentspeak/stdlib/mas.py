@@ -124,7 +124,8 @@ def at(ctx, when, event):
 
 
 class _AtEvent:
-    """An event ``.at`` posts when its time comes, unless cancelled first (``.drop_all_intentions``)."""
+    """An event ``.at`` posts when its time comes, unless cancelled first (``.drop_all_intentions`` sets
+    ``cancelled`` on each of ``agent.at_events``: Jason's ``at.cancelAts``)."""
     __slots__ = ("agent", "trigger", "cancelled")
 
     def __init__(self, agent, trigger: Trigger) -> None:
@@ -135,12 +136,6 @@ class _AtEvent:
         if not self.cancelled:
             self.agent.post_external(self.trigger, force=True)
 
-
-def cancel_ats(agent) -> None:
-    """Forget the events ``.at`` would post (Jason's ``at.cancelAts``)."""
-    for pending in getattr(agent, "at_events", None) or ():
-        pending.cancelled = True
-    agent.at_events = set()
 
 
 def _types(x) -> list[str]:

@@ -172,7 +172,8 @@ def include(ctx, path, namespace=None):
     from agentspeak.stdlib.registry import read_program
     if not isinstance(path, str):
         raise wrong_arguments(".include needs a file name")
-    if namespace is not None and not (isinstance(namespace, Var) or (isinstance(namespace, Literal) and not namespace.args)):
+    if namespace is not None and not isinstance(namespace, Var) and not (isinstance(namespace, Literal)
+                                                                         and not namespace.args):
         raise wrong_arguments("the second argument of .include (the name space) must be an atom or a variable")
     agent = ctx.agent
     base = os.path.dirname(agent.source_file) if agent.source_file else "."

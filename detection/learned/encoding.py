@@ -15,6 +15,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from detection.taps.ros2_take import HEAD_BYTES     # a type that ``reads_heads`` is read from this many bytes
+
 SIZE_COLUMN = "size"
 SMALL_ARRAY = 9
 SKIPPED_TYPES = {("builtin_interfaces", "msg", "Time")}
@@ -85,15 +87,31 @@ class RosEncoder:
         return np.fromiter((size, *(get(msg) for get in self._getters)), dtype=np.float64,
                            count=len(self.columns))
 
-    def encode_raw(self, data: bytes) -> np.ndarray:
-        """The vector of a serialised (CDR) message: read in place (``CdrColumns``) when its layout
-        allows, else deserialised by rclpy; the same numbers either way (tested)."""
+    @property
+    def cdr(self) -> "CdrColumns | bool":
+        """The in-place reader of this type (False when its layout does not allow one)."""
         if self._cdr is None:
             self._cdr = CdrColumns.for_class(self.msg_class, self.columns[1:])
-        if self._cdr:
-            vector = self._cdr.read(data)
+        return self._cdr
+
+    @property
+    def head_bytes(self) -> int | None:
+        """How many first bytes of a message suffice for its vector (``HEAD_BYTES``: every column
+        comes before the message's bulk, as an image's header and sizes before its pixels), or None
+        when the whole message is needed."""
+        return HEAD_BYTES if self.cdr and self.cdr.reads_heads else None
+
+    def encode_raw(self, data: bytes) -> np.ndarray:
+        """The vector of a serialised (CDR) message: read in place (``CdrColumns``) when its layout
+        allows, else deserialised by rclpy; the same numbers either way (tested). ``data`` may be the
+        head of a longer message (``detection.taps.ros2_take.MessageHead``, its length in ``size``)."""
+        if self.cdr:
+            vector = self.cdr.read(data)
             if vector is not None:
                 return vector
+        if getattr(data, "size", len(data)) != len(data):
+            raise EncodingError(f"the first {len(data)} of {data.size} bytes do not hold every number of a "
+                                f"{self.msg_class.__name__} (its strings are longer than that)")
         from rclpy.serialization import deserialize_message
         return self.encode(deserialize_message(data, self.msg_class), len(data))
 
@@ -185,38 +203,64 @@ class CdrColumns:
         return cls(steps, len(columns) + 1) if labels == columns else False
 
     def read(self, data: bytes) -> np.ndarray | None:
-        """The encoder's vector of ``data``, or None when this reader cannot vouch for it."""
+        """The encoder's vector of ``data``, or None when this reader cannot vouch for it. ``data`` may
+        be the head of a longer message (a ``MessageHead``, whose ``size`` is the message's length):
+        the vector is the whole message's when every number lies in the head, else None."""
+        size = getattr(data, "size", len(data))
         if len(data) < 4 or data[1] != 1:           # encapsulation: CDR little endian
             return None
-        layout = self._layouts.get(len(data))
-        if layout is not None and layout[1](values := layout[0](data)) != layout[2]:
+        layout = self._layouts.get(size)
+        if layout is not None and (len(data) < layout[6] or layout[1](values := layout[0](data)) != layout[2]):
             layout = None                           # same size, other string lengths: walk this one
         if layout is None:
-            layout = self._layout(data)
+            layout = self._layout(data, size)
             if layout is None:
                 return None
             if len(self._layouts) >= self.MAX_LAYOUTS:
                 self._layouts.clear()
-            self._layouts[len(data)] = layout
+            self._layouts[size] = layout
             values = layout[0](data)
-        _, _, _, strings, pick, adjust = layout
+        _, _, _, strings, pick, adjust, _ = layout
         for start, end in strings:
             if not data[start:end].isascii():       # a string's length in characters is not its bytes
                 return None
-        vector = np.array((len(data), *pick(values)), dtype=np.float64)
+        vector = np.array((size, *pick(values)), dtype=np.float64)
         vector -= adjust
         return vector
 
-    def _layout(self, data: bytes) -> tuple | None:
+    @property
+    def reads_heads(self) -> bool:
+        """Whether every column comes before the type's bulk (the content of its sequences), so that a
+        message's first bytes hold all its numbers: an image's header, sizes and pixel count come before
+        its pixels; a ``CameraInfo``'s matrices after its distortion sequence (small anyway)."""
+        def walk(steps, bulk: bool) -> tuple[bool, bool]:          # (a column after bulk, bulk seen)
+            for kind, arg, column in steps:
+                if kind == "struct":
+                    late, bulk = walk(arg, bulk)
+                    if late:
+                        return True, bulk
+                    continue
+                if column is not None and bulk:
+                    return True, bulk
+                bulk = bulk or kind == "seq" or (kind == "opaque" and self._has_seq(arg))
+            return False, bulk
+        return not walk(self.steps, False)[0]
+
+    @staticmethod
+    def _has_seq(steps) -> bool:
+        return any(kind == "seq" or (kind in ("struct", "opaque") and CdrColumns._has_seq(arg))
+                   for kind, arg, _ in steps)
+
+    def _layout(self, data: bytes, size: int) -> tuple | None:
         import struct
 
         fields: list[tuple[int, str, int | None, bool]] = []      # offset in data, code, column, is a length
         strings: list[tuple[int, int]] = []
-        end = len(data) - 4
+        end = size - 4
 
         def length(pos: int, column: int | None) -> tuple[int, int]:
             pos += -pos % 4
-            if pos + 4 > end:
+            if pos + 4 > end or pos + 8 > len(data):            # past the message, or past a head of it
                 raise IndexError
             fields.append((pos + 4, "I", column, True))
             return pos + 4, int.from_bytes(data[pos + 4:pos + 8], "little")
@@ -273,6 +317,9 @@ class CdrColumns:
         for offset, code, _, _ in fields:
             fmt += f"{offset - at}x{code}" if offset > at else code
             at = offset + struct.calcsize(code)
+        need = max([at, *(stop for _, stop in strings)])
+        if need > len(data):
+            return None                                         # a number or string beyond the head
         unpack = struct.Struct(fmt).unpack_from
         length_at = [i for i, f in enumerate(fields) if f[3]]
         values = unpack(data)
@@ -284,7 +331,7 @@ class CdrColumns:
             if fields[i][3] and self._is_string(column):
                 adjust[column + 1] = 1.0                        # CDR counts a string's NUL
         return (unpack, _getter_of(length_at), _getter_of(length_at)(values), tuple(strings),
-                _getter_of([i for _, i in by_column]), adjust)
+                _getter_of([i for _, i in by_column]), adjust, need)
 
     def _is_string(self, column: int) -> bool:
         def find(steps) -> bool | None:

@@ -77,7 +77,9 @@ class RawTap:
     CONFIG --learned``: one subscription per topic, so Fast DDS receives each message once).
     ``on_tick()`` (if given) runs every ``tick_s`` seconds on the same thread, so a user needs no lock
     between events and ticks; ``on_raw(t_ns, topic, cdr)`` (if given) sees each message before it is
-    encoded (a recording). ``close()`` stops it (closing the context does too).
+    encoded (a recording). ``close()`` stops it (closing the context does too). Without ``on_raw``, only
+    the first bytes of a big message are copied when they hold all its numbers (``RosEncoder.head_bytes``:
+    an image's header and sizes, not its pixels).
 
     A message that cannot be decoded is counted in ``dropped`` (per topic), never raised in the reader.
     """
@@ -96,8 +98,8 @@ class RawTap:
                                                                     name=f"{node.get_name()}_tap")
         self._listener = self.reader.add_listener(self._on_batch, topics=set(self.encoders), on_tick=on_tick,
                                                   tick_s=tick_s, batch_s=BATCH_S)
-        for topic, encoder in self.encoders.items():
-            self.reader.subscribe(topic, encoder.msg_class)
+        for topic, encoder in self.encoders.items():         # a recording keeps whole messages
+            self.reader.subscribe(topic, encoder.msg_class, head=None if on_raw is not None else encoder.head_bytes)
         if self._owns:
             self.reader.start()
 

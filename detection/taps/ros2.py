@@ -19,6 +19,7 @@ from detection.observer_set import ObserverSet
 from detection.taps import codec
 from detection.taps.live import LiveTap
 from detection.taps.ros2_reader import Batch, TopicReader
+from detection.taps.ros2_take import HEAD_BYTES
 
 log = logging.getLogger("faultmas.detection")
 GRAPH_PERIOD = 0.1          # seconds between graph polls (activated reacts within this + one evaluation)
@@ -86,7 +87,10 @@ class Ros2Tap(LiveTap):
                 raise TapError(f"{topic}: {exc}") from None
         self.types[topic] = msgtype
         self.reader.listen_to(self._listener, topic)
-        self.reader.subscribe(topic, cls)
+        # without a recording or a decoder, an observer reads at most a message's header (its stamp):
+        # a camera's pixels need not be copied
+        whole = self.recorder is not None or topic in self._decoders
+        self.reader.subscribe(topic, cls, head=None if whole else HEAD_BYTES)
         log.info("observing %s (%s)", topic, msgtype)
 
     # -- on the reader's thread ----------------------------------------------------------------------

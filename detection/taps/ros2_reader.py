@@ -7,7 +7,9 @@ of a core with raw subscriptions and empty callbacks, against 1.6-2.3 % for this
 ~60 % is Fast DDS's own receive thread). The reader waits on an rcl wait set, drains every ready
 subscription completely, then sleeps ``batch`` seconds so that one wake-up takes many messages
 (each keeps the time the middleware received it, so batching does not blur timing). Messages stay
-serialized (CDR bytes): deserializing is the user's choice, per field, when needed.
+serialized (CDR bytes): deserializing is the user's choice, per field, when needed. They are taken
+with one copy into a buffer kept between takes (``ros2_take``), and a topic whose every consumer
+needs only a message's first bytes (``subscribe(head=N)``) gets ``MessageHead``s of big messages.
 
 The subscriptions live on a node of their own that no executor spins (an executor would take the
 messages first); it shares the caller's rclpy context, so one DDS participant serves both.
@@ -22,7 +24,8 @@ from typing import Callable
 log = logging.getLogger("faultmas.detection")
 
 Batch = list[tuple[int, str, bytes]]
-"""``(receive time in ns, topic, CDR bytes)``, sorted by receive time."""
+"""``(receive time in ns, topic, CDR bytes)``, sorted by receive time (the bytes are a
+``ros2_take.MessageHead`` for a topic subscribed with ``head`` by all its consumers)."""
 
 BATCH_S = 0.02          # after a wake-up, let messages gather this long (at 1,000 msgs/s: ~20 per wake-up)
 
@@ -57,6 +60,7 @@ class TopicReader:
         self.received = 0
         self._listeners: list[_Listener] = []
         self._subscriptions: dict[str, object] = {}
+        self._heads: dict[str, int | None] = {}     # topic -> bytes its consumers need (None: whole messages)
         self._changed = True
         self._stop = threading.Event()
         self._wake = GuardCondition(None, None, context=context)
@@ -102,12 +106,21 @@ class TopicReader:
         if listener.topics is not None:
             listener.topics = listener.topics | {topic}
 
-    def subscribe(self, topic: str, msg_class: type, depth: int = 100) -> None:
+    def subscribe(self, topic: str, msg_class: type, depth: int = 100, *, head: int | None = None) -> None:
         """Take ``topic``'s messages (best effort: matches every publisher; ``depth`` messages are kept
         between two wake-ups, 100 ms of a 1 kHz topic at the default). A topic already taken keeps its
-        one subscription (another listener's), whoever asks again."""
+        one subscription (another listener's), whoever asks again.
+
+        ``head``: this consumer needs only the first ``head`` bytes of a message and its size; a longer
+        message then comes as a ``MessageHead`` (its pixels, say, are never copied), unless another
+        consumer of the topic asked for whole messages: then every consumer gets them whole."""
         from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+        if topic in self._heads:
+            wanted = self._heads[topic]
+            self._heads[topic] = None if head is None or wanted is None else max(wanted, head)
+        else:
+            self._heads[topic] = head
         if topic in self._subscriptions:
             return
         qos = QoSProfile(depth=depth, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT)
@@ -141,7 +154,10 @@ class TopicReader:
     def _loop(self) -> None:
         from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 
+        from detection.taps.ros2_take import Taker
+
         wait_set, subs = None, []
+        taker = Taker.create()
         try:
             while not self._stop.is_set() and self.context.ok():
                 if self._changed or wait_set is None:
@@ -160,7 +176,7 @@ class TopicReader:
                 batch: Batch = []
                 for topic, sub in subs:
                     if sub.handle.pointer in ready:
-                        self._drain(topic, sub, batch)
+                        self._drain(topic, sub, batch, taker, self._heads.get(topic))
                 if batch:
                     batch.sort(key=lambda m: m[0])
                     self.received += len(batch)
@@ -182,12 +198,18 @@ class TopicReader:
         except Exception:
             if self.context.ok() and not self._stop.is_set():       # not a shutdown under our feet
                 log.exception("ROS 2 reader stopped")
+        finally:
+            if taker is not None:
+                taker.close()
 
     @staticmethod
-    def _drain(topic: str, sub, out: Batch) -> None:
-        """Every message waiting on ``sub``, with the time the middleware received it."""
-        take = sub.handle.take_message
-        cls = sub.msg_type
+    def _drain(topic: str, sub, out: Batch, taker=None, head: int | None = None) -> None:
+        """Every message waiting on ``sub``, with the time the middleware received it (by ``taker``,
+        a ``ros2_take.Taker``, when there is one, else through rclpy)."""
         with sub.handle:
+            if taker is not None:
+                taker.drain(sub.handle.pointer, topic, head, out)
+                return
+            take, cls = sub.handle.take_message, sub.msg_type
             while (taken := take(cls, True)) is not None:
                 out.append((taken[1].get("received_timestamp") or time.time_ns(), topic, taken[0]))

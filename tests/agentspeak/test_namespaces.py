@@ -370,3 +370,12 @@ def test_a_variable_formula_of_a_module_is_of_its_name_space(tmp_path):
     runtime.add_agent("ag", main.read_text(), source_file=str(main))
     runtime.run(timeout=10, stop_when_idle=True)
     assert lines == ["ok_in(m)", "module_caught(missing,no_relevant)", "main_caught(elsewhere,no_relevant)"]
+
+
+def test_a_free_variable_as_a_query_ranges_over_the_beliefs_of_the_default_name_space():
+    out = run_asl(asl("""
+        !g.
+        +!g <- +b(0, k); +ns1::b(10, t); +default::b(50, o);
+            .findall(X, X, L); .print(L).
+    """))
+    assert out == ["[b(50,o)[source(self)],b(0,k)[source(self)]]"]

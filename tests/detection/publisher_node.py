@@ -1,7 +1,8 @@
 """A ROS 2 node for the observer tests, run in its own process: ``python publisher_node.py --domain-id N ...``.
 
 ``--pub TOPIC:RATE[:MEAN]`` publishes ``std_msgs/Float64`` at RATE Hz (data ~ N(MEAN, 1), seeded) or,
-with ``--stamped``, ``std_msgs/Header`` stamped now. The node's ``rate`` parameter (first topic) can be
+with ``--stamped``, ``std_msgs/Header`` stamped now. ``--image TOPIC:RATE`` publishes a 640x480 rgb8
+``sensor_msgs/Image`` (``image_message()``: the same every time) at RATE Hz. The node's ``rate`` parameter (first topic) can be
 set through ROS 2; each change prints ``rate=<value>``. ``--slow-to R --slow-after S`` drops the rate
 of the first topic to R after S seconds. Prints ``ready`` once publishing; SIGINT/SIGTERM end it cleanly.
 """
@@ -14,12 +15,22 @@ import sys
 import time
 
 
+def image_message():
+    """The image ``--image`` publishes (a test rebuilds it to know what was sent)."""
+    from sensor_msgs.msg import Image
+
+    image = Image(height=480, width=640, encoding="rgb8", is_bigendian=0, step=1920, data=bytes(range(256)) * 3600)
+    image.header.frame_id = "camera_rgb_optical_frame"
+    return image
+
+
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--domain-id", type=int, required=True)
     ap.add_argument("--name", default="test_publisher")
     ap.add_argument("--pub", action="append", default=[])
     ap.add_argument("--stamped", action="store_true")
+    ap.add_argument("--image", action="append", default=[])
     ap.add_argument("--slow-to", type=float, default=None)
     ap.add_argument("--slow-after", type=float, default=None)
     args = ap.parse_args()
@@ -56,6 +67,13 @@ def main() -> int:
 
     for i, (_topic, rate, _mean) in enumerate(specs):
         set_rate(i, rate)
+    if args.image:
+        from sensor_msgs.msg import Image
+        image = image_message()
+        for spec in args.image:
+            topic, rate = spec.split(":")
+            image_pub = node.create_publisher(Image, topic, 2)
+            node.create_timer(1.0 / float(rate), lambda pub=image_pub: pub.publish(image))
 
     def on_parameters(params):
         for p in params:

@@ -99,10 +99,16 @@ def test_slow_publisher_is_diagnosed_and_repaired_and_the_bag_replays_the_same(t
         repaired = lambda ls: any(c[0] == "hz(scan)" for c in changes(ls)[1:])  # noqa: E731
         assert obs_out.wait_for(repaired, 30), obs_out.lines
     finally:
-        observe.send_signal(2)                      # Ctrl-C ends it cleanly
-        observe.wait(30)
-        publisher.terminate()
-        publisher.wait(10)
+        try:
+            observe.send_signal(2)                  # Ctrl-C ends it cleanly
+            observe.wait(30)
+        except subprocess.TimeoutExpired:           # fails the test, but leaves no process behind
+            observe.kill()
+            observe.wait()
+            raise
+        finally:
+            publisher.terminate()
+            publisher.wait(10)
     assert observe.returncode == 0, observe.stderr.read()
     obs_out.join()                                  # the last lines may still be in the pipe
     updates = [json.loads(line) for line in obs_out.lines]

@@ -153,6 +153,17 @@ def test_hz_10_hz_passes_and_3_hz_fails(live):
     assert seen.latest("hz(ten)").holds and not seen.latest("hz(three)").holds
 
 
+def test_topics_no_observer_decodes_are_taken_as_heads(live):
+    """Without a recording, a topic whose fields no observer reads needs at most its header stamp: the
+    reader copies only a big message's first bytes (``ros2_take.HEAD_BYTES``); a decoded topic whole."""
+    from detection.taps.ros2_take import HEAD_BYTES
+
+    tap, _, _ = live
+    assert wait_for(lambda: {"/ten", "/centered", "/stamped"} <= set(tap.reader.topics), 30)
+    assert tap.reader._heads["/ten"] == HEAD_BYTES and tap.reader._heads["/stamped"] == HEAD_BYTES
+    assert tap.reader._heads["/centered"] is None                  # the t-test reads its data field
+
+
 def test_t_test_accepts_an_unshifted_mean_and_rejects_a_shifted_one(live):
     tap, seen, _ = live
     assert settled(tap, "score(centered)").holds

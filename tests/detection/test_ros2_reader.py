@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import threading
 
+import numpy as np
 import pytest
 
 pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'faultmas[ros2]')")
@@ -14,7 +15,7 @@ from tests.detection.test_ros2_observers import DOMAIN, start_publishers, stop  
 
 @pytest.fixture(scope="module")
 def publisher():
-    [proc] = start_publishers(["--name", "reader_pub", "--pub", "/fast:200", "--pub", "/slow:20"])
+    [proc] = start_publishers(["--name", "reader_pub", "--pub", "/fast:200", "--pub", "/slow:20", "--image", "/image:10"])
     yield proc
     stop(proc)
 
@@ -49,6 +50,56 @@ def test_messages_arrive_raw_in_receive_time_order_and_ticks_share_the_thread(pu
     assert max(len(b) for b in batches) > 1                 # a wake-up takes many messages, not one
     assert isinstance(deserialize_message(messages[0][2], Float64), Float64)
     assert len(threads) == 1                                # batches and ticks: one thread, no lock needed
+
+
+def test_a_consumer_of_heads_gets_the_first_bytes_of_big_messages_and_their_size(publisher):
+    """``subscribe(head=N)``: an image comes as its first N bytes and its size (its pixels are not
+    copied), small messages whole; the numbers read from the head are the whole image's."""
+    from rclpy.serialization import serialize_message
+    from sensor_msgs.msg import Image
+    from std_msgs.msg import Float64
+
+    from detection.learned.encoding import RosEncoder
+    from detection.taps.ros2_reader import TopicReader
+    from detection.taps.ros2_take import MessageHead, Taker
+    from tests.detection.publisher_node import image_message
+
+    assert Taker.create() is not None                       # rcl's C API is usable here (else rclpy takes)
+    whole = serialize_message(image_message())
+    got = []
+    with RosContext(domain_id=DOMAIN) as ros:
+        reader = TopicReader(ros.context, got.extend, tick_s=0.2)
+        reader.subscribe("/image", Image, head=4096)
+        reader.subscribe("/fast", Float64, head=4096)
+        reader.start()
+        assert wait_for(lambda: {t for _, t, _ in got} == {"/image", "/fast"}, 30)
+        reader.close()
+    images = [data for _, topic, data in got if topic == "/image"]
+    assert all(isinstance(d, MessageHead) and len(d) == 4096 and d.size == len(whole) for d in images)
+    assert all(not isinstance(d, MessageHead) and len(d) == 12 for _, topic, d in got if topic == "/fast")
+    assert images[0][-1000:] == whole[4096 - 1000:4096]     # pixels (CDR's padding bytes may differ)
+    encoder = RosEncoder(Image)
+    np.testing.assert_array_equal(encoder.encode_raw(images[0]), encoder.encode_raw(whole))
+
+
+def test_a_topic_is_taken_whole_when_one_of_its_consumers_needs_whole_messages(publisher):
+    from rclpy.serialization import serialize_message
+    from sensor_msgs.msg import Image
+
+    from detection.taps.ros2_reader import TopicReader
+    from tests.detection.publisher_node import image_message
+
+    size = len(serialize_message(image_message()))
+    heads, wholes = [], []
+    with RosContext(domain_id=DOMAIN) as ros:
+        reader = TopicReader(ros.context, heads.extend, tick_s=0.2)
+        reader.subscribe("/image", Image, head=4096)
+        reader.add_listener(wholes.extend, topics={"/image"})
+        reader.subscribe("/image", Image)                   # the second consumer wants whole messages
+        reader.start()
+        assert wait_for(lambda: len(wholes) >= 2, 30)
+        reader.close()
+    assert all(type(d) is bytes and len(d) == size for _, _, d in heads + wholes)
 
 
 def test_the_reader_ends_when_its_context_is_shut_down_under_it(publisher):

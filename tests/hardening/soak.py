@@ -13,8 +13,10 @@ time (the simulator runs in real time while the robots stand, faster while they 
 What it watches, after every task: this process (hub, simulator server, world) for RSS, threads and open
 descriptors; every agent (the inspector's summary query) for intentions, events and beliefs once it should
 be idle (an agent still busy then has a stuck intention); every agent process for RSS and threads; the
-Zenoh declarations of this process's hub. The summary gives the least-squares slope of each RSS per hour
-of simulated time. A task that ends neither diagnosed nor arrived within ``--task-timeout`` wall seconds is
+Zenoh declarations of this process's hub; what the simulator keeps that may grow (the camera renderer's
+static layers, the trajectory rows kept: both bounded) and the gc-tracked objects. The summary gives the
+least-squares slope of each RSS per hour of simulated time, over the run and over its second half (after
+the bounded stores filled), and the object types that grew from the second task to the last. A task that ends neither diagnosed nor arrived within ``--task-timeout`` wall seconds is
 named (``timeout``) and the next task starts anyway.
 
 ``python -m tests.hardening.soak --sim-seconds 3600 --out soak.jsonl`` (one JSON line per task, then the

@@ -144,6 +144,43 @@ def test_numbers_read_in_place_from_cdr_equal_rclpys_deserialised_message():
     assert non_ascii and in_place == len(messages) - non_ascii        # all but the non-ASCII texts
 
 
+def test_the_head_of_a_message_gives_its_whole_vector_or_none():
+    """A ``MessageHead`` (the reader's first bytes of a big message): where the type's numbers all come
+    before its bulk (``reads_heads``) and lie in the head, the vector is the whole message's; else None,
+    never a wrong vector. An image's head of ``HEAD_BYTES`` always holds them (the live detector's case)."""
+    pytest.importorskip("rclpy")
+    from rclpy.serialization import serialize_message
+    from sensor_msgs.msg import CameraInfo, Image, PointCloud2
+
+    from detection.learned.encoding import HEAD_BYTES, CdrColumns, EncodingError, RosEncoder
+    from detection.taps.ros2_take import MessageHead
+
+    read_in_heads = 0
+    for msg in _messages_of_every_shape():
+        encoder = RosEncoder(type(msg))
+        data = serialize_message(msg)
+        whole = encoder.encode_raw(data)
+        for cut in range(4, len(data), 3):
+            vector = CdrColumns.for_class(type(msg), encoder.columns[1:]).read(MessageHead(data[:cut], len(data)))
+            if vector is not None:
+                np.testing.assert_array_equal(vector, whole, err_msg=type(msg).__name__)
+                read_in_heads += 1
+    assert read_in_heads > 100
+    assert RosEncoder(Image).head_bytes == HEAD_BYTES
+    assert RosEncoder(CameraInfo).head_bytes is None and RosEncoder(PointCloud2).head_bytes is None
+
+    encoder = RosEncoder(Image)
+    image = Image(height=480, width=640, encoding="rgb8", step=1920, data=bytes(921600))
+    image.header.frame_id = "camera_rgb_optical_frame"
+    data = serialize_message(image)
+    np.testing.assert_array_equal(encoder.encode_raw(MessageHead(data[:HEAD_BYTES], len(data))),
+                                  encoder.encode_raw(data))
+    image.header.frame_id = "x" * HEAD_BYTES                        # its numbers are not in the head
+    data = serialize_message(image)
+    with pytest.raises(EncodingError, match="do not hold every number"):
+        encoder.encode_raw(MessageHead(data[:HEAD_BYTES], len(data)))
+
+
 def test_a_message_shorter_than_its_layout_is_not_read_in_place():
     pytest.importorskip("rclpy")
     from nav_msgs.msg import Odometry

@@ -112,10 +112,16 @@ def test_observe_learned_names_the_leaking_node_live(smoke_evaluation, tmp_path)
                         named = update
                 time.sleep(0.5)
     finally:
-        if observe is not None and observe.poll() is None:
-            observe.send_signal(2)                       # Ctrl-C ends it cleanly
-            observe.wait(30)
-        supervisor.stop()
+        try:
+            if observe is not None and observe.poll() is None:
+                observe.send_signal(2)                   # Ctrl-C ends it cleanly
+                observe.wait(30)
+        except subprocess.TimeoutExpired:                # fails the test, but leaves no process behind
+            observe.kill()
+            observe.wait()
+            raise
+        finally:
+            supervisor.stop()
     err = observe.stderr.read()
     assert named is not None, (lines[-3:], err[-2000:])
     assert observe.returncode == 0, err[-2000:]
