@@ -153,13 +153,14 @@ class _FromSource:
     finder: ``find_spec`` is all the protocol asks)."""
 
     def __init__(self, sources: dict[str, Path]) -> None:
+        import importlib.util     # now, not in find_spec: importing it there would ask this finder again
+
         self.sources = sources
+        self._spec = importlib.util.spec_from_file_location
 
     def find_spec(self, fullname, path=None, target=None):
-        import importlib.util
-
         source = self.sources.get(fullname)
-        return None if source is None else importlib.util.spec_from_file_location(fullname, source)
+        return None if source is None else self._spec(fullname, source)
 
 
 def install() -> None:
