@@ -65,22 +65,27 @@ def option_literals(text: str | None, file: str) -> list:
     return list_items(parse_term(f"[{text}]"))
 
 
-def project_option_literals(project) -> list[tuple[list, list]]:
-    """``(beliefs, goals)`` of each agent declaration of ``project`` (``option_literals`` of its options), kept in
-    the parse cache (``agentspeak.parse_cache``) as one entry per project: a project run again never imports the
-    parser for them (in a 10-agent ring with a ``beliefs=`` option each, importing the parser and loading its
-    tables for those was a third of the whole run)."""
-    options = [(decl.options.get("beliefs"), decl.options.get("goals")) for decl in project.agents]
-    if not any(beliefs or goals for beliefs, goals in options):
-        return [([], []) for _ in options]
+def declaration_option_literals(project, decl) -> tuple[list, list]:
+    """``(beliefs, goals)`` of one agent declaration of ``project`` (``option_literals`` of its options), kept in
+    the parse cache (``agentspeak.parse_cache``): a project run again never imports the parser for them (in a
+    10-agent ring with a ``beliefs=`` option each, importing the parser and loading its tables for those was a
+    third of the whole run). One declaration at a time: an agent process reads only its own options, so another
+    agent's bad option fails that agent alone."""
+    beliefs, goals = decl.options.get("beliefs"), decl.options.get("goals")
+    if not (beliefs or goals):
+        return [], []
     from agentspeak.parse_cache import cached
     from agentspeak.stdlib.registry import FUNCTIONS
 
-    def parse() -> list[tuple[list, list]]:
-        return [(option_literals(beliefs, project.file), option_literals(goals, project.file))
-                for beliefs, goals in options]
+    def parse() -> tuple[list, list]:
+        return option_literals(beliefs, project.file), option_literals(goals, project.file)
     # the literals depend on the texts and on which arithmetic functions are registered, as programs do
-    return cached("options", repr(options), project.file, tuple(sorted(FUNCTIONS.functions)), parse)
+    return cached("options", repr((beliefs, goals)), project.file, tuple(sorted(FUNCTIONS.functions)), parse)
+
+
+def project_option_literals(project) -> list[tuple[list, list]]:
+    """``declaration_option_literals`` of every agent declaration of ``project``, in order."""
+    return [declaration_option_literals(project, decl) for decl in project.agents]
 
 
 def cmd_agent_run(args: argparse.Namespace) -> int:
@@ -111,9 +116,9 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
             project = load_mas2j(args.project)
             source_dirs = project.source_dirs
             declared = project.agent_names()
-            for decl, (decl_beliefs, decl_goals) in zip(project.agents, project_option_literals(project)):
+            for decl in project.agents:
                 if args.name in decl.instance_names():
-                    beliefs, goals = decl_beliefs, decl_goals
+                    beliefs, goals = declaration_option_literals(project, decl)
         identity = None
         if args.project:
             identity = project_identity(project, [args.name], args.identity)
