@@ -128,3 +128,25 @@ def test_objects_the_message_path_builds_without_their_class_call_are_complete()
     message = sent[0]
     assert _slots(message) == _slots(Message("r", "s", "achieve", Literal("h", (7, 2))))
     assert _slots(message.content) == _slots(Literal("h", (7, 2)))
+
+
+def test_a_tell_does_not_overtake_an_earlier_untell_of_the_same_sender_still_in_the_event_queue():
+    """Issue 21: a mock untells ``sleeping(tom)`` then tells it again; both wait in the mailbox while other
+    events are queued, so the untell (an event, Jason's kqmlPlans) is handled after the tell was read.
+    Applied at once, the tell was overtaken and the belief lost: the tester's ``.wait(sleeping(tom))``
+    hung. The sender's order is kept: the last message, the tell, decides. Timing by hand: no load."""
+    from agentspeak.communication import Message
+    from agentspeak.runtime import LocalRuntime
+    from agentspeak.terms import Literal, to_str
+
+    def beliefs_after(*performatives: str) -> list[str]:
+        runtime = LocalRuntime(printer=lambda name, text: None)
+        runtime.add_agent("a", "sleeping(tom)[source(tom)].\n!g1. !g2.\n+!g1 <- true.\n+!g2 <- true.\n")
+        agent = runtime.agents["a"]
+        fact = Literal("sleeping", (Literal("tom"),))
+        agent.mailbox.extend(Message("tom", "a", perf, fact) for perf in performatives)
+        runtime.run(timeout=5.0)
+        return [to_str(b) for b in agent.bb.literals()]
+
+    assert beliefs_after("untell", "tell") == ["sleeping(tom)[source(tom)]"]
+    assert beliefs_after("tell", "untell") == []
