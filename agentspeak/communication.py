@@ -155,21 +155,26 @@ def _source_annots(name: str) -> tuple:
     return found
 
 
-def _earlier_message_waits(agent: Any, sender: str) -> bool:
-    """Does an earlier message of ``sender`` (an untell, an ask...) still wait in the event queue as
-    ``+!kqml_received``? A tell applied at once would overtake it: a mock's untell of ``sleeping(M)`` then
-    its tell of it left the tester believing ``not sleeping(M)``, and its ``.wait(sleeping(M))`` waited for
-    ever (issue 21). A Jason agent on a thread of its own reads such messages far apart; here both can be
-    in the mailbox, so the tell takes the event route too (Jason's semantics without its fast path, as in
-    its sync mode) and the sender's messages take effect in the order they were sent."""
+def _untell_waits(agent: Any, msg: Message) -> bool:
+    """Does an earlier untell of the same sender, of a belief this tell is about (same functor and arity),
+    still wait in the event queue as ``+!kqml_received``? Applied at once, the tell would be overtaken
+    by it and the belief lost: a mock's untell of ``sleeping(M)`` then its tell of it left the tester
+    believing ``not sleeping(M)``, and its ``.wait(sleeping(M))`` waited for ever (issue 21). A Jason
+    agent on a thread of its own reads such messages far apart; here both can be in the mailbox. The
+    tell then takes the event route too (Jason's semantics without its fast path, as in its sync mode):
+    the sender's last word on a belief stands. Tells of other beliefs keep the fast path (and Jason's
+    order of the events that follows from it)."""
     held = agent.__dict__.get("kqml_messages")
     if not held:
         return False
+    told = {(item.functor, len(item.args)) for item in _items(msg.content) if isinstance(item, Literal)}
     for ev in agent.events:
         lit = ev.trigger.literal
         if type(lit) is Literal and lit.functor == "kqml_received" and len(lit.args) == 4:
             earlier = held.get(lit.args[3])
-            if earlier is not None and earlier.sender == sender:
+            if earlier is not None and earlier.sender == msg.sender and earlier.performative == "untell" \
+                    and any(isinstance(item, Literal) and (item.functor, len(item.args)) in told
+                            for item in _items(earlier.content)):
                 return True
     return False
 
@@ -191,7 +196,7 @@ def receive_message(agent: Any, msg: Message, by_default: bool = False) -> None:
     # path at once, and only while no user plan for +!kqml_received exists (TransitionSystem.applyProcMsg).
     # An ask is therefore answered after the goals and intentions that came before it had their turn.
     if not by_default and (plans.kqml_override or perf not in _FAST_PATH
-                           or (perf == "tell" and _earlier_message_waits(agent, name))):
+                           or (perf == "tell" and _untell_waits(agent, msg))):
         sender = _atom_of(name) if name != agent.name else SELF
         goal = Literal("kqml_received", (sender, Literal(perf), msg.content, msg.msg_id), (SOURCE_SELF,))
         # kept until a plan handles it: when none of the user's +!kqml_received plans applies, the
