@@ -26,7 +26,6 @@ MAS = """MAS hang_driver {{
 def dump(runtime, names: list[str]) -> None:
     """What each named agent holds: beliefs, events, intentions and what they wait for, timers, asks."""
     from agentspeak.terms import to_str
-    now = time.monotonic()
     for name in names:
         agent = runtime.agents.get(name)
         if agent is None:
@@ -47,7 +46,6 @@ def dump(runtime, names: list[str]) -> None:
                   f"term={getattr(w, 'term', None)} suspended={intention.suspended}")
             for im in intention.stack:
                 print(f"      {im!r}")
-    del now
 
 
 def one_run(suite: Path, mas_file: Path, timeout: float, watch: list[str]) -> bool:
