@@ -250,7 +250,10 @@ def _discovered_model(live):
 def _run_until_stopped(args: argparse.Namespace, table) -> None:
     """Until Ctrl-C, SIGTERM or ``--duration``; the table (if any) redrawn four times a second."""
     stop = threading.Event()
-    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    # SIGINT too, set here: a process started without job control (a script's `&`, some CI runners) inherits
+    # SIGINT ignored, and Python then never raises KeyboardInterrupt: `kill -INT` must still end the watch
+    for signum in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(signum, lambda *_: stop.set())
     end = None if args.duration is None else time.monotonic() + args.duration
     try:
         while not stop.is_set() and (end is None or time.monotonic() < end):

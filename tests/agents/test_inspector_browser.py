@@ -2,12 +2,16 @@
 the page lists both agents, shows Faulty's beliefs change when it diagnoses and the helper's intention
 stack during ``findRobot``, the map's two robots move, the timeline ends with the diagnosis; pause and
 step change the cycle count by exactly one; a killed agent greys; a team of 10 works. The screenshot
-in docs/inspector.png is made here."""
+in docs/inspector.png is made here, with ``FAULTMAS_UPDATE_DOCS=1`` (otherwise it goes to a temporary
+folder, so that a test run leaves the working tree as it found it)."""
 from __future__ import annotations
 
 import json
+import os
 import signal
+import tempfile
 import time
+from pathlib import Path
 import urllib.request
 
 import psutil
@@ -42,7 +46,8 @@ def main_job(browser):
     try:   # docs/inspector.png: the helper's mind while it looks for Faulty, the run going on
         pages["helper"].wait_for_function("document.querySelector('#intentions').innerText.includes('findRobot(faulty')"
                                           " && document.querySelectorAll('#plans li').length > 10", timeout=60_000)
-        pages["helper"].screenshot(path=str(DOCS / "inspector.png"), full_page=True)
+        folder = DOCS if os.environ.get("FAULTMAS_UPDATE_DOCS") else Path(tempfile.gettempdir())
+        pages["helper"].screenshot(path=str(folder / "inspector.png"), full_page=True)
     except PlaywrightTimeout:
         pass   # missed: test_page_shows_the_main_job_as_it_runs says what the page did show
     wait_line(proc, r"run finished; the inspector stays", 120)

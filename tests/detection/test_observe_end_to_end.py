@@ -7,6 +7,7 @@ node in another process whose ``rate`` parameter the rule sets through the ROS 2
 from __future__ import annotations
 
 import json
+import signal
 import os
 import subprocess
 import sys
@@ -90,7 +91,9 @@ def test_slow_publisher_is_diagnosed_and_repaired_and_the_bag_replays_the_same(t
                                   "--slow-after", "6"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                  text=True, env=loopback_env())
     observe = faultmas("obs.yaml", "--model", "nav.yaml", "--json", "--domain-id", str(DOMAIN),
-                       "--record", "run.mcap", "--duration", "40", cwd=tmp_path)
+                       "--record", "run.mcap", "--duration", "40", cwd=tmp_path,
+                       # started as a script's `cmd &` starts it (SIGINT ignored): `kill -INT` must still end it
+                       preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
     try:
         pub_out, obs_out = Lines(publisher.stdout), Lines(observe.stdout)
         assert pub_out.wait_for(lambda ls: "rate=3.0" in ls, 30), "the publisher never slowed down"
