@@ -20,6 +20,7 @@ from agentspeak.intentions import Event
 from agentspeak.program import ACHIEVE, ADD, BEL, DEL, Plan, PlanTerm, Trigger
 from agentspeak.solver import SolveError, solve
 from agentspeak.terms import NIL, Cons, Literal, Term, Var, is_ground, list_items, make_list, rename, resolve, to_str
+from agentspeak.terms import ns_atom as _atom_of   # a sender's atom: one object per name, the table bounded
 
 log = logging.getLogger("faultmas.agentspeak")
 
@@ -97,17 +98,6 @@ def _strip_self_source(lit: Literal) -> Literal:
 _SOURCES: dict[str, Literal] = {}
 _new = object.__new__  # objects of the message path without class calls: see agentspeak.agent._new
 _SELF_ANNOTS = (SOURCE_SELF,)
-_ATOMS: dict[str, Literal] = {}
-
-
-def _atom_of(name: str) -> Literal:
-    """The atom naming a sender, made once per name (the table stays small under hostile input)."""
-    found = _ATOMS.get(name)
-    if found is None:
-        found = Literal(name)
-        if len(_ATOMS) < 10_000:
-            _ATOMS[name] = found
-    return found
 
 
 def _source_of(who: Term) -> Literal:

@@ -457,7 +457,8 @@ _NS_ATOMS: dict = {}
 
 
 def ns_atom(name: str) -> "Literal":
-    """The atom naming a name space (one object per name, the table bounded)."""
+    """The atom named ``name``, one object per name, the table bounded under hostile input: name spaces,
+    and the senders of messages (``agentspeak.communication``)."""
     found = _NS_ATOMS.get(name)
     if found is None:
         found = Literal(name)

@@ -1,6 +1,8 @@
 """Shared helpers for the detection tests: files in a temporary folder, message streams at given rates."""
 from __future__ import annotations
 
+import signal
+import subprocess
 from pathlib import Path
 from typing import Callable, Iterator
 
@@ -49,3 +51,17 @@ def stream(channel: str, rate_hz: float, start: float, end: float, data=None) ->
 
 def merged(*streams: Iterator[Message]) -> list[Message]:
     return sorted((m for s in streams for m in s), key=lambda m: m.t_ns)
+
+
+def interrupt(process: subprocess.Popen, timeout: float = 30.0) -> None:
+    """Ctrl-C a command (``faultmas observe``) and wait for it to end cleanly; one still running after
+    ``timeout`` is killed, so that the failing test leaves no process behind for the rest of the suite."""
+    if process.poll() is not None:
+        return
+    process.send_signal(signal.SIGINT)
+    try:
+        process.wait(timeout)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+        raise

@@ -20,7 +20,7 @@ import pytest
 pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'faultmas[ros2]')")
 
 from robot_bridge.ros2.runtime import loopback_env  # noqa: E402
-from .conftest import NAV_MODEL, REPAIR_RULES  # noqa: E402
+from .conftest import NAV_MODEL, REPAIR_RULES, interrupt  # noqa: E402
 
 DOMAIN = 1 + (os.getpid() + 63) % 100
 HERE = Path(__file__).resolve().parent
@@ -103,12 +103,7 @@ def test_slow_publisher_is_diagnosed_and_repaired_and_the_bag_replays_the_same(t
         assert obs_out.wait_for(repaired, 30), obs_out.lines
     finally:
         try:
-            observe.send_signal(2)                  # Ctrl-C ends it cleanly
-            observe.wait(30)
-        except subprocess.TimeoutExpired:           # fails the test, but leaves no process behind
-            observe.kill()
-            observe.wait()
-            raise
+            interrupt(observe)                      # Ctrl-C ends it cleanly
         finally:
             publisher.terminate()
             publisher.wait(10)

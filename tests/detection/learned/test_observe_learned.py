@@ -15,6 +15,8 @@ import pytest
 
 from agents.cli import main
 
+from ..conftest import interrupt
+
 LEAKING = "helper_motion_decomposer"
 
 
@@ -113,13 +115,8 @@ def test_observe_learned_names_the_leaking_node_live(smoke_evaluation, tmp_path)
                 time.sleep(0.5)
     finally:
         try:
-            if observe is not None and observe.poll() is None:
-                observe.send_signal(2)                   # Ctrl-C ends it cleanly
-                observe.wait(30)
-        except subprocess.TimeoutExpired:                # fails the test, but leaves no process behind
-            observe.kill()
-            observe.wait()
-            raise
+            if observe is not None:
+                interrupt(observe)                       # Ctrl-C ends it cleanly
         finally:
             supervisor.stop()
     err = observe.stderr.read()
