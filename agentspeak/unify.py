@@ -13,7 +13,7 @@ from typing import Iterator
 
 from agentspeak.terms import (
     LOCAL_NS_PREFIX, NIL, And, AnnotatedVar, Arith, Bindings, Cons, Func, Literal, Not, NsTerm, Or, Rel, Term, Var,
-    list_items, make_list, ns_atom, split_ns,
+    deref, list_items, make_list, ns_atom, split_ns,
 )
 
 
@@ -182,12 +182,7 @@ def unify_ns(x: NsTerm, other: Term, b: Bindings, trail: list, x_left: bool) -> 
         return pair(x.ns, other.ns) and pair(x.body, other.body)
     if type(other) is Literal:
         ns_name, name = split_ns(other.functor)
-        ns = x.ns
-        while type(ns) is Var:
-            v = b.get(ns)
-            if v is None:
-                break
-            ns = v
+        ns = deref(x.ns, b)
         if type(ns) is Var:
             if ns_name.startswith(LOCAL_NS_PREFIX):
                 return False
@@ -218,12 +213,7 @@ def _unify_annotated_var(x: Term, y: Term, b: Bindings, trail: list) -> bool:
             return False
     elif not unify_annots(other, pattern, b, trail):
         return False
-    value = av.var
-    while type(value) is Var:
-        bound = b.get(value)
-        if bound is None:
-            break
-        value = bound
+    value = deref(av.var, b)
     if type(value) is Var:
         bind(value, other.without_annots(), b, trail)
         return True
