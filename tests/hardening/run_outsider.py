@@ -13,11 +13,10 @@ from __future__ import annotations
 import argparse
 import time
 
-from agents.transport import Envelope, ZenohOptions, ZenohTransport
-from agents.transport.identity import Identity, load_private_key
+from agents.transport import ZenohOptions, ZenohTransport
+from agents.transport.identity import load_private_key
 from agents.transport.keys import control_key, inbox_key
-
-EVIL_PLAN = "{+!evil <- +evil_ran.}"
+from tests.hardening.outsider_attacks import OUTSIDER, attack_inbox, attack_stop, posing_as
 
 
 def main() -> None:
@@ -31,8 +30,6 @@ def main() -> None:
     args = parser.parse_args()
     mas, robots = args.mas, args.robots.split(",")
     own_key = load_private_key(args.key)
-    mallory = Identity({"mallory": own_key.public_key()}, {"mallory": own_key})
-    as_faulty = Identity({args.faulty: own_key.public_key()}, {args.faulty: own_key})  # a forged name, own key
 
     with ZenohTransport(mas, ZenohOptions(mode="client", connect=(args.connect,))) as transport:
         session = transport.session
@@ -40,25 +37,14 @@ def main() -> None:
         assert transport.wait_for_agents(robots, timeout=120), "the robots never appeared"
         for robot in robots:
             other = next(r for r in robots if r != robot)
-            put = lambda payload, robot=robot: session.put(inbox_key(mas, robot), payload)  # noqa: E731
-            as_other = Identity({other: own_key.public_key()}, {other: own_key})
-
-            def env(sender: str, performative: str, content: str, robot=robot) -> Envelope:
-                return Envelope(mas, sender, (robot,), performative, content)
-            put(env("mallory", "tell", "evil_unsigned").encode())                       # unsigned
-            put(env(other, "achieve", "evil_goal").encode())                            # unsigned, a member's name
-            for performative, content in (("tell", "evil_signed"), ("achieve", "evil_goal"),
-                                          ("tellHow", EVIL_PLAN), ("askOne", "destination(X)")):
-                put(mallory.seal("mallory", env("mallory", performative, content).encode()))  # key not listed
-            put(as_other.seal(other, env(other, "tell", "evil_forged").encode()))      # a member's name, own key
+            attack_inbox(lambda payload, robot=robot: session.put(inbox_key(mas, robot), payload), mas, robot,
+                         other, own_key, goal="evil_goal", query="destination(X)")
+        attack_stop(transport, mas, robots[0], own_key)
         progress = {"command": "progress", "agent": args.faulty, "step": "diagnosed", "detail": args.wrong}
         control = control_key(mas)
-        session.put(control, b'{"command":"stop","by":"%s","delay":0}' % robots[0].encode())  # unsigned
-        session.put(control, mallory.seal_control({"command": "stop", "by": "mallory", "delay": 0}))
-        transport.publish_control("stop", by="launcher", delay=0.0)                    # without its token
         transport.publish_control(**{**progress, "by": args.faulty})                   # unsigned
-        session.put(control, mallory.seal_control({**progress, "by": "mallory"}))      # signed by itself
-        session.put(control, as_faulty.seal_control({**progress, "by": args.faulty}))  # faulty's name, own key
+        session.put(control, posing_as(OUTSIDER, own_key).seal_control({**progress, "by": OUTSIDER}))  # itself
+        session.put(control, posing_as(args.faulty, own_key).seal_control({**progress, "by": args.faulty}))
         time.sleep(0.5)  # let the puts leave before the session closes
     print("SENT", flush=True)
 

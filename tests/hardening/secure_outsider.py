@@ -10,11 +10,10 @@ import argparse
 import threading
 import time
 
-from agents.transport import Envelope, ZenohOptions, ZenohTransport
-from agents.transport.identity import Identity, load_private_key
-from agents.transport.keys import control_key, inbox_key
-
-EVIL_PLAN = "{+!evil <- +evil_ran.}"
+from agents.transport import ZenohOptions, ZenohTransport
+from agents.transport.identity import load_private_key
+from agents.transport.keys import inbox_key
+from tests.hardening.outsider_attacks import attack_inbox, attack_stop
 
 
 def main() -> None:
@@ -25,8 +24,6 @@ def main() -> None:
     args = parser.parse_args()
     mas = args.mas
     own_key = load_private_key(args.key)
-    mallory = Identity({"mallory": own_key.public_key()}, {"mallory": own_key})
-    as_alice = Identity({"alice": own_key.public_key()}, {"alice": own_key})  # a forged from, own key
     captured: list[bytes] = []
     seen_alice = threading.Event()
 
@@ -47,21 +44,11 @@ def main() -> None:
         def put(payload: bytes) -> None:
             session.put(inbox_key(mas, "bob"), payload)
 
-        def env(sender: str, performative: str, content: str) -> Envelope:
-            return Envelope(mas, sender, ("bob",), performative, content)
-
-        transport.send(env("mallory", "tell", "evil_unsigned"))                 # unsigned
-        transport.send(env("alice", "achieve", "act"))                          # unsigned, a member's name
-        for performative, content in (("tell", "evil_signed"), ("achieve", "act"), ("tellHow", EVIL_PLAN),
-                                      ("askOne", "secret(X)")):                # signed, key not in the project
-            put(mallory.seal("mallory", env("mallory", performative, content).encode()))
-        put(as_alice.seal("alice", env("alice", "tell", "evil_forged").encode()))  # from alice, mallory's key
+        attack_inbox(put, mas, "bob", "alice", own_key, goal="act", query="secret(X)")
         original = captured[0]
         put(original)                                                           # a replay
         put(original.replace(b"hello_from(alice)", b"hello_from(evil)"))        # tampered
-        session.put(control_key(mas), b'{"command":"stop","by":"alice","delay":0}')   # unsigned, a member's name
-        session.put(control_key(mas), mallory.seal_control({"command": "stop", "by": "mallory", "delay": 0}))
-        transport.publish_control("stop", by="launcher", delay=0.0)             # the launcher, without its token
+        attack_stop(transport, mas, "alice", own_key)
         time.sleep(0.5)  # let the puts leave before the session closes
         spy.undeclare()
     print("SENT", flush=True)
