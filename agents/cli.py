@@ -185,6 +185,20 @@ Filling 10,000 beliefs: 4 % less CPU than with 20,000; what cycles there are (a 
 this many allocations, some MB, before they are freed."""
 
 
+def _stop_on_sigterm() -> None:
+    """SIGTERM stops a command as Ctrl-C does (``KeyboardInterrupt``), so that its clean-up runs: a ``faultmas
+    run`` stops its agent and robot processes instead of dying at once (Python's default) and leaving them to
+    find out on their own. Commands that handle SIGTERM themselves (``agent run``, ``router``) install their
+    own handler later; a SIGTERM ignored by whoever started us stays ignored."""
+    import signal
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt(f"signal {signum}")
+
+    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, interrupt)
+
+
 def console_main() -> None:
     """The ``faultmas`` command (the console script, and ``python -m agents``): ``main`` in a process that ends
     as soon as it is done. Two costs only a whole process has, each about a tenth of ``faultmas asl run
@@ -202,6 +216,10 @@ def console_main() -> None:
     """
     import gc
 
+    if "FAULTMAS_PARENT" in os.environ:  # started by another faultmas process: never outlive it (an import only then)
+        from robot_bridge.processes import die_with_parent
+        die_with_parent()
+    _stop_on_sigterm()
     gc.set_threshold(GC_THRESHOLD, *gc.get_threshold()[1:])
     try:
         code = main()

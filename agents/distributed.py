@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import IO, Callable
 
 from agents.zenoh_arch import LAUNCHER_TOKEN_ENV
-from robot_bridge.processes import ESCALATION, stop_processes
+from robot_bridge.processes import ESCALATION, spawn, stop_processes
 
 log = logging.getLogger("faultmas.agents")
 
@@ -149,8 +149,8 @@ class Launcher:
                 command = [sys.executable, "-m", "agents", "agent", "run", decl.source, "--name", name,
                            "--mas", self.project.name, "--connect", endpoint, "--project", self.project.file,
                            "--wait-for-peers", str(START_TIMEOUT), *self.extra_args]
-                child = subprocess.Popen(command, cwd=os.getcwd(), env=env, text=True, stdin=subprocess.DEVNULL,
-                                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+                child = spawn(command, cwd=os.getcwd(), env=env, text=True, stdin=subprocess.DEVNULL,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
                 self.children[name] = child
                 for stream, sink in ((child.stdout, self.out), (child.stderr, self.err)):
                     relay = threading.Thread(target=self._relay, args=(stream, sink), daemon=True)

@@ -404,6 +404,8 @@ def generate(out_dir: str | Path, profile_name: str, seed: int = 0, out: TextIO 
 
 def _worker(out_dir: Path, profile_name: str, seed: int, only, agents, label: str) -> None:
     """One more recording process of ``generate(jobs=N)``: takes the runs nobody has claimed."""
+    from robot_bridge.processes import die_with_multiprocessing_parent
+    die_with_multiprocessing_parent()           # a worker never outlives the generation that started it
     out = _Prefixed(sys.stderr, label)
     try:
         generate(out_dir, profile_name, seed, out, only, agents)

@@ -15,7 +15,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Sequence
 
-from robot_bridge.processes import stop_processes
+from robot_bridge.processes import spawn, stop_processes
 from robot_bridge.ros2.runtime import loopback_env
 
 SPACING_M = 1.5
@@ -79,7 +79,7 @@ class Supervisor:
         if self.domain_id is not None:
             env["ROS_DOMAIN_ID"] = str(self.domain_id)
         for spec in self.specs:
-            self.processes.append(subprocess.Popen(spec.argv(self.domain_id), env=env, start_new_session=True))
+            self.processes.append(spawn(spec.argv(self.domain_id), env=env, start_new_session=True))
 
     def expected(self) -> set[tuple[str, str]]:
         return {(spec.node, f"/{spec.robot}") for spec in self.specs}

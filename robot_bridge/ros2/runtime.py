@@ -139,6 +139,8 @@ def run_node(node_factory: Callable[..., object], description: str, argv: Sequen
     With ``FAULTMAS_PERFBUGS`` set, the scheduled performance bugs are installed in the node
     (:mod:`robot_bridge.ros2.perfbugs`; the learned detector's experiments).
     """
+    from robot_bridge.processes import die_with_parent
+    die_with_parent()                       # a node of a launch never outlives it
     require_ros("__main__")
     import rclpy
     from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor

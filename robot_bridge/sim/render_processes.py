@@ -42,6 +42,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from robot_bridge.processes import die_with_parent, spawn
+
 log = logging.getLogger(__name__)
 
 ENV_WORKERS = "FAULTMAS_RENDER_PROCESSES"
@@ -119,7 +121,7 @@ class _Worker:
         env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH", "")) if p)
         env[ENV_WORKERS] = "0"              # a worker never starts workers of its own
         try:
-            self.process = subprocess.Popen(
+            self.process = spawn(
                 [sys.executable, "-m", "robot_bridge.sim.render_processes", str(to_child_r), str(from_child_w)],
                 pass_fds=(to_child_r, from_child_w), stdin=subprocess.DEVNULL, env=env)
         finally:
@@ -459,4 +461,5 @@ def serve(recv_conn: Connection, send_conn: Connection) -> None:
 
 
 if __name__ == "__main__":
+    die_with_parent()
     serve(Connection(int(sys.argv[1]), writable=False), Connection(int(sys.argv[2]), readable=False))

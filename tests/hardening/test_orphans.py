@@ -1,0 +1,102 @@
+"""No process that faultmas starts outlives the command that started it (a clean-clone ``make test`` once left a
+``faultmas agent run ... faulty.asl`` of a ``faultmas run`` alive 30 minutes later): the command killed with
+SIGKILL (no clean-up of its own can run) or stopped with SIGTERM (its clean-up runs), every descendant is gone
+within seconds. Real commands, real agent and render processes."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import psutil
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def _start(tmp_path: Path, *argv: str) -> tuple[subprocess.Popen, Path]:
+    log = tmp_path / "out.txt"
+    with open(log, "w") as out:
+        proc = subprocess.Popen([sys.executable, "-m", "agents", *argv], cwd=REPO, stdout=out, stderr=subprocess.STDOUT,
+                                stdin=subprocess.DEVNULL, env=dict(os.environ, PYTHONUNBUFFERED="1"),
+                                start_new_session=True)
+    return proc, log
+
+
+def _agents_started(proc: subprocess.Popen, names: set[str], log: Path, timeout: float = 120.0) -> list[psutil.Process]:
+    """The command's descendants once an agent process runs for each of ``names``."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        assert proc.poll() is None, log.read_text()[-3000:]
+        descendants = psutil.Process(proc.pid).children(recursive=True)
+        running = set()
+        for child in descendants:
+            try:
+                cmd = child.cmdline()
+            except psutil.Error:
+                continue
+            if "--name" in cmd and cmd.index("--name") + 1 < len(cmd):
+                running.add(cmd[cmd.index("--name") + 1])
+        if names <= running:
+            return descendants
+        time.sleep(0.2)
+    pytest.fail(f"agents {sorted(names)} not started within {timeout} s:\n{log.read_text()[-3000:]}")
+
+
+def _still_alive(processes: list[psutil.Process], seconds: float) -> list[str]:
+    deadline = time.monotonic() + seconds
+    alive = processes
+    while time.monotonic() < deadline:
+        alive = [p for p in alive if p.is_running() and p.status() != psutil.STATUS_ZOMBIE]
+        if not alive:
+            return []
+        time.sleep(0.1)
+    return [" ".join(p.cmdline()[:6]) for p in alive if p.is_running()]
+
+
+def _kill_all(processes: list[psutil.Process]) -> None:
+    for p in processes:
+        try:
+            p.kill()
+        except psutil.Error:
+            pass
+
+
+@pytest.mark.parametrize("signum", [signal.SIGKILL, signal.SIGTERM])
+def test_faultmas_run_leaves_no_process_behind(tmp_path, signum):
+    proc, log = _start(tmp_path, "run", "--timeout", "120")
+    descendants = []
+    try:
+        descendants = _agents_started(proc, {"faulty", "helper"}, log)
+        time.sleep(1.0)                      # the agents past their start (Zenoh sessions open)
+        descendants = psutil.Process(proc.pid).children(recursive=True)
+        os.kill(proc.pid, signum)
+        code = proc.wait(30)
+        left = _still_alive(descendants, 10.0)
+        assert left == [], f"alive 10 s after {signal.Signals(signum).name} of faultmas run: {left}"
+        if signum == signal.SIGTERM:         # stopped as by Ctrl-C: its clean-up ran
+            assert code != -signal.SIGTERM, "SIGTERM killed faultmas run outright: its clean-up did not run"
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        _kill_all(descendants)
+
+
+def test_mas_run_processes_leaves_no_process_behind(tmp_path):
+    (tmp_path / "a.asl").write_text("!go.\n+!go <- .wait(100); !go.\n")
+    (tmp_path / "t.mas2j").write_text("MAS orphans { agents: a #2; }\n")
+    proc, log = _start(tmp_path, "mas", "run", str(tmp_path / "t.mas2j"), "--processes", "--timeout", "120")
+    descendants = []
+    try:
+        descendants = _agents_started(proc, {"a1", "a2"}, log)
+        time.sleep(1.0)
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(30)
+        assert _still_alive(descendants, 10.0) == []
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        _kill_all(descendants)
