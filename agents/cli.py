@@ -185,18 +185,22 @@ Filling 10,000 beliefs: 4 % less CPU than with 20,000; what cycles there are (a 
 this many allocations, some MB, before they are freed."""
 
 
-def _stop_on_sigterm() -> None:
-    """SIGTERM stops a command as Ctrl-C does (``KeyboardInterrupt``), so that its clean-up runs: a ``faultmas
-    run`` stops its agent and robot processes instead of dying at once (Python's default) and leaving them to
-    find out on their own. Commands that handle SIGTERM themselves (``agent run``, ``router``) install their
-    own handler later; a SIGTERM ignored by whoever started us stays ignored."""
+def _stop_on_signals() -> None:
+    """SIGINT and SIGTERM stop a command as Ctrl-C does (``KeyboardInterrupt``), so that its clean-up runs: a
+    ``faultmas run`` stops its agent and robot processes instead of dying at once (Python's default for SIGTERM)
+    and leaving them to find out on their own. Also when the process started with them ignored (a script's
+    ``cmd &``, CI runners without job control: Python then never raises ``KeyboardInterrupt``): a test's
+    ``kill -INT`` of ``faultmas run --inspect`` was ignored that way, the test killed it after 30 s and its
+    agent went on alone (issue 22). Commands that handle these signals themselves (``agent run``, ``router``)
+    install their own handlers later."""
     import signal
 
     def interrupt(signum, frame):
         raise KeyboardInterrupt(f"signal {signum}")
 
-    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
-        signal.signal(signal.SIGTERM, interrupt)
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        if signal.getsignal(signum) in (signal.SIG_DFL, signal.SIG_IGN):
+            signal.signal(signum, interrupt)
 
 
 def console_main() -> None:
@@ -219,7 +223,7 @@ def console_main() -> None:
     if "FAULTMAS_PARENT" in os.environ:  # started by another faultmas process: never outlive it (an import only then)
         from robot_bridge.processes import die_with_parent
         die_with_parent()
-    _stop_on_sigterm()
+    _stop_on_signals()
     gc.set_threshold(GC_THRESHOLD, *gc.get_threshold()[1:])
     try:
         code = main()

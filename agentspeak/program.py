@@ -8,7 +8,8 @@ from __future__ import annotations
 from typing import Callable
 
 from agentspeak.terms import (
-    NIL, And, Arith, Bindings, Cons, Func, Literal, Not, Or, Rel, Term, Var, rename, resolve, to_str, variables,
+    MAX_TERM_DEPTH, NIL, And, Arith, Bindings, Cons, Func, Literal, Not, Or, Rel, Term, Var, rename, resolve,
+    term_height, to_str, variables,
 )
 
 # trigger operators and types, as Jason names them
@@ -43,8 +44,8 @@ class Trigger:
     def __hash__(self) -> int:
         return hash((self.op, self.kind, self.literal))
 
-    def resolve(self, b: Bindings) -> "Trigger":
-        return Trigger(self.op, self.kind, resolve(self.literal, b))
+    def resolve(self, b: Bindings, depth: int = 0) -> "Trigger":
+        return Trigger(self.op, self.kind, resolve(self.literal, b, depth + 1))
 
     def rename(self, mapping: dict) -> "Trigger":
         return Trigger(self.op, self.kind, rename(self.literal, mapping))
@@ -274,6 +275,29 @@ def body_str(body: tuple) -> str:
     return "; ".join(str(i) for i in body)
 
 
+def body_terms(body: tuple, out: list | None = None) -> list:
+    """Every term written in ``body`` (conditions, and those of the bodies of if/while/for/fork), in order.
+    What nests in them (a plan term in a plan term, built at run time) is left to the caller's walk:
+    ``variables`` and ``term_height`` take it with a stack of their own, not the C stack."""
+    out = [] if out is None else out
+    for instr in body:
+        if isinstance(instr, If):
+            for c, b in instr.branches:
+                out.append(c)
+                body_terms(b, out)
+            if instr.else_body:
+                body_terms(instr.else_body, out)
+        elif isinstance(instr, (While, For)):
+            out.append(instr.cond)
+            body_terms(instr.body, out)
+        elif isinstance(instr, Fork):
+            for b in instr.branches:
+                body_terms(b, out)
+        else:
+            out.extend(instr.terms())
+    return out
+
+
 def body_variables(body: tuple, out: list | None = None) -> list:
     out = [] if out is None else out
     for instr in body:
@@ -367,15 +391,16 @@ class Plan:
                  self.source_file, self.line)
         return p
 
-    def resolved(self, b: Bindings) -> "Plan":
+    def resolved(self, b: Bindings, depth: int = 0) -> "Plan":
         """The plan with the bindings applied; nothing in it is evaluated (a plan is code: its
-        ``math.random`` runs when the formula runs, not when the plan is handed around as a term)."""
-        p = Plan(Trigger(self.trigger.op, self.trigger.kind, substitute(self.trigger.literal, b)),
-                 substitute(self.context, b) if self.context is not None else None,
-                 map_body(self.body, lambda t: substitute(t, b)),
-                 substitute(self.label, b) if self.label is not None else None,
+        ``math.random`` runs when the formula runs, not when the plan is handed around as a term).
+        ``depth``: how deep the plan sits in a term being resolved (``terms.resolve``)."""
+        p = Plan(Trigger(self.trigger.op, self.trigger.kind, substitute(self.trigger.literal, b, depth)),
+                 substitute(self.context, b, depth) if self.context is not None else None,
+                 map_body(self.body, lambda t: substitute(t, b, depth)),
+                 substitute(self.label, b, depth) if self.label is not None else None,
                  self.source_file, self.line)
-        p.goal_condition = substitute(self.goal_condition, b) if self.goal_condition is not None else None
+        p.goal_condition = substitute(self.goal_condition, b, depth) if self.goal_condition is not None else None
         return p
 
     def __str__(self) -> str:
@@ -475,12 +500,13 @@ class PlanTerm:
     ``body`` for a body term; ``rule`` for a rule term.
     """
 
-    __slots__ = ("plan", "body", "rule", "_vars", "bare")
+    __slots__ = ("plan", "body", "rule", "_vars", "bare", "_height")
 
     def __init__(self, plan: Plan | None = None, body: tuple | None = None, rule: Rule | None = None,
                  bare: bool = False) -> None:
         self.plan, self.body, self.rule = plan, body, rule
         self._vars = None  # its variables, worked out on the first resolve
+        self._height = -1  # how deep it nests (``term_height``), worked out when first resolved unchanged
         # a body taken out of a plan or of a longer body (``{@L +!T : C <- B}``, ``{ F; Rest }``) prints
         # without braces, as Jason's (its PlanBody is not "a term"): ``.substring(".send(", B, 0)``
         self.bare = bare
@@ -516,21 +542,32 @@ class PlanTerm:
         trig = self.as_trigger()
         return Plan(trig) if trig is not None else None
 
-    def resolve(self, b: Bindings) -> "PlanTerm":
+    def resolve(self, b: Bindings, depth: int = 0) -> "PlanTerm":
         if self.body is not None:
             # Jason's PlanBodyImpl.capply: a body term gets the bindings, and the arithmetic and functions
             # of its formulas are computed (`{ !assert_equals(1, .count(b(_))) }` stored in a belief
             # holds the count of that moment, so two such beliefs can be equal: Jason's own test manager
             # counts its asserts that way). Conditions of if/while/for stay code.
             if not self._bound_in(b) and not self._has_calls():
-                return self
-            return PlanTerm(body=tuple([_capply_instr(i, b) for i in self.body]), bare=self.bare)
+                return self._unchanged(depth)
+            return PlanTerm(body=tuple([_capply_instr(i, b, depth + 1) for i in self.body]), bare=self.bare)
         if not self._bound_in(b):
-            return self
+            return self._unchanged(depth)
         if self.plan is not None:
-            return PlanTerm(plan=self.plan.resolved(b))
+            return PlanTerm(plan=self.plan.resolved(b, depth + 1))
         r = self.rule
-        return PlanTerm(rule=Rule(substitute(r.head, b), substitute(r.body, b), r.source_file, r.line))
+        return PlanTerm(rule=Rule(substitute(r.head, b, depth + 1), substitute(r.body, b, depth + 1), r.source_file,
+                                  r.line))
+
+    def _unchanged(self, depth: int) -> "PlanTerm":
+        """This term, as it is, at ``depth`` of a term being resolved: its own nesting counts too (a plan term
+        resolved unchanged is not walked, so a goal wrapping the last one in a new one on each call built
+        them 18,000 deep, and the walkers overflowed the C stack of the compiled build)."""
+        if self._height < 0:
+            self._height = term_height(self)
+        if depth + self._height > MAX_TERM_DEPTH:
+            raise RecursionError(f"a term nested deeper than {MAX_TERM_DEPTH} levels")
+        return self
 
     def _has_calls(self) -> bool:
         """Does a simple formula of this body term hold arithmetic or a function call?"""
@@ -568,7 +605,7 @@ class PlanTerm:
             body = self.body
         else:
             return [self.rule.head, self.rule.body]
-        return out + body_variables(body)
+        return body_terms(body, out)   # terms, not their variables: nested plan terms on the caller's stack
 
     def unify_with(self, other: object, b: Bindings, trail: list) -> bool:
         """Structural, as Jason's plan terms: label, trigger, context (none is ``true``) and body, where
@@ -647,61 +684,67 @@ def _holds_call(t: Term) -> bool:
     return False
 
 
-def _capply_instr(instr: "Instr", b: Bindings) -> "Instr":
+def _capply_instr(instr: "Instr", b: Bindings, depth: int = 0) -> "Instr":
     if isinstance(instr, (If, While, For, Fork)):
-        return instr.map_terms(lambda t: substitute(t, b))
-    return instr.map_terms(lambda t: _capply(t, b))
+        return instr.map_terms(lambda t: substitute(t, b, depth))
+    return instr.map_terms(lambda t: _capply(t, b, depth))
 
 
-def _capply(t: Term, b: Bindings) -> Term:
+def _capply(t: Term, b: Bindings, depth: int = 0) -> Term:
     """``resolve`` (bindings applied, ground arithmetic and functions computed); a term that cannot be
     computed now is kept as it is, with the bindings applied (Jason logs it and keeps the term)."""
     try:
-        return resolve(t, b)
+        return resolve(t, b, depth)
+    except RecursionError:
+        raise                # too deep: not "not computable now" (substitute would walk it as deep)
     except Exception:  # noqa: BLE001 - an expression that fails now stays code, as in Jason
-        return substitute(t, b)
+        return substitute(t, b, depth)
 
 
-def substitute(t: Term, b: Bindings) -> Term:
+def substitute(t: Term, b: Bindings, depth: int = 0) -> Term:
     """``t`` with the bindings applied, evaluating nothing (``resolve`` computes arithmetic and calls
-    functions; inside a plan term those are code that runs later)."""
+    functions; inside a plan term those are code that runs later). ``depth``: as ``terms.resolve``'s, the
+    same limit (``MAX_TERM_DEPTH``): a plan term can nest plan terms at run time as a literal can nest literals."""
+    if depth > MAX_TERM_DEPTH:
+        raise RecursionError(f"a term nested deeper than {MAX_TERM_DEPTH} levels")
     tt = type(t)
+    d = depth + 1
     if tt is Var:
         v = b.get(t)
         while type(v) is Var:
             t, v = v, b.get(v)
-        return t if v is None else substitute(v, b)
+        return t if v is None else substitute(v, b, depth)
     if tt is Literal:
         if not t.args and t.annots is None and t.annot_tail is None:
             return t
         if t.annot_tail is not None and b.get(t.annot_tail) is not None:
-            return resolve(t, b)
-        return Literal(t.functor, tuple(substitute(a, b) for a in t.args),
-                       tuple(substitute(a, b) for a in t.annots) if t.annots else None, t.neg, t.annot_tail)
+            return resolve(t, b, depth)
+        return Literal(t.functor, tuple([substitute(a, b, d) for a in t.args]),
+                       tuple([substitute(a, b, d) for a in t.annots]) if t.annots else None, t.neg, t.annot_tail)
     if tt is Func:
-        return Func(t.name, tuple(substitute(a, b) for a in t.args), t.spec)
+        return Func(t.name, tuple([substitute(a, b, d) for a in t.args]), t.spec)
     if tt is Arith:
-        return Arith(t.op, substitute(t.left, b), substitute(t.right, b) if t.right is not None else None)
+        return Arith(t.op, substitute(t.left, b, d), substitute(t.right, b, d) if t.right is not None else None)
     if tt is Rel:
-        return Rel(t.op, substitute(t.left, b), substitute(t.right, b))
+        return Rel(t.op, substitute(t.left, b, d), substitute(t.right, b, d))
     if tt is And:
-        return And(substitute(t.left, b), substitute(t.right, b))
+        return And(substitute(t.left, b, d), substitute(t.right, b, d))
     if tt is Or:
-        return Or(substitute(t.left, b), substitute(t.right, b))
+        return Or(substitute(t.left, b, d), substitute(t.right, b, d))
     if tt is Not:
-        return Not(substitute(t.arg, b))
+        return Not(substitute(t.arg, b, d))
     if tt is Cons:
         heads = []
         while type(t) is Cons:
-            heads.append(substitute(t.head, b))
+            heads.append(substitute(t.head, b, d))
             t = t.tail
             while type(t) is Var and b.get(t) is not None:
                 t = b[t]
-        tail = substitute(t, b) if t is not NIL else NIL
+        tail = substitute(t, b, depth) if t is not NIL else NIL
         for h in reversed(heads):
             tail = Cons(h, tail)
         return tail
-    return resolve(t, b)
+    return resolve(t, b, depth)
 
 
 def _formula_term(instr) -> Term:

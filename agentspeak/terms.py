@@ -62,11 +62,11 @@ class AnnotatedVar(Var):
         """The literal ``functor(args)[annots|tail]`` (to match annotations with ``unify_annots``)."""
         return Literal(functor, args, self.annots or None, neg, self.annot_tail)
 
-    def resolve(self, b):
-        value = resolve(self.var, b)
+    def resolve(self, b, depth: int = 0):
+        value = resolve(self.var, b, depth)
         if type(value) is Literal:
-            annots = tuple(resolve(a, b) for a in self.annots)
-            tail = resolve(self.annot_tail, b) if self.annot_tail is not None else None
+            annots = tuple(resolve(a, b, depth + 1) for a in self.annots)
+            tail = resolve(self.annot_tail, b, depth + 1) if self.annot_tail is not None else None
             if type(tail) is Var:
                 return Literal(value.functor, value.args, (value.annots or ()) + annots, value.neg, tail)
             if tail is not None:
@@ -394,8 +394,8 @@ class Func:
     def __init__(self, name: str, args: tuple, spec: Any) -> None:
         self.name, self.args, self.spec = name, args, spec
 
-    def resolve(self, b: Bindings) -> Term:
-        args = tuple([resolve(a, b) for a in self.args])
+    def resolve(self, b: Bindings, depth: int = 0) -> Term:
+        args = tuple([resolve(a, b, depth + 1) for a in self.args])
         if all(is_ground(a) for a in args):
             value = self.spec.evaluate(args)
             if value is not None:  # None: not now (it needs an agent and none is running)
@@ -483,9 +483,9 @@ class NsTerm:
     def __init__(self, ns: Term, body: Term) -> None:
         self.ns, self.body = ns, body
 
-    def resolve(self, b: Bindings) -> Term:
-        ns = resolve(self.ns, b)
-        body = resolve(self.body, b)
+    def resolve(self, b: Bindings, depth: int = 0) -> Term:
+        ns = resolve(self.ns, b, depth + 1)
+        body = resolve(self.body, b, depth + 1)
         if type(ns) is Literal and not ns.args:
             if type(body) is Literal:
                 name = split_ns(body.functor)[1]
@@ -641,8 +641,8 @@ def resolve(t: Term, b: Bindings, depth: int = 0) -> Term:
     if tt is Not:
         return Not(resolve(t.arg, b, depth + 1))
     resolver = getattr(t, "resolve", None)
-    if resolver is not None:
-        return resolver(b)
+    if resolver is not None:   # a term that resolves itself, ``resolve(b, depth)``: the count goes on inside it
+        return resolver(b, depth)
     return t
 
 
@@ -687,6 +687,43 @@ def variables(t: Term, out: list | None = None) -> list:
             if sub is not None:
                 stack.extend(reversed(sub()))
     return out
+
+
+def term_height(t: Term, limit: int = MAX_TERM_DEPTH) -> int:
+    """How many levels ``t`` nests, counted as ``resolve`` counts them (a list's elements one level down, its
+    tail on the same), with a stack rather than the C stack; the walk stops past ``limit`` (returns
+    ``limit + 1``): what matters is whether a term is too deep, not by how much."""
+    best = 0
+    stack = [(t, 0)]
+    while stack:
+        x, level = stack.pop()
+        if level > best:
+            best = level
+            if best > limit:
+                return best
+        tx = type(x)
+        d = level + 1
+        if tx is Literal:
+            stack.extend([(a, d) for a in x.args])
+            if x.annots:
+                stack.extend([(a, d) for a in x.annots])
+        elif tx is Cons:
+            stack.append((x.head, d))
+            stack.append((x.tail, level))
+        elif tx is Arith:
+            stack.append((x.left, d))
+            if x.right is not None:
+                stack.append((x.right, d))
+        elif tx is Rel or tx is And or tx is Or:
+            stack.append((x.left, d))
+            stack.append((x.right, d))
+        elif tx is Not:
+            stack.append((x.arg, d))
+        elif tx is not Var and tx is not int and tx is not float and tx is not str:
+            sub = getattr(x, "subterms", None)
+            if sub is not None:
+                stack.extend([(a, d) for a in sub()])
+    return best
 
 
 def is_ground(t: Term, depth: int = 0) -> bool:

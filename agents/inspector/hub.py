@@ -8,6 +8,12 @@
   in this process, its ground truth (``truth``);
 * the timeline: the agents' ``.progress`` steps on the MAS's control key (what ``faultmas run`` prints).
 
+In the secure profile (``transport`` given, with an identity: ``faultmas run --secure --inspect``) the team
+and the timeline come from the transport, which checks signatures: an agent is listed alive only while its
+token is up and its signed heartbeats come (``agents.transport.proved_presence``: an outsider's token makes
+nobody alive), and the timeline shows only ``.progress`` reports signed by the agent they name (an outsider
+cannot write into it; the refused ones are counted in ``refused_marks`` and logged by the transport).
+
 A message that does not decode is dropped with one warning line naming its key; the hub goes on.
 Readers (the web app) wait on ``changed`` and read ``view()``; everything else happens on Zenoh's
 threads and the hub's poller.
@@ -54,8 +60,10 @@ class TeamHub:
     the hub started); ``truth()``: robot name -> (x m, y m, yaw degrees) ground truth, if known."""
 
     def __init__(self, session: Any, mas: str, *, clock: Callable[[], float] | None = None,
-                 truth: Callable[[], dict[str, tuple[float, float, float]]] | None = None) -> None:
+                 truth: Callable[[], dict[str, tuple[float, float, float]]] | None = None,
+                 transport: Any = None) -> None:
         self.session = session
+        self.transport = transport if transport is not None and transport.identity is not None else None
         self.mas = mas_keys.check_name(mas, "MAS name")
         self.started = time.monotonic()
         self.clock = clock or (lambda: time.monotonic() - self.started)
@@ -68,6 +76,7 @@ class TeamHub:
         self.robots: dict[str, dict] = {}        # name -> {"odom", "trail", "seen", "truth", "truth_trail"}
         self.timeline: list[dict] = []
         self.dropped = 0
+        self.refused_marks = 0                   # the secure profile: reports not signed by their agent
         self._trails: dict[tuple[str, str], _Trail] = {}
         self._watch: dict[str, tuple[int, Any]] = {}   # agent -> (viewers, subscriber)
         self._fetching: set[str] = set()                # agents whose plan library is being asked for
@@ -79,11 +88,14 @@ class TeamHub:
     # -- life cycle ------------------------------------------------------------------------------
     def start(self) -> "TeamHub":
         s = self.session
-        self._declared = [
-            s.liveliness().declare_subscriber(mas_keys.alive_pattern(self.mas), self._on_alive, history=True),
-            s.declare_subscriber(mas_keys.control_key(self.mas), self._on_control),
-            s.declare_subscriber(keys.robot_percepts_pattern(self.mas), self._on_percepts),
-        ]
+        self._declared = [s.declare_subscriber(keys.robot_percepts_pattern(self.mas), self._on_percepts)]
+        if self.transport is None:
+            self._declared += [
+                s.liveliness().declare_subscriber(mas_keys.alive_pattern(self.mas), self._on_alive, history=True),
+                s.declare_subscriber(mas_keys.control_key(self.mas), self._on_control)]
+        else:   # signatures checked by the transport (the secure profile)
+            self.transport.on_presence(self._on_presence)
+            self.transport.on_control(self._on_proved_control)
         self._thread = threading.Thread(target=self._poll, name="faultmas-inspect-hub", daemon=True)
         self._thread.start()
         return self
@@ -115,8 +127,11 @@ class TeamHub:
     def _on_alive(self, sample: Any) -> None:
         import zenoh
 
-        name = mas_keys.last_chunk(str(sample.key_expr))
-        alive = sample.kind == zenoh.SampleKind.PUT
+        self._on_presence(mas_keys.last_chunk(str(sample.key_expr)), sample.kind == zenoh.SampleKind.PUT)
+
+    def _on_presence(self, name: str, alive: bool) -> None:
+        if self._stop.is_set():
+            return
         with self._lock:
             entry = self.agents.setdefault(name, {"alive": alive, "summary": None})
             entry["alive"], entry["changed_at"] = alive, time.time()
@@ -252,13 +267,30 @@ class TeamHub:
 
     # -- the timeline ----------------------------------------------------------------------------
     def _on_control(self, sample: Any) -> None:
-        from agents.progress import ProgressReport
-
         try:
             message = json.loads(sample.payload.to_bytes())
         except ValueError:
             return   # the transport itself logs bad control messages
-        report = ProgressReport.from_message(message) if isinstance(message, dict) else None
+        if isinstance(message, dict):
+            self._add_mark(message)
+
+    def _on_proved_control(self, message: dict) -> None:
+        """The secure profile: a control message opened by the transport (``by`` kept only when its signature
+        proved it); a report joins the timeline only if signed by the agent it names."""
+        from agents.progress import ProgressReport
+
+        if self._stop.is_set() or ProgressReport.from_message(message) is None:
+            return
+        if not ProgressReport.proved(message):
+            with self._lock:
+                self.refused_marks += 1
+            return
+        self._add_mark(message)
+
+    def _add_mark(self, message: dict) -> None:
+        from agents.progress import ProgressReport
+
+        report = ProgressReport.from_message(message)
         if report is None:
             return
         mark = {"agent": report.agent, "step": report.step, "detail": report.detail,

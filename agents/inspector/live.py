@@ -38,7 +38,7 @@ class LiveInspector:
 
             def clock() -> float:
                 return world.time
-        team = TeamHub(hub.session, hub.mas, clock=clock, truth=truth).start()
+        team = TeamHub(hub.session, hub.mas, clock=clock, truth=truth, transport=hub).start()
         server = WebServer(team, self.socket).start()
         self.url = server.url
         print(f"faultmas: inspector at {server.url}" + (" (pause/step allowed)" if self.allow_pause else ""),

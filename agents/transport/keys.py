@@ -47,6 +47,15 @@ def status_pattern(mas: str) -> str:
     return f"{mas_prefix(mas)}/status/*"
 
 
+def heartbeat_key(mas: str, agent: str) -> str:
+    """The secure profile's signed heartbeats of ``agent`` (``proved_presence``: what proves its token)."""
+    return f"{mas_prefix(mas)}/heartbeat/{check_name(agent)}"
+
+
+def heartbeat_pattern(mas: str) -> str:
+    return f"{mas_prefix(mas)}/heartbeat/*"
+
+
 def last_chunk(key: str) -> str:
     """The agent name at the end of an ``alive``/``status`` key."""
     return key.rsplit("/", 1)[-1]

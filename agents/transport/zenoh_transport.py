@@ -5,7 +5,9 @@ Per agent: a subscriber on ``faultmas/<mas>/agent/<name>/inbox`` and a livelines
 reach the inbox). Per process: a liveliness subscriber with history (presence), a subscriber on
 ``faultmas/<mas>/control``, one on ``faultmas/<mas>/status/*`` and a queryable there that answers
 with the latest status of the local agents (in the secure profile a status is signed by its agent and a
-receiver refuses any other). Messages are put reliably with congestion control
+receiver refuses any other). In the secure profile a token alone proves nothing (anyone may declare one):
+an agent is present while its token is up and its signed heartbeats keep coming (``proved_presence``).
+Messages are put reliably with congestion control
 BLOCK on a cached publisher per receiver (a burst from the agents' thread in batches, see
 ``outbox``); agents of this process are served without the network.
 """
@@ -19,6 +21,7 @@ from agents.transport import keys
 from agents.transport.base import Transport, log
 from agents.transport.config import ZenohOptions, build_config, listen_endpoints
 from agents.transport.envelope import DEFAULT_MAX_SIZE, BadMessage, Envelope
+from agents.transport.proved_presence import HEARTBEAT, ProvedPresence
 from agents.transport.status import AgentStatus
 
 
@@ -42,6 +45,9 @@ class ZenohTransport(Transport):
         self._tokens: dict[str, Any] = {}
         self._statuses: dict[str, AgentStatus] = {}
         self._declared: list[Any] = []
+        # the secure profile: presence needs a signed proof besides the token
+        self._proof = ProvedPresence(self._presence.update) if self.identity is not None else None
+        self._heartbeats_done = threading.Event()
 
     def _open(self) -> None:
         import zenoh
@@ -60,8 +66,13 @@ class ZenohTransport(Transport):
         self._control_publisher = self.session.declare_publisher(
             keys.control_key(self.mas), congestion_control=zenoh.CongestionControl.BLOCK,
             reliability=zenoh.Reliability.RELIABLE)
+        if self._proof is not None:
+            self._declared.append(self.session.declare_subscriber(keys.heartbeat_pattern(self.mas), self._on_heartbeat))
+            self._heartbeats_done.clear()
+            threading.Thread(target=self._heartbeats, daemon=True, name="faultmas-heartbeats").start()
 
     def _close(self) -> None:
+        self._heartbeats_done.set()
         for entity in [*self._publishers.values(), self._control_publisher, *self._declared]:
             try:
                 entity.undeclare()
@@ -83,6 +94,8 @@ class ZenohTransport(Transport):
         threading.Thread(target=self._drain, args=(agent, subscriber.handler, key), daemon=True,
                          name=f"faultmas-inbox-{agent}").start()
         self._tokens[agent] = self.session.liveliness().declare_token(keys.alive_key(self.mas, agent))
+        if self._proof is not None:
+            self._heartbeat(agent)   # proved at once, not a heartbeat later (peers may be waiting for it)
 
     def _drain(self, agent: str, channel: Any, key: str) -> None:
         """Take the samples of one inbox in batches, in a thread of ours. A Zenoh callback needs the
@@ -139,11 +152,50 @@ class ZenohTransport(Transport):
         """Put arbitrary bytes on ``receiver``'s inbox (for tests and probes of the receiving side)."""
         self._publisher(receiver).put(payload)
 
+    # -- heartbeats (the secure profile) ----------------------------------------------------------
+    def _heartbeat(self, agent: str) -> None:
+        if self.identity.can_sign(agent):
+            document = json.dumps({"agent": agent}, separators=(",", ":")).encode()
+            try:
+                self.session.put(keys.heartbeat_key(self.mas, agent), self.identity.seal(agent, document))
+            except Exception:  # the session closing: the thread ends with it
+                log.debug("heartbeat of %s not put", agent, exc_info=True)
+
+    def _heartbeats(self) -> None:
+        """Every ``HEARTBEAT`` seconds: each local agent's signed heartbeat, then the leases checked."""
+        while not self._heartbeats_done.wait(HEARTBEAT):
+            for agent in list(self._tokens):
+                self._heartbeat(agent)
+            self._proof.expire()
+
+    def _on_heartbeat(self, sample: Any) -> None:
+        def agent_of(document: bytes) -> Any:
+            try:
+                data = json.loads(document)
+            except (ValueError, RecursionError) as exc:
+                raise BadMessage("not_json", str(exc)[:80]) from None
+            return data.get("agent") if isinstance(data, dict) else None
+
+        key = str(sample.key_expr)
+        try:
+            document, seq = self.identity.open(sample.payload.to_bytes(), agent_of)
+            agent = agent_of(document)
+            if agent != keys.last_chunk(key):
+                raise BadMessage("bad_signature", f"a heartbeat of {agent} put on {key}", agent)
+            self.identity.check_fresh(agent, "heartbeat", seq)
+        except BadMessage as bad:
+            self._drop(bad.reason, key, bad.sender, bad.detail)
+            return
+        self._proof.proved(agent)
+
     # -- network callbacks (Zenoh threads: never block, never raise) -----------------------------
     def _on_alive(self, sample: Any) -> None:
         import zenoh
 
         agent = keys.last_chunk(str(sample.key_expr))
+        if self._proof is not None:   # the secure profile: a token is a claim until a signed heartbeat proves it
+            self._proof.token(agent, sample.kind == zenoh.SampleKind.PUT)
+            return
         self._presence.update(agent, sample.kind == zenoh.SampleKind.PUT)
 
     def _on_control(self, sample: Any) -> None:
@@ -198,6 +250,7 @@ class ZenohTransport(Transport):
         document, seq = self.identity.open(payload, agent_of)
         status = AgentStatus.decode(document)
         self.identity.check_fresh(status.agent, "status", seq)
+        self._proof.proved(status.agent)
         return status
 
     def _sealed_status(self, status: AgentStatus) -> bytes:

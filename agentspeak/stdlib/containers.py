@@ -15,7 +15,7 @@ from agentspeak.unify import undo
 class _Collection:
     """A mutable term: resolving or renaming it gives the object itself (it is shared, as in Jason)."""
 
-    def resolve(self, b):
+    def resolve(self, b, depth: int = 0):
         return self
 
     def rename(self, mapping):

@@ -41,3 +41,31 @@ def attack_stop(transport: ZenohTransport, mas: str, member: str, own_key) -> No
     session.put(control_key(mas), posing_as(OUTSIDER, own_key).seal_control(
         {"command": "stop", "by": OUTSIDER, "delay": 0}))
     transport.publish_control("stop", by="launcher", delay=0.0)
+
+
+def claim_alive(session, mas: str, names: list[str]) -> list:
+    """Liveliness tokens on ``names``: a member's (to keep it alive after its death, or make it look up before it
+    is), a non-member's (a fake member). Returns the tokens: up while the caller keeps them."""
+    from agents.transport.keys import alive_key
+
+    return [session.liveliness().declare_token(alive_key(mas, name)) for name in names]
+
+
+def forge_heartbeats(session, mas: str, names: list[str], own_key) -> None:
+    """Per name, heartbeats that prove nothing: unsigned, and signed with the outsider's own key under it."""
+    from agents.transport.keys import heartbeat_key
+
+    for name in names:
+        document = b'{"agent":"%s"}' % name.encode()
+        session.put(heartbeat_key(mas, name), document)                                      # unsigned
+        session.put(heartbeat_key(mas, name), posing_as(name, own_key).seal(name, document))  # its own key
+
+
+def forge_progress(transport: ZenohTransport, mas: str, agent: str, step: str, detail: str, own_key) -> None:
+    """``.progress`` reports on the control key that ``agent`` never made: unsigned under its name, signed by
+    the outsider itself, and under its name signed with the outsider's own key."""
+    session = transport.session
+    report = {"command": "progress", "agent": agent, "step": step, "detail": detail}
+    transport.publish_control(**{**report, "by": agent})                                        # unsigned
+    session.put(control_key(mas), posing_as(OUTSIDER, own_key).seal_control({**report, "by": OUTSIDER}))
+    session.put(control_key(mas), posing_as(agent, own_key).seal_control({**report, "by": agent}))

@@ -15,8 +15,8 @@ import time
 
 from agents.transport import ZenohOptions, ZenohTransport
 from agents.transport.identity import load_private_key
-from agents.transport.keys import control_key, inbox_key
-from tests.hardening.outsider_attacks import OUTSIDER, attack_inbox, attack_stop, posing_as
+from agents.transport.keys import inbox_key
+from tests.hardening.outsider_attacks import attack_inbox, attack_stop, forge_progress
 
 
 def main() -> None:
@@ -40,11 +40,7 @@ def main() -> None:
             attack_inbox(lambda payload, robot=robot: session.put(inbox_key(mas, robot), payload), mas, robot,
                          other, own_key, goal="evil_goal", query="destination(X)")
         attack_stop(transport, mas, robots[0], own_key)
-        progress = {"command": "progress", "agent": args.faulty, "step": "diagnosed", "detail": args.wrong}
-        control = control_key(mas)
-        transport.publish_control(**{**progress, "by": args.faulty})                   # unsigned
-        session.put(control, posing_as(OUTSIDER, own_key).seal_control({**progress, "by": OUTSIDER}))  # itself
-        session.put(control, posing_as(args.faulty, own_key).seal_control({**progress, "by": args.faulty}))
+        forge_progress(transport, mas, args.faulty, "diagnosed", args.wrong, own_key)
         time.sleep(0.5)  # let the puts leave before the session closes
     print("SENT", flush=True)
 

@@ -16,12 +16,22 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 WRAP = "f(" * 190 + "T" + ")" * 190
+# terms that resolve themselves (a name-space term with an unbound name space, a plan term): ``resolve`` once
+# started a new count inside each, so nesting one at every level was bounded only by what built it (19,000
+# levels: SIGSEGV of the compiled build); the count now goes on through them
+NS_WRAP = "NS::f(" * 95 + "T" + ")" * 95
+PLAN_WRAP = "{ +b(" * 45 + "P" + ") }" * 45
 PROGRAMS = {
     # a goal that wraps its argument deeper on each call (each clause nests 191 levels: allowed)
     "goal": f"+!g(0, T) <- .print(T).\n+!g(N, T) <- D = {WRAP}; !g(N-1, D).\n"
             "+!start <- !g(100, a).\n",
     # a list inside a list inside ..., one level per call
     "list": "+!g(0, L) <- .print(L).\n+!g(N, L) <- !g(N-1, [L]).\n+!start <- !g(20000, []).\n",
+    # the same through name-space terms (their name space unbound: each stays a term of its own)
+    "namespace": f"+!g(0, T) <- .print(done).\n+!g(N, T) <- D = {NS_WRAP}; !g(N-1, D).\n"
+                 "+!start <- !g(100, a).\n",
+    # plan terms in plan terms: the goal's argument wraps the last one 45 plan terms deeper on each call
+    "plan_term": f"+!g(0, P) <- .print(done).\n+!g(N, P) <- !g(N-1, {PLAN_WRAP}).\n+!start <- !g(400, x).\n",
     # a rule whose answer nests one level per step, resolved when printed
     "rule": "nest(0, a).\nnest(N, f(X)) :- N > 0 & nest(N-1, X).\n+!start <- ?nest(3000, T); .print(T).\n",
 }

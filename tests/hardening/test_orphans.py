@@ -17,12 +17,19 @@ import pytest
 REPO = Path(__file__).resolve().parents[2]
 
 
+def _ignore_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def _start(tmp_path: Path, *argv: str) -> tuple[subprocess.Popen, Path]:
+    """``faultmas ARGV`` started as a script's ``cmd &`` or a CI runner without job control starts it: SIGINT
+    ignored (the clean-clone run that left the agent behind: the inspector's browser test stopped its ``faultmas
+    run --inspect`` with SIGINT, ignored, then killed it after 30 s)."""
     log = tmp_path / "out.txt"
     with open(log, "w") as out:
         proc = subprocess.Popen([sys.executable, "-m", "agents", *argv], cwd=REPO, stdout=out, stderr=subprocess.STDOUT,
                                 stdin=subprocess.DEVNULL, env=dict(os.environ, PYTHONUNBUFFERED="1"),
-                                start_new_session=True)
+                                start_new_session=True, preexec_fn=_ignore_sigint)
     return proc, log
 
 
@@ -65,7 +72,7 @@ def _kill_all(processes: list[psutil.Process]) -> None:
             pass
 
 
-@pytest.mark.parametrize("signum", [signal.SIGKILL, signal.SIGTERM])
+@pytest.mark.parametrize("signum", [signal.SIGKILL, signal.SIGTERM, signal.SIGINT])
 def test_faultmas_run_leaves_no_process_behind(tmp_path, signum):
     proc, log = _start(tmp_path, "run", "--timeout", "120")
     descendants = []
@@ -74,11 +81,11 @@ def test_faultmas_run_leaves_no_process_behind(tmp_path, signum):
         time.sleep(1.0)                      # the agents past their start (Zenoh sessions open)
         descendants = psutil.Process(proc.pid).children(recursive=True)
         os.kill(proc.pid, signum)
-        code = proc.wait(30)
+        code = proc.wait(60)
         left = _still_alive(descendants, 10.0)
         assert left == [], f"alive 10 s after {signal.Signals(signum).name} of faultmas run: {left}"
-        if signum == signal.SIGTERM:         # stopped as by Ctrl-C: its clean-up ran
-            assert code != -signal.SIGTERM, "SIGTERM killed faultmas run outright: its clean-up did not run"
+        if signum != signal.SIGKILL:         # stopped as by Ctrl-C, its clean-up ran (not killed by the signal)
+            assert code >= 0, f"faultmas run ended by {signal.Signals(signum).name} without its clean-up ({code})"
     finally:
         if proc.poll() is None:
             proc.kill()
