@@ -54,11 +54,13 @@ def _agents_started(proc: subprocess.Popen, names: set[str], log: Path, timeout:
 
 
 def _still_alive(processes: list[psutil.Process], seconds: float) -> list[str]:
-    deadline = time.monotonic() + seconds
+    start = time.monotonic()
+    deadline = start + seconds
     alive = processes
     while time.monotonic() < deadline:
         alive = [p for p in alive if p.is_running() and p.status() != psutil.STATUS_ZOMBIE]
         if not alive:
+            print(f"{len(processes)} descendants gone {time.monotonic() - start:.1f} s after", end=" ")
             return []
         time.sleep(0.1)
     return [" ".join(p.cmdline()[:6]) for p in alive if p.is_running()]
@@ -83,6 +85,7 @@ def test_faultmas_run_leaves_no_process_behind(tmp_path, signum):
         os.kill(proc.pid, signum)
         code = proc.wait(60)
         left = _still_alive(descendants, 10.0)
+        print(f"{signal.Signals(signum).name} of faultmas run (SIGINT ignored at its start)")
         assert left == [], f"alive 10 s after {signal.Signals(signum).name} of faultmas run: {left}"
         if signum != signal.SIGKILL:         # stopped as by Ctrl-C, its clean-up ran (not killed by the signal)
             assert code >= 0, f"faultmas run ended by {signal.Signals(signum).name} without its clean-up ({code})"
@@ -103,6 +106,7 @@ def test_mas_run_processes_leaves_no_process_behind(tmp_path):
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait(30)
         assert _still_alive(descendants, 10.0) == []
+        print("SIGKILL of faultmas mas run --processes")
     finally:
         if proc.poll() is None:
             proc.kill()
