@@ -314,7 +314,10 @@ def cmd_eval(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     # runs done / total, elapsed and ETA on stderr while it works (a terminal only: no bar in a log file)
-    with ProcessPoolExecutor(max_workers=args.jobs) as pool, \
+    from robot_bridge.processes import die_with_multiprocessing_parent
+
+    # each worker ends with this process, however it ends (a SIGKILLed eval left its workers running)
+    with ProcessPoolExecutor(max_workers=args.jobs, initializer=die_with_multiprocessing_parent) as pool, \
             tqdm(total=len(jobs), unit="run", desc="faultmas eval", file=sys.stderr, disable=None) as bar:
         for done in pool.map(_one_run, jobs):
             runs.append(done)
