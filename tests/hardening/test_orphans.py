@@ -111,3 +111,26 @@ def test_mas_run_processes_leaves_no_process_behind(tmp_path):
         if proc.poll() is None:
             proc.kill()
         _kill_all(descendants)
+
+
+def test_faultmas_eval_pool_workers_end_with_it(tmp_path):
+    proc, log = _start(tmp_path, "eval", "--runs", "4", "--jobs", "2", "--faults", "none", "--teams", "none")
+    workers: list[psutil.Process] = []
+    try:
+        deadline = time.monotonic() + 60
+        while len(workers) < 2 and time.monotonic() < deadline:
+            assert proc.poll() is None, log.read_text()[-3000:]
+            workers = psutil.Process(proc.pid).children(recursive=True)
+            time.sleep(0.2)
+        assert len(workers) >= 2, "no pool workers started"
+        time.sleep(1.0)
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(30)
+        # the lifeline: SIGTERM, then SIGKILL 3 s later; a worker's sentinel is also held by the workers forked
+        # after it, so they go one after the other
+        assert _still_alive(workers, 20.0) == []
+        print("SIGKILL of faultmas eval --jobs 2")
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        _kill_all(workers)
