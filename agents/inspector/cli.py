@@ -1,8 +1,11 @@
-"""``faultmas inspect [--mas NAME] [--connect EP] [--listen 127.0.0.1:PORT]``: the live web view of a MAS.
+"""``faultmas inspect [--mas NAME] [--connect EP] [--project P.mas2j] [--listen 127.0.0.1:PORT]``: the live web
+view of a MAS.
 
 It joins the MAS's Zenoh network (``--connect``: a router or any agent's endpoint; ``faultmas run
 --inspect`` needs none, it serves the page itself) and serves the page on loopback. A non-loopback
 ``--listen`` is refused unless ``--public`` says so, and then a warning says who can see the page.
+``--project`` of a MAS in the secure profile (its agents' public keys listed) makes the page trust only what
+is signed: agents proved alive by their signed heartbeats, ``.progress`` reports signed by their agent.
 """
 from __future__ import annotations
 
@@ -25,6 +28,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
                    help="a Zenoh router or agent of the MAS, e.g. tcp/127.0.0.1:7447 (repeatable)")
     p.add_argument("--config", default=None, metavar="FILE", help="Zenoh JSON5 file (TLS, access control)")
+    p.add_argument("--project", default=None, metavar="FILE.mas2j",
+                   help="the MAS's project file; in the secure profile (key= options) only agents proved by "
+                        "their signed heartbeats are shown alive and only signed .progress reports join the "
+                        "timeline (without it, the page believes every liveliness token and report)")
     add_listen_arguments(p)
     p.set_defaults(func=cmd_inspect)
 
@@ -68,6 +75,24 @@ def cmd_inspect(args: argparse.Namespace) -> int:
     except ValueError as exc:
         print(f"faultmas inspect: {exc}", file=sys.stderr)
         return 2
+    identity = None
+    if args.project is not None:
+        from agents.transport.identity import IdentityError, project_identity
+        from agentspeak.errors import SourceError
+        from agentspeak.mas2j import load_mas2j
+        try:
+            project = load_mas2j(args.project)
+            identity = project_identity(project)
+        except OSError as exc:
+            print(f"faultmas inspect: cannot read {args.project}: {exc.strerror or exc}", file=sys.stderr)
+            return 2
+        except (IdentityError, SourceError, ValueError) as exc:
+            print(exc, file=sys.stderr)
+            return 2
+        args.mas = args.mas or project.name
+        if identity is None:
+            print(f"faultmas inspect: {args.project} lists no keys (not the secure profile): the page believes "
+                  "every liveliness token and report", file=sys.stderr)
     try:
         sock = listening_socket(host, port)
     except OSError as exc:
@@ -86,11 +111,19 @@ def cmd_inspect(args: argparse.Namespace) -> int:
         if mas is None:
             sock.close()
             return 1
-        hub = TeamHub(session, mas).start()
+        transport = None
+        if identity is not None:   # signatures checked as the MAS's own processes check them
+            from agents.transport import ZenohTransport
+            transport = ZenohTransport(mas, session=session, identity=identity).open()
+        hub = TeamHub(session, mas, transport=transport).start()
         server = WebServer(hub, sock)
         print(f"faultmas inspect: MAS {mas} at {server.url} (Ctrl-C to stop)", flush=True)
-        server.serve_forever()
-        hub.close()
+        try:
+            server.serve_forever()
+        finally:
+            hub.close()
+            if transport is not None:
+                transport.close()
         return 0
     finally:
         session.close()

@@ -7,16 +7,20 @@ that is no member (ghost), puts heartbeats that prove nothing and forged ``.prog
 or a viewer sees (the run's hub transport and the inspector's ``TeamHub`` on it): neither ghost nor bob alive
 before bob starts; bob alive once his process runs; bob gone within the lease after a SIGKILL, though the
 outsider's token on his name is still up (Zenoh reports a key gone only with its last token); no forged report
-in the timeline, bob's own reports in it. Before: ghost and bob were listed alive from the outsider's tokens
+in the timeline, bob's own reports in it. The same on the page of ``faultmas inspect --project`` (another
+process, keys from the project). Before: ghost and bob were listed alive from the outsider's tokens
 and bob stayed alive after his death; the forged reports were on the timeline."""
 from __future__ import annotations
 
+import json
 import os
 import queue
+import re
 import subprocess
 import sys
 import threading
 import time
+import urllib.request
 from pathlib import Path
 
 from agents.inspector.hub import TeamHub
@@ -52,7 +56,7 @@ def test_an_outsiders_tokens_and_reports_neither_make_anyone_alive_nor_reach_the
     project_file = tmp_path / "team.mas2j"
     project_file.write_text(f'MAS {mas} {{ agents: alice alice.asl [key="keys"]; bob bob.asl [key="keys"]; }}\n')
     identity = project_identity(load_mas2j(str(project_file)))      # the public keys only: a launcher's
-    outsider = bob = None
+    outsider = bob = page = None
     with ZenohTransport(mas, ZenohOptions(listen=(endpoint,)), identity=identity) as hub:
         team = TeamHub(hub.session, mas, transport=hub).start()
         try:
@@ -62,6 +66,10 @@ def test_an_outsiders_tokens_and_reports_neither_make_anyone_alive_nor_reach_the
                 cwd=REPO, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
             said: queue.Queue = queue.Queue()
             threading.Thread(target=lambda: [said.put(line) for line in outsider.stdout], daemon=True).start()
+            page = subprocess.Popen([sys.executable, "-m", "agents", "inspect", "--project", str(project_file),
+                                     "--connect", endpoint, "--listen", "127.0.0.1:0"],
+                                    cwd=tmp_path, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            url = re.search(r"at (http://\S+/) ", page.stdout.readline()).group(1)
             assert said.get(timeout=60).strip() == "READY", outsider.stderr.read()[-2000:]
             time.sleep(3.0)   # tokens, forged heartbeats (every 0.5 s) and reports have all arrived by now
             assert hub.alive_agents() == frozenset(), "an outsider's token made someone alive"
@@ -86,9 +94,17 @@ def test_an_outsiders_tokens_and_reports_neither_make_anyone_alive_nor_reach_the
             assert "ghost" not in hub.alive_agents() and not team.agents.get("ghost", {}).get("alive")
             assert outsider.poll() is None, "the outsider ended early: its token on bob was not up all along"
             assert not any(m["detail"] == "evil" for m in team.timeline), team.timeline
+            # the page of `faultmas inspect --project`: the same verdicts
+            def shown_alive() -> list[str]:
+                team_shown = json.load(urllib.request.urlopen(url + "api/team", timeout=10))["team"]
+                return [a["agent"] for a in team_shown if a["alive"]]
+            assert _until(lambda: shown_alive() == [], 15), shown_alive()   # its own lease, a moment later
+            marks = json.load(urllib.request.urlopen(url + "api/timeline.json", timeout=10))["marks"]
+            assert any(m["agent"] == "bob" and m["step"] == "started" for m in marks), marks
+            assert not any(m["detail"] == "evil" for m in marks), marks
         finally:
             team.close()
-            for proc in (outsider, bob):
+            for proc in (outsider, bob, page):
                 if proc is not None and proc.poll() is None:
                     proc.kill()
                     proc.wait(30)
