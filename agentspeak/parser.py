@@ -311,7 +311,7 @@ class _ToProgram(Transformer):
             return ExecVar(t, self.line)
         if isinstance(t, (Rel, And, Or, Not)):
             return Constraint(t, self.line)
-        raise _BadInput(f"'{t}' is not a body formula (expected an action, a goal, a belief update or a test)")
+        raise _BadInput(f"'{_shown(t)}' is not a body formula (expected an action, a goal, a belief update or a test)")
 
     def if_stmt(self, c):
         cond, block = c[0], c[1]
@@ -550,6 +550,20 @@ class _BadInput(Exception):
     """A clause that parses but is not valid AgentSpeak (raised inside the transformer)."""
 
 
+_SHOWN_CHARS = 80   # of a term quoted in an error message
+
+
+def _shown(t: Term) -> str:
+    """``t`` as an error message quotes it: at most ``_SHOWN_CHARS`` characters. An operator chain nests without
+    brackets (``.print - - - … t(1)``, ``a - 1 - 1 …``), so the bracket scan before parsing lets it through,
+    and the transformer sees it before the depth check after parsing: printed whole, 20,000 levels deep, it
+    overflowed the C stack of the compiled build (found by the fuzz campaign); it is the depth error now."""
+    if nesting_depth(t) > MAX_NESTING:
+        raise _BadInput(too_deep_message())
+    text = str(t)
+    return text if len(text) <= _SHOWN_CHARS else text[:_SHOWN_CHARS - 3] + "..."
+
+
 def parse_program(text: str, source_file: str = "<string>", base_dir: str | None = None,
                   _seen: set | None = None, source_path: tuple = (), namespace: str = DEFAULT_NS_NAME) -> Program:
     """Parse a whole agent program; raise ``AslSyntaxError`` at the first error.
@@ -786,7 +800,7 @@ def _include_ns(lit: Literal, scope: NsScope | None) -> Literal:
         if type(ns) is Var:
             ns = Literal(f"ns{unique_ns_id()}")
         elif not (type(ns) is Literal and not ns.args):
-            raise _BadInput(f"the name space of {lit} must be an atom or a variable")
+            raise _BadInput(f"the name space of {_shown(lit)} must be an atom or a variable")
         return Literal(lit.functor, (args[0], ns) + args[2:])
     current = scope.current if scope is not None else DEFAULT_NS_NAME
     return Literal(lit.functor, args + (Literal(current),)) if args else lit
