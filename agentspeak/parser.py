@@ -97,6 +97,7 @@ class _ToProgram(Transformer):
         self.line = 0
         self.warnings: list[str] = []
         self.prefix_nots: set[int] = set()
+        self.op_depth: dict[int, int] = {}   # id of an operator node -> how many operators deep (``_op``)
         self.user_functions: dict = {}   # name -> FunctionSpec, from register_function directives
 
     # -- helpers -----------------------------------------------------------------------------
@@ -368,18 +369,33 @@ class _ToProgram(Transformer):
         return PlanTerm(rule=Rule(c[0], c[1], self.source_file, self.line))
 
     # -- expressions -------------------------------------------------------------------------------
+    def _op(self, node: Term, *operands: Term) -> Term:
+        """``node``, an operator applied to ``operands``, refused past ``MAX_NESTING`` operators deep. An
+        operator chain (``- - - … 1``, ``a - 1 - 1 …``, ``not not … a``) nests without brackets, so the bracket
+        scan before parsing lets it through, and the callbacks here see it before the depth walk after
+        parsing: a Literal made with such an annotation (it sorts its annotations: a recursive comparison)
+        or an error message that printed one overflowed the C stack of the compiled build (SIGSEGV, found
+        by the fuzz campaign). Counted as the chain is built (bracketed operands count as one level: the
+        bracket scan bounds them), so the refusal costs a dictionary look-up per operator."""
+        depth = self.op_depth
+        level = 1 + max([depth.get(id(x), 0) for x in operands])
+        if level > MAX_NESTING:
+            raise _BadInput(too_deep_message())
+        depth[id(node)] = level
+        return node
+
     def prefixed(self, c):
         tok, inner = c
         kind = tok.type
         if kind == "NOT":
-            node = Not(inner)
+            node = self._op(Not(inner), inner)
             self.prefix_nots.add(id(node))
             return node
         if kind == "PLUS":
             return inner
         if type(inner) in (int, float):
             return -inner
-        return Arith("-", inner)
+        return self._op(Arith("-", inner), inner)
 
     def expr(self, c):
         """Precedence climbing over ``operand (operator operand)*``."""
@@ -393,7 +409,8 @@ class _ToProgram(Transformer):
                 if type(left) is Not and id(left) in prefix_nots and min_prec <= _PREFIX_NOT_PREC:
                     # `not X > 3` is `not (X > 3)`: `not` binds looser than relational operators
                     prefix_nots.discard(id(left))
-                    left = Not(climb(_PREFIX_NOT_PREC + 1, left.arg))
+                    arg = climb(_PREFIX_NOT_PREC + 1, left.arg)
+                    left = self._op(Not(arg), arg)
             while pos[0] < len(c):
                 op = c[pos[0]].value
                 prec, right_assoc = _INFIX[op]
@@ -401,7 +418,7 @@ class _ToProgram(Transformer):
                     break
                 pos[0] += 1
                 right = climb(prec if right_assoc else prec + 1)
-                left = _binary(op, left, right)
+                left = self._op(_binary(op, left, right), left, right)
             return left
 
         return climb(0)
@@ -699,6 +716,7 @@ def _parse_items(text: str, source_file: str) -> list:
         t = _TRANSFORMER
         t.source_file, t.vars, t.line, t.trigger_line = source_file, {}, 0, 0
         t.prefix_nots = set()
+        t.op_depth = {}
         t.user_functions = {}
         try:
             return _INLINE_PARSER.parse(text)

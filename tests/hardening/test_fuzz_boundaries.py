@@ -24,7 +24,8 @@ BY_EXTENSION = {".asl": "asl", ".mas2j": "mas2j", ".txt": None, ".json": None, "
 CORPUS_BOUNDARY = {"deep_content.txt": "content", "duplicate_from.json": "envelope",
                    "huge_integer_content.txt": "content", "huge_integer_observation.json": "observations",
                    "deep_json.json": "observations", "deep_formula.txt": "formula",
-                   "huge_window_observers.yaml": "observer_config", "operator_chain_formula.txt": "content"}
+                   "huge_window_observers.yaml": "observer_config", "operator_chain_formula.txt": "content",
+                   "operator_chain_annotation.txt": "content"}
 GRAMMAR_BYTES = b"()[]{}<>!?~+-*/=&|:;.,\"'\\@#$%^_ \n\t0123456789aXzAB\x00\xe9\xff"
 
 
