@@ -30,7 +30,7 @@ from agentspeak.program import ACHIEVE, ADD, BEL, DEL, META, Plan, Program, Trig
 from agentspeak.solver import SolveError, _true_k, solve_first
 from agentspeak.stdlib.registry import STDLIB, IAError, Registry, Suspend, yields_solutions
 from agentspeak.terms import (
-    _EXACT, INT_OPS, Arith, ArithmeticError_, Literal, NsTerm, Term, Var, rename, resolve, to_str, variables,
+    _EXACT, INT_OPS, NS_SEP, Arith, ArithmeticError_, Literal, NsTerm, Term, Var, rename, resolve, to_str, variables,
 )
 from agentspeak.unify import unify
 
@@ -449,8 +449,11 @@ class Agent:
             if relevant is None:
                 relevant = plans.relevant(trigger)
             for a in args:  # (a loop: `Var in map(type, args)` costs 3x more for one argument)
-                if type(a) is Var:
-                    args = None  # variables in the event: bind by unification (shared or repeated ones)
+                ta = type(a)
+                if ta is Var or (ta is Literal and NS_SEP in a.functor) or ta is NsTerm:
+                    # variables in the event: bind by unification (shared or repeated ones); so too a value
+                    # whose name space a trigger's variable must match (agentspeak.unify.in_other_ns)
+                    args = None
                     break
         else:
             args = None

@@ -4,7 +4,7 @@ from __future__ import annotations
 from concurrent.futures import Future
 
 from agentspeak.communication import Message
-from agentspeak.stdlib.registry import Suspend, internal_action, wrong_arguments
+from agentspeak.stdlib.registry import IAError, Suspend, internal_action, wrong_arguments
 from agentspeak.terms import NIL, Literal, Var, list_items, make_list, to_str
 
 _ASK = ("askOne", "askAll", "askHow")
@@ -75,7 +75,11 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
 
     def on_result(c, replies) -> bool:
         values = [_answer_value(perf, r, content) for r in replies]
-        return c.unify(answer, values[0] if len(values) == 1 and not isinstance(receiver, type(NIL)) and len(names) == 1 and not _is_list(receiver) else make_list(values))
+        value = values[0] if len(values) == 1 and not isinstance(receiver, type(NIL)) and len(names) == 1 and not _is_list(receiver) else make_list(values)
+        if not c.unify(answer, value):  # Jason's TransitionSystem.resumeSyncAskIntention
+            raise IAError("ask_failed", f"reply of an ask message ('{to_str(value)}') does not unify with fourth "
+                                        f"argument of .send ('{to_str(answer, c.b)}')")
+        return True
 
     def on_timeout(c) -> bool:
         for fut in futures:

@@ -9,7 +9,9 @@ import re
 from agentspeak.program import ACHIEVE, ADD, PlanTerm, Plan, Trigger, body_variables, substitute
 from agentspeak.stdlib.registry import IAError, Suspend, internal_action, wrong_arguments
 from agentspeak.beliefs import SOURCE_SELF
-from agentspeak.terms import NIL, Literal, Var, is_list, list_items, make_list, resolve, to_print_str, to_str
+from agentspeak.terms import (
+    LOCAL_NS_PREFIX, NIL, Literal, Var, is_list, list_items, make_list, resolve, to_print_str, to_str,
+)
 from agentspeak.unify import undo, unifies
 
 
@@ -360,6 +362,8 @@ def namespace(ctx, ns):
     if not isinstance(ns, Var) and not (isinstance(ns, Literal) and not ns.args):
         raise wrong_arguments(".namespace: the argument must be an atom or a variable")
     for name in _namespaces(ctx.agent):
+        if name.startswith(LOCAL_NS_PREFIX) and isinstance(ns, Var):
+            continue  # a variable never takes a local name space (Jason's Unifier.bind): it stays private
         mark = len(ctx.trail)
         if ctx.unify(ns, Literal(name)):
             yield
