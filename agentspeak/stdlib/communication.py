@@ -39,7 +39,7 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
         # the usual send: one receiver named by an atom, no answer awaited (the checks below pass)
         msg = Message.__new__(Message)  # Message(agent.name, receiver.functor, performative.functor, content)
         msg.sender, msg.receiver, msg.performative = agent.name, receiver.functor, performative.functor
-        msg.content, msg._msg_id, msg.in_reply_to, msg.sent_at = content, None, None, None
+        msg.content, msg._msg_id, msg.in_reply_to, msg.sent_at, msg.read_at = content, None, None, None, None
         agent.arch.send(agent, msg)
         return True
     if not isinstance(performative, Literal) or performative.args:
