@@ -51,7 +51,7 @@ class Message:
         self.content = content
         self._msg_id = msg_id
         self.in_reply_to = in_reply_to
-        self.sent_at = None  # monotonic time a reply to an ask was sent (in this process), see .send
+        self.sent_at = None  # monotonic time an ask with a timeout, or a reply to an ask, was sent (in this process)
         self.read_at = None  # an ask: when it was read, see _answer
 
     @property
@@ -283,6 +283,12 @@ def _signal(agent, msg: Message, sender: Term) -> None:
     for item in _items(msg.content):
         if isinstance(item, Literal):
             agent.post_external(Trigger(ADD, BEL, _annotate(item, sender)), force=False)
+
+
+def stamp_sent(msg: Message) -> None:
+    """An ask with a timeout: when it was sent. Its receiver, and the asker for the answer (stamped by
+    _answer), go first in this process's queue of woken agents (LocalRuntime._route_from)."""
+    msg.sent_at = time.monotonic()
 
 
 def _answer(agent, msg: Message, performative: str, content: Term) -> None:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from concurrent.futures import Future
 
-from agentspeak.communication import Message
+from agentspeak.communication import Message, stamp_sent
 from agentspeak.stdlib.registry import IAError, Suspend, internal_action, wrong_arguments
 from agentspeak.terms import NIL, Literal, Var, list_items, make_list, to_str
 
@@ -58,10 +58,14 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
             agent.arch.send(agent, msg)
         return True
     # a synchronous ask: wait for the replies
+    if timeout is not None and not isinstance(timeout, (int, float)):
+        raise wrong_arguments(".send: the timeout is a number of milliseconds")
     futures = []
     asks = set()  # the ids of the messages this ask sent
     for name in names:
         msg = Message(sender, name, perf, content)
+        if timeout is not None:
+            stamp_sent(msg)  # a deadline runs: the receiver reads it first (LocalRuntime._route_from)
         asks.add(msg.msg_id)
         fut: Future = Future()
         futures.append(fut)
@@ -87,11 +91,7 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
         c.unify(answer, Literal("timeout"))  # Jason goes on even when the answer pattern does not match
         return True
 
-    seconds = None
-    if timeout is not None:
-        if not isinstance(timeout, (int, float)):
-            raise wrong_arguments(".send: the timeout is a number of milliseconds")
-        seconds = timeout / 1000.0
+    seconds = None if timeout is None else timeout / 1000.0
 
     def answer_waiting(deadline: float) -> bool:
         # an answer sent in time but not read yet (this agent got no CPU meanwhile) is not a timeout

@@ -183,6 +183,40 @@ def test_an_answer_counts_as_sent_when_the_answerer_would_have_sent_it_on_a_thre
     assert lines == [expected]
 
 
+def test_the_receiver_of_an_ask_with_a_timeout_goes_before_agents_woken_earlier():
+    # Jason runs the asked agent on a thread of its own: it reads the ask at once. Here the agents of a run
+    # take turns; one woken by an ask with a timeout (or by an answer to an ask) goes first, as an agent whose
+    # timer is due does, but at most URGENT_IN_ROW in a row before an agent woken earlier, so none starves
+    import threading
+
+    from agentspeak.communication import Message, stamp_sent
+    from agentspeak.runtime import URGENT_IN_ROW, LocalRuntime
+    from agentspeak.terms import Literal
+    runtime = LocalRuntime()
+    names = ["c", "b", "d", "e", "f"]
+    for name in names:
+        runtime.add_agent(name, "")
+    runtime.ready.clear()
+    runtime.busy.clear()
+    runtime._ready_set.clear()
+    runtime._loop_thread = threading.get_ident()  # delivered from the loop's own thread, as agents send
+
+    def send(to: str, performative: str, deadline: bool) -> None:
+        msg = Message("a", to, performative, Literal("v", (1,)))
+        if deadline:
+            stamp_sent(msg)
+        runtime.route(msg)
+
+    send("c", "tell", False)
+    send("b", "askOne", True)
+    assert [ag.name for ag in runtime.ready] == ["b", "c"]
+    assert URGENT_IN_ROW == 3
+    send("d", "askOne", True)
+    send("e", "askOne", True)
+    send("f", "askOne", True)  # a fourth in a row waits behind c
+    assert [ag.name for ag in runtime.ready] == ["e", "d", "b", "c", "f"]
+
+
 # -- .drop_all_intentions (stdlib/drop_all_intentions.java; Jason's suite: stdlib/drop_all_intentions.asl) --
 def test_drop_all_intentions_keeps_the_calling_intention():
     # Circumstance.clearRunningIntentions empties I, and the intention running the formula is not in I
