@@ -148,7 +148,13 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 def setup_logging(args: argparse.Namespace) -> None:
-    """The root logger at the level asked (WARNING unless ``-v`` or ``--log-level``), lines on stderr."""
+    """The root logger at the level asked (WARNING unless ``-v`` or ``--log-level``), lines on stderr.
+
+    A command that writes no log lines says so (``set_defaults(logs=False)``, e.g. ``diagnose``): then logging
+    is set up only when asked for, as importing it is a tenth of a short run (issue 23); a warning of a library
+    it uses still reaches stderr (Python's last-resort handler), without the level and logger name."""
+    if not getattr(args, "logs", True) and not (args.log_level or args.verbose):
+        return
     import logging
 
     level = args.log_level or {0: "WARNING", 1: "INFO"}.get(args.verbose, "DEBUG")
@@ -168,7 +174,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.print_help()
             return 2
         setup_logging(args)
-        import agentspeak.lark_loader  # noqa: F401  every command refuses a replaced Lark 1.x at once, in one line
+        if getattr(args, "needs_lark", True):   # a command that may parse without Lark says so (diagnose: .bench)
+            import agentspeak.lark_loader  # noqa: F401  every command refuses a replaced Lark 1.x at once, in one line
         return int(args.func(args) or 0)
     except KeyboardInterrupt:
         return 130
