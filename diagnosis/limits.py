@@ -14,6 +14,7 @@ stays below the limit never imports psutil (its import is a large part of a shor
 """
 from __future__ import annotations
 
+import io
 import os
 import resource
 import sys
