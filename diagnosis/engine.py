@@ -27,7 +27,8 @@ from RC2 (core-guided MaxSAT). Time limits interrupt the solver through one shar
 (``deadline``). The totalizer and RC2 are imported when first needed: most queries use neither, and a
 short ``faultmas diagnose`` is mostly start-up (issue 23).
 
-The default solver is Glucose 4: it releases the GIL while solving (other threads of the agent keep
+The default solver is Glucose 4 (python-sat's, made by ``diagnosis.sat`` without importing ``pysat.solvers``,
+for start-up): it releases the GIL while solving (other threads of the agent keep
 running) and honours ``interrupt()``, which the time limits rely on; CaDiCaL in python-sat does neither.
 """
 from __future__ import annotations

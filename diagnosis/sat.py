@@ -8,8 +8,9 @@ is a thin class over its ``glucose41_*`` functions. ``Glucose4`` below makes exa
 makes, for the methods the diagnoser uses, so the solving is python-sat's own.
 
 ``make_solver(name)`` gives that class for ``glucose4`` when the extension has those functions (the python-sat
-this project pins does, as has every release since 2018), and ``pysat.solvers.Solver`` for every other name
-or another extension: the rest of python-sat (cardinality encodings, RC2) is imported where it is used.
+this project pins does; ``tests/diagnosis/test_sat.py`` compares it with ``pysat.solvers.Glucose4``), and
+``pysat.solvers.Solver`` for every other name or an extension without them: the rest of python-sat
+(cardinality encodings, RC2) is imported where it is used.
 """
 from __future__ import annotations
 
