@@ -43,7 +43,7 @@ class Glucose4:
         self.delete()
 
     def delete(self) -> None:
-        if self.glucose:
+        if getattr(self, "glucose", None):     # also from __del__ of an instance whose __init__ failed
             self._api.glucose41_del(self.glucose)
             self.glucose = None
 
