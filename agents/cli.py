@@ -141,9 +141,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         module.add_parser(sub)
         for chosen in {name for name, (owner, _) in COMMANDS.items() if owner == module_name} & set(sub.choices):
             _with_logging_options(sub.choices[chosen])
+        # the other commands' placeholders serve only the top level's --help (the usage line says COMMAND);
+        # made here they were a twentieth of a short `faultmas diagnose` (issue 23)
+        return parser
     for name, (_, help_text) in COMMANDS.items():
-        if name not in sub.choices:              # listed for --help and the usage line; never parsed here
-            sub.add_parser(name, help=help_text, add_help=False)
+        sub.add_parser(name, help=help_text, add_help=False)   # listed for --help; never parsed here
     return parser
 
 
