@@ -1,42 +1,56 @@
 """Where faultmas keeps what it builds once and reuses between runs (grammar tables, parsed programs, compiled
-netlists), and how an entry is written and read back.
+netlists), and how an entry is written.
 
-Nothing in it is needed: a missing, damaged or read-only directory only makes start-up slower.
+Nothing in it is needed: a missing, damaged or read-only directory only makes start-up slower. Paths here are
+strings (``os.path``): ``pathlib`` is imported only by ``cache_dir``, as its import is a tenth of a short
+``faultmas diagnose`` (issue 23), which uses ``cache_path``.
 """
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
+TYPE_CHECKING = False     # typing.TYPE_CHECKING without importing typing
+if TYPE_CHECKING:
+    from pathlib import Path
 
 CACHE_ENV = "FAULTMAS_CACHE_DIR"
 """Where the cache goes (default: ``$XDG_CACHE_HOME/faultmas`` or ``~/.cache/faultmas``)."""
 
 
-def cache_dir() -> Path:
+def cache_path() -> str:
     """The cache directory (not created here)."""
     configured = os.environ.get(CACHE_ENV)
     if configured:
-        return Path(configured)
+        return configured
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "faultmas"
+    return os.path.join(base, "faultmas")
 
 
-def write_entry(path: Path, data: bytes, max_entries: int) -> None:
+def cache_dir() -> Path:
+    """The cache directory as a ``Path`` (not created here)."""
+    from pathlib import Path
+
+    return Path(cache_path())
+
+
+def write_entry(path: str | os.PathLike, data: bytes, max_entries: int) -> None:
     """Keep ``data`` (an entry, serialized by the caller) at ``path``, atomically (a reader sees the old entry or
     the new one, never half of one), then only the ``max_entries`` most recently written entries of that
     directory with the same suffix. Nothing is raised: a read-only or full disk only costs the rebuild."""
+    path = os.fspath(path)
+    directory, name = os.path.split(path)
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        partial = path.with_name(f".{path.name}.{os.getpid()}")
-        partial.write_bytes(data)
+        os.makedirs(directory, exist_ok=True)
+        partial = os.path.join(directory, f".{name}.{os.getpid()}")
+        with open(partial, "wb") as f:
+            f.write(data)
         os.replace(partial, path)
-        _prune(path.parent, path.suffix, max_entries)
+        _prune(directory, os.path.splitext(name)[1], max_entries)
     except OSError:
         pass
 
 
-def _prune(directory: Path, suffix: str, max_entries: int) -> None:
+def _prune(directory: str, suffix: str, max_entries: int) -> None:
     entries = [e for e in os.scandir(directory) if e.name.endswith(suffix) and not e.name.startswith(".")]
     if len(entries) <= max_entries:
         return

@@ -23,7 +23,7 @@ import sys
 import zlib
 
 from agentspeak.source_text import read_source
-from agentspeak.user_cache import cache_dir, code_files, write_entry
+from agentspeak.user_cache import cache_path, code_files, write_entry
 from diagnosis.model import SystemModel
 
 FORMAT = 1
@@ -38,7 +38,8 @@ def cached_netlist_model(path: str) -> SystemModel:
     text = read_source(path, "netlist")
     where = os.path.abspath(path)
     header = (FORMAT, where, code_key(), text)
-    entry = cache_dir() / SUBDIRECTORY / f"{os.path.basename(path)[:40]}-{zlib.crc32(where.encode()):08x}.marshal"
+    entry = os.path.join(cache_path(), SUBDIRECTORY,
+                         f"{os.path.basename(path)[:40]}-{zlib.crc32(where.encode()):08x}.marshal")
     try:
         with open(entry, "rb") as f:
             kept, fields = marshal.loads(f.read())   # one object: marshal.load from a file reads item by item
