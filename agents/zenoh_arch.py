@@ -23,6 +23,7 @@ from collections import OrderedDict
 from functools import partial
 from typing import Iterable
 
+from agents.directory import NetworkDirectory
 from agents.transport.base import Transport
 from agents.transport.envelope import BadMessage, Envelope, make_envelope
 from agents.transport.trust import CODE_PERFORMATIVES, TrustPolicy
@@ -168,6 +169,7 @@ class TransportBridge:
         if self._attached:
             return self
         self.runtime.remote = self.send_remote
+        self.runtime.directory = NetworkDirectory(self.runtime.tell_provider, self.transport)  # .df_* reach afar
         self.transport.on_control(self._on_control)
         for agent in self.runtime.agents.values():
             body = agent.arch if type(agent.arch) is not LocalArch else None

@@ -14,13 +14,14 @@ from abc import ABC, abstractmethod
 from collections import Counter
 from contextlib import contextmanager
 from threading import get_ident
-from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Mapping, Sequence
 
 from agents.transport.envelope import (BATCH_BYTES, BATCH_SEPARATOR, DEFAULT_MAX_SIZE, QUESTIONS, BadMessage,
                                        Envelope, decode, split_batch)
 from agents.transport.drop_log import DropLog
 from agents.transport.keys import check_name
 from agents.transport.outbox import Outbox
+from agents.transport.registrations import QUERY_TIMEOUT
 from agents.transport.status import AgentStatus
 
 if TYPE_CHECKING:
@@ -177,6 +178,9 @@ class Transport(ABC):
         self._presence = Presence()
         self._control_callbacks: list[OnControl] = []
         self._status_callbacks: list[OnStatus] = []
+        self.registrations: Callable[[], Mapping[str, Sequence[str]]] | None = None
+        """The directory facilitator's registrations of this process's agents, {agent: services}: what
+        this process answers directory queries with (set by ``agents.directory.NetworkDirectory``)."""
         self._opened = False
 
     # -- life cycle ---------------------------------------------------------------------------
@@ -423,6 +427,34 @@ class Transport(ABC):
     @abstractmethod
     def collect_status(self, timeout: float = 1.0) -> list[AgentStatus]:
         """The latest published status of every agent of the MAS, in all processes."""
+
+    # -- directory facilitator (agents.directory) --------------------------------------------------
+    def local_registrations(self) -> dict[str, list[str]]:
+        """{agent: services} of the registered agents of this process that have any."""
+        source = self.registrations
+        if source is None:
+            return {}
+        return {agent: list(services) for agent, services in source().items() if services and agent in self._agents}
+
+    @abstractmethod
+    def provide(self, agent: str, service: str) -> None:
+        """Announce that ``agent`` (of this process) provides ``service``; announced again if it was
+        already, so that the other processes' subscribers are told again (as Jason tells them)."""
+
+    @abstractmethod
+    def withdraw(self, agent: str, service: str) -> None:
+        """``agent`` no longer provides ``service``."""
+
+    @abstractmethod
+    def remote_registrations(self, timeout: float = QUERY_TIMEOUT) -> dict[str, list[str]]:
+        """{agent: services} of the agents of the other processes of the MAS, each checked (signed by
+        that agent in the secure profile); waits at most ``timeout`` for a process that does not answer."""
+
+    @abstractmethod
+    def watch_registrations(self, service: str, callback: Callable[[str], None]) -> None:
+        """``callback(agent)`` (on a thread of the transport) for each agent of another process that
+        provides ``service``: those that do now, then each that registers it, checked as
+        ``remote_registrations`` checks them. A second watch of one service hears only of later registrations."""
 
     # -- what a concrete transport provides ------------------------------------------------------
     @abstractmethod

@@ -2,6 +2,8 @@
 network never see each other's traffic, and an access-control rule can name one MAS by prefix."""
 from __future__ import annotations
 
+import base64
+
 from agents.transport.envelope import is_valid_name
 
 ROOT = "faultmas"
@@ -50,3 +52,32 @@ def status_pattern(mas: str) -> str:
 def last_chunk(key: str) -> str:
     """The agent name at the end of an ``alive``/``status`` key."""
     return key.rsplit("/", 1)[-1]
+
+
+def df_key(mas: str, agent: str) -> str:
+    """The queryable that answers with the services ``agent`` has registered (``.df_register``)."""
+    return f"{mas_prefix(mas)}/df/{check_name(agent)}"
+
+
+def df_pattern(mas: str) -> str:
+    return f"{mas_prefix(mas)}/df/*"
+
+
+def service_chunk(service: str) -> str:
+    """A service (any text, e.g. ``sell(book)``) as one key chunk: ``s`` + its UTF-8 in unpadded base64url."""
+    return "s" + base64.urlsafe_b64encode(service.encode()).rstrip(b"=").decode()
+
+
+def provides_key(mas: str, agent: str, service: str) -> str:
+    """The liveliness token of one registration: present while ``agent`` provides ``service`` and its
+    process is up (a hint for subscribers; the registration itself is read from ``df_key``)."""
+    return f"{mas_prefix(mas)}/provides/{check_name(agent)}/{service_chunk(service)}"
+
+
+def provides_pattern(mas: str, service: str) -> str:
+    return f"{mas_prefix(mas)}/provides/*/{service_chunk(service)}"
+
+
+def provider_of(key: str) -> str:
+    """The agent of a ``provides`` key."""
+    return key.rsplit("/", 2)[-2]

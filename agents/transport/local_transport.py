@@ -44,6 +44,8 @@ class LocalTransport(Transport):
         self.bus = bus or LocalBus()
         self.wire = wire
         self._statuses: dict[str, AgentStatus] = {}
+        self._provided: set[tuple[str, str]] = set()                  # (agent, service) announced
+        self._watches: dict[str, list[Callable[[str], None]]] = {}   # service -> callbacks
 
     def _open(self) -> None:
         with self.bus.lock:
@@ -62,6 +64,7 @@ class LocalTransport(Transport):
 
     def _detach(self, agent: str) -> None:
         self._statuses.pop(agent, None)
+        self._provided = {(a, s) for a, s in self._provided if a != agent}
         for peer in self.bus.peers(self.mas):
             peer._presence.update(agent, False)
 
@@ -81,6 +84,37 @@ class LocalTransport(Transport):
         owner = self.bus.owner(self.mas, receiver)
         if owner is not None:
             owner.receive_bytes(receiver, payload, f"local:{receiver}")
+
+    # -- directory facilitator: the peers' registrations are read directly (no queries, no tokens)
+    def provide(self, agent: str, service: str) -> None:
+        self._provided.add((agent, service))
+        for peer in self.bus.peers(self.mas):
+            if peer is not self:
+                peer._announced(agent, service)
+
+    def withdraw(self, agent: str, service: str) -> None:
+        self._provided.discard((agent, service))
+
+    def remote_registrations(self, timeout: float = 0.0) -> dict[str, list[str]]:
+        found: dict[str, list[str]] = {}
+        for peer in self.bus.peers(self.mas):
+            if peer is not self:
+                found.update(peer.local_registrations())
+        return found
+
+    def watch_registrations(self, service: str, callback: Callable[[str], None]) -> None:
+        first = service not in self._watches
+        self._watches.setdefault(service, []).append(callback)
+        if first:
+            for peer in self.bus.peers(self.mas):
+                if peer is not self:
+                    for agent, provided in sorted(peer._provided):
+                        if provided == service and service in peer.local_registrations().get(agent, ()):
+                            callback(agent)
+
+    def _announced(self, agent: str, service: str) -> None:
+        for callback in list(self._watches.get(service, ())):
+            callback(agent)
 
     def _publish_control(self, message: dict[str, Any]) -> None:
         for peer in self.bus.peers(self.mas):

@@ -5,13 +5,17 @@ Per agent: a subscriber on ``faultmas/<mas>/agent/<name>/inbox`` and a livelines
 reach the inbox). Per process: a liveliness subscriber with history (presence), a subscriber on
 ``faultmas/<mas>/control``, one on ``faultmas/<mas>/status/*`` and a queryable there that answers
 with the latest status of the local agents (in the secure profile a status is signed by its agent and a
-receiver refuses any other). Messages are put reliably with congestion control
+receiver refuses any other); a queryable on ``faultmas/<mas>/df/*`` that answers with the directory
+facilitator's registrations of the local agents (``registrations``). Per registration a liveliness token
+``faultmas/<mas>/provides/<agent>/<service>``, which other processes' subscribers watch (see
+``agents.directory`` for why both). Messages are put reliably with congestion control
 BLOCK on a cached publisher per receiver (a burst from the agents' thread in batches, see
 ``outbox``); agents of this process are served without the network.
 """
 from __future__ import annotations
 
 import json
+import queue
 import threading
 from typing import Any, Callable
 
@@ -19,6 +23,7 @@ from agents.transport import keys
 from agents.transport.base import Transport, log
 from agents.transport.config import ZenohOptions, build_config, listen_endpoints
 from agents.transport.envelope import DEFAULT_MAX_SIZE, BadMessage, Envelope
+from agents.transport.registrations import QUERY_TIMEOUT, encode_services, new_nonce, open_services
 from agents.transport.status import AgentStatus
 
 
@@ -42,6 +47,10 @@ class ZenohTransport(Transport):
         self._tokens: dict[str, Any] = {}
         self._statuses: dict[str, AgentStatus] = {}
         self._declared: list[Any] = []
+        self._provided: dict[tuple[str, str], Any] = {}              # (agent, service) -> liveliness token
+        self._watches: dict[str, list[Callable[[str], None]]] = {}   # service -> callbacks
+        self._watch_queue: queue.SimpleQueue = queue.SimpleQueue()  # (agent, service) announced; None: stop
+        self._watch_thread: threading.Thread | None = None
 
     def _open(self) -> None:
         import zenoh
@@ -56,18 +65,21 @@ class ZenohTransport(Transport):
             self.session.declare_subscriber(keys.control_key(self.mas), self._on_control),
             self.session.declare_subscriber(keys.status_pattern(self.mas), self._on_status),
             self.session.declare_queryable(keys.status_pattern(self.mas), self._on_status_query),
+            self.session.declare_queryable(keys.df_pattern(self.mas), self._on_df_query),
         ]
         self._control_publisher = self.session.declare_publisher(
             keys.control_key(self.mas), congestion_control=zenoh.CongestionControl.BLOCK,
             reliability=zenoh.Reliability.RELIABLE)
 
     def _close(self) -> None:
-        for entity in [*self._publishers.values(), self._control_publisher, *self._declared]:
+        self._watch_queue.put(None)
+        for entity in [*self._publishers.values(), self._control_publisher, *self._provided.values(), *self._declared]:
             try:
                 entity.undeclare()
             except Exception:  # already gone with the session
                 pass
         self._publishers.clear()
+        self._provided.clear()
         self._declared = []
         if self._owns_session:
             self.session.close()
@@ -105,6 +117,8 @@ class ZenohTransport(Transport):
                 log.debug("inbox of %s closed: %s", agent, exc)
 
     def _detach(self, agent: str) -> None:
+        for (provider, service) in [k for k in self._provided if k[0] == agent]:
+            self.withdraw(provider, service)
         for table in (self._tokens, self._inboxes):  # presence first: nobody should send any more
             entity = table.pop(agent, None)
             if entity is not None:
@@ -215,6 +229,99 @@ class ZenohTransport(Transport):
             if asked.intersects(zenoh.KeyExpr(key)):
                 status = self._statuses.get(agent) or self.status_of(agent, busy=False)
                 query.reply(key, self._sealed_status(status))
+
+    # -- directory facilitator --------------------------------------------------------------------
+    def _on_df_query(self, query: Any) -> None:
+        import zenoh
+
+        asked = zenoh.KeyExpr(str(query.key_expr))
+        nonce = query.payload.to_bytes().decode(errors="replace")[:64] if query.payload is not None else ""
+        for agent, services in self.local_registrations().items():
+            key = keys.df_key(self.mas, agent)
+            if asked.intersects(zenoh.KeyExpr(key)):
+                query.reply(key, encode_services(self.mas, agent, services, nonce, self.identity))
+
+    def provide(self, agent: str, service: str) -> None:
+        self.withdraw(agent, service)  # a new token: subscribers elsewhere see it appear again
+        key = keys.provides_key(self.mas, agent, service)
+        self._provided[(agent, service)] = self.session.liveliness().declare_token(key)
+
+    def withdraw(self, agent: str, service: str) -> None:
+        token = self._provided.pop((agent, service), None)
+        if token is not None:
+            token.undeclare()
+
+    def remote_registrations(self, timeout: float = QUERY_TIMEOUT) -> dict[str, list[str]]:
+        return self._query_registrations(keys.df_pattern(self.mas), timeout)
+
+    def _query_registrations(self, key: str, timeout: float) -> dict[str, list[str]]:
+        nonce = new_nonce()
+        found: dict[str, list[str]] = {}
+        for reply in self.session.get(key, payload=nonce, timeout=timeout):
+            if reply.ok is None:
+                continue
+            where = str(reply.ok.key_expr)
+            if keys.last_chunk(where) in self._agents:
+                continue  # this process's own agents: the local directory has them
+            try:
+                agent, services = open_services(reply.ok.payload.to_bytes(), self.mas, nonce, self.identity,
+                                                self.max_message_size)
+            except BadMessage as bad:
+                self._drop(bad.reason, where, bad.sender, bad.detail)
+                continue
+            if keys.last_chunk(where) != agent:
+                self._drop("bad_registration", where, agent, "the document names another agent")
+                continue
+            found[agent] = services
+        return found
+
+    def watch_registrations(self, service: str, callback: Callable[[str], None]) -> None:
+        callbacks = self._watches.get(service)
+        if callbacks is not None:
+            callbacks.append(callback)
+            return
+        self._watches[service] = [callback]
+        if self._watch_thread is None:
+            self._watch_thread = threading.Thread(target=self._check_announcements, daemon=True,
+                                                  name="faultmas-df-watch")
+            self._watch_thread.start()
+        self._declared.append(self.session.liveliness().declare_subscriber(
+            keys.provides_pattern(self.mas, service), lambda sample: self._on_provides(sample, service),
+            history=True))
+
+    def _on_provides(self, sample: Any, service: str) -> None:
+        import zenoh
+
+        if sample.kind != zenoh.SampleKind.PUT:
+            return  # a withdrawn registration or a dead agent: Jason tells subscribers nothing
+        agent = keys.provider_of(str(sample.key_expr))
+        if agent not in self._agents:
+            self._watch_queue.put((agent, service))
+
+    def _check_announcements(self) -> None:
+        """Believe an announced registration only once the agent's own process confirms it (signed by
+        the agent in the secure profile): a liveliness token is a hint anyone on the network can declare.
+        On a thread of ours: a query from a Zenoh callback would wait on Zenoh's own threads."""
+        while True:
+            item = self._watch_queue.get()
+            if item is None:
+                return
+            agent, service = item
+            try:
+                confirmed = self._query_registrations(keys.df_key(self.mas, agent), QUERY_TIMEOUT)
+            except Exception as exc:  # the session closed meanwhile
+                log.debug("directory: cannot confirm %s's registration: %s", agent, exc)
+                continue
+            if service not in confirmed.get(agent, ()):
+                if agent not in confirmed:
+                    log.info("directory: %s announced service %r but does not confirm it (withdrawn since, "
+                             "or not announced by %s)", agent, service, agent)
+                continue
+            for callback in list(self._watches.get(service, ())):
+                try:
+                    callback(agent)
+                except Exception:
+                    log.exception("directory: a watcher of %r failed", service)
 
     # -- control and status ----------------------------------------------------------------------
     def _publish_control(self, message: dict[str, Any]) -> None:
