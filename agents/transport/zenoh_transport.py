@@ -51,6 +51,8 @@ class ZenohTransport(Transport):
         self._watches: dict[str, list[Callable[[str], None]]] = {}   # service -> callbacks
         self._watch_queue: queue.SimpleQueue = queue.SimpleQueue()  # (agent, service) announced; None: stop
         self._watch_thread: threading.Thread | None = None
+        self._announced: set[tuple[str, str]] = set()   # tokens seen present (history and live may repeat one)
+        self._announced_lock = threading.Lock()
 
     def _open(self) -> None:
         import zenoh
@@ -292,9 +294,14 @@ class ZenohTransport(Transport):
     def _on_provides(self, sample: Any, service: str) -> None:
         import zenoh
 
-        if sample.kind != zenoh.SampleKind.PUT:
-            return  # a withdrawn registration or a dead agent: Jason tells subscribers nothing
         agent = keys.provider_of(str(sample.key_expr))
+        with self._announced_lock:
+            if sample.kind != zenoh.SampleKind.PUT:  # withdrawn, or its process died: Jason tells nobody
+                self._announced.discard((agent, service))
+                return
+            if (agent, service) in self._announced:
+                return  # the same token seen twice (history and live), not a new registration
+            self._announced.add((agent, service))
         if agent not in self._agents:
             self._watch_queue.put((agent, service))
 
