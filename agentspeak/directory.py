@@ -72,7 +72,7 @@ class Directory:
             subscribers = self._subscribers.setdefault(service, [])
             if agent not in subscribers:
                 subscribers.append(agent)
-        for provider in self.search(service):
+        for provider in jason_set_order(self.local_providers(service)):  # those of this process
             self._tell(agent, provider, service)
 
     def forget(self, agent: str) -> None:
