@@ -257,9 +257,13 @@ class ZenohTransport(Transport):
         return self._query_registrations(keys.df_pattern(self.mas), timeout)
 
     def _query_registrations(self, key: str, timeout: float) -> dict[str, list[str]]:
+        import zenoh
+
         nonce = new_nonce()
         found: dict[str, list[str]] = {}
-        for reply in self.session.get(key, payload=nonce, timeout=timeout):
+        # every reply, unconsolidated: an outsider's reply on an agent's key must not displace the agent's
+        for reply in self.session.get(key, payload=nonce, timeout=timeout,
+                                      consolidation=zenoh.ConsolidationMode.NONE):
             if reply.ok is None:
                 continue
             where = str(reply.ok.key_expr)
