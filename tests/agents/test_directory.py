@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import signal
+import time
 from pathlib import Path
 
 import zenoh
@@ -136,19 +137,24 @@ def test_an_outsider_cannot_forge_a_registration_in_the_secure_profile(tmp_path)
         alice_side.watch_registrations("sell(book)", heard.append)
         alice_side.watch_registrations("buy(book)", heard.append)
         assert poll(lambda: heard == ["bob"], 20)
-        # mallory: announces bob as a buyer (a token is a hint: bob's process does not confirm it), and
-        # answers directory queries as bob without bob's key, and with an answer of bob's to another query
-        token = outsider.liveliness().declare_token(keys.provides_key(mas, "bob", "buy(book)"))
+        # mallory answers directory queries as bob, without bob's key, and with an answer of bob's to
+        # another query; then announces bob as a buyer (a token is a hint: bob's process does not confirm it)
         replayed = bob_side.identity.seal("bob", json.dumps(
             {"mas": mas, "agent": "bob", "services": ["buy(book)"], "nonce": "old"}, separators=(",", ":")).encode())
 
         def answer(query):
-            query.reply(keys.df_key(mas, "bob"), encode_services(mas, "bob", ["buy(book)"], query.payload.to_bytes().decode()))
+            nonce = query.payload.to_bytes().decode()
+            query.reply(keys.df_key(mas, "bob"), encode_services(mas, "bob", ["buy(book)"], nonce))
             query.reply(keys.df_key(mas, "bob"), replayed)
         forger = outsider.declare_queryable(keys.df_pattern(mas), answer)
-        assert poll(lambda: alice_side.dropped["unsigned"] >= 1 and alice_side.dropped["replayed"] >= 1, 20)
-        assert alice_side.remote_registrations() == {"bob": ["sell(book)"]}
-        assert heard == ["bob"]  # not told of the forged buy(book)
+        dropped = alice_side.dropped
+        assert poll(lambda: alice_side.remote_registrations(1.0) == {"bob": ["sell(book)"]}
+                    and dropped["unsigned"] >= 1 and dropped["replayed"] >= 1, 20), dict(dropped)
+        before = dropped["unsigned"]
+        token = outsider.liveliness().declare_token(keys.provides_key(mas, "bob", "buy(book)"))
+        assert poll(lambda: dropped["unsigned"] > before, 20)  # alice's process asked bob's to confirm
+        time.sleep(0.5)  # the confirmation's verdict comes right after its answers
+        assert heard == ["bob"]  # and was not told of the forged buy(book)
         forger.undeclare()
         token.undeclare()
     finally:
