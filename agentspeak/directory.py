@@ -72,7 +72,7 @@ class Directory:
             subscribers = self._subscribers.setdefault(service, [])
             if agent not in subscribers:
                 subscribers.append(agent)
-        for provider in jason_set_order(self.local_providers(service)):  # those of this process
+        for provider in self.providers_for_subscriber(agent, service):
             self._tell(agent, provider, service)
 
     def forget(self, agent: str) -> None:
@@ -84,6 +84,10 @@ class Directory:
                     subscribers.remove(agent)
 
     # -- for back-ends -------------------------------------------------------------------------------
+    def providers_for_subscriber(self, agent: str, service: str) -> list[str]:
+        """The providers a new subscriber is told of, in Jason's order (a back-end adds those it reaches)."""
+        return jason_set_order(self.local_providers(service))
+
     def local_providers(self, service: str) -> list[str]:
         with self._lock:
             return [agent for agent, services in self._provides.items() if service in services]

@@ -178,9 +178,10 @@ class Transport(ABC):
         self._presence = Presence()
         self._control_callbacks: list[OnControl] = []
         self._status_callbacks: list[OnStatus] = []
-        self.registrations: Callable[[], Mapping[str, Sequence[str]]] | None = None
+        self.registrations: Callable[[tuple[str, str] | None], Mapping[str, Sequence[str]]] | None = None
         """The directory facilitator's registrations of this process's agents, {agent: services}: what
-        this process answers directory queries with (set by ``agents.directory.NetworkDirectory``)."""
+        this process answers directory queries with (set by ``agents.directory.NetworkDirectory``). Called
+        with (subscriber, service) when the query comes from an agent that subscribes to the service."""
         self._opened = False
 
     # -- life cycle ---------------------------------------------------------------------------
@@ -429,32 +430,37 @@ class Transport(ABC):
         """The latest published status of every agent of the MAS, in all processes."""
 
     # -- directory facilitator (agents.directory) --------------------------------------------------
-    def local_registrations(self) -> dict[str, list[str]]:
-        """{agent: services} of the registered agents of this process that have any."""
+    def local_registrations(self, subscribed: tuple[str, str] | None = None) -> dict[str, list[str]]:
+        """{agent: services} of the registered agents of this process that have any; ``subscribed``: the
+        asker is agent (subscriber, service) of another process, which the directory remembers."""
         source = self.registrations
         if source is None:
             return {}
-        return {agent: list(services) for agent, services in source().items() if services and agent in self._agents}
+        if subscribed is not None and subscribed[0] in self._agents:
+            subscribed = None  # our own agent: the directory tells it directly
+        return {agent: list(services) for agent, services in source(subscribed).items()
+                if services and agent in self._agents}
 
     @abstractmethod
-    def provide(self, agent: str, service: str) -> None:
-        """Announce that ``agent`` (of this process) provides ``service``; announced again if it was
-        already, so that the other processes' subscribers are told again (as Jason tells them)."""
-
-    @abstractmethod
-    def withdraw(self, agent: str, service: str) -> None:
-        """``agent`` no longer provides ``service``."""
-
-    @abstractmethod
-    def remote_registrations(self, timeout: float = QUERY_TIMEOUT) -> dict[str, list[str]]:
+    def remote_registrations(self, timeout: float = QUERY_TIMEOUT,
+                             subscribe: tuple[str, str] | None = None) -> dict[str, list[str]]:
         """{agent: services} of the agents of the other processes of the MAS, each checked (signed by
-        that agent in the secure profile); waits at most ``timeout`` for a process that does not answer."""
+        that agent in the secure profile); waits at most ``timeout`` for a process that does not answer.
+        ``subscribe`` = (agent of this process, service): each process that answers also learns that
+        the agent subscribes to the service, in one step with its answer (``local_registrations``)."""
 
     @abstractmethod
-    def watch_registrations(self, service: str, callback: Callable[[str], None]) -> None:
-        """``callback(agent)`` (on a thread of the transport) for each agent of another process that
-        provides ``service``: those that do now, then each that registers it, checked as
-        ``remote_registrations`` checks them. A second watch of one service hears only of later registrations."""
+    def announce_subscription(self, agent: str, service: str) -> None:
+        """Let the other processes know that ``agent`` (of this process) subscribed to ``service``."""
+
+    @abstractmethod
+    def withdraw_subscription(self, agent: str, service: str) -> None: ...
+
+    @abstractmethod
+    def on_subscription(self, callback: Callable[[str, str, bool], None]) -> None:
+        """``callback(agent, service, present)`` (on a thread of the transport, never a network
+        thread: it may send) for each subscription of an agent of another process: those there are
+        now, then each that comes or goes, each change once."""
 
     # -- what a concrete transport provides ------------------------------------------------------
     @abstractmethod

@@ -68,16 +68,20 @@ def service_chunk(service: str) -> str:
     return "s" + base64.urlsafe_b64encode(service.encode()).rstrip(b"=").decode()
 
 
-def provides_key(mas: str, agent: str, service: str) -> str:
-    """The liveliness token of one registration: present while ``agent`` provides ``service`` and its
-    process is up (a hint for subscribers; the registration itself is read from ``df_key``)."""
-    return f"{mas_prefix(mas)}/provides/{check_name(agent)}/{service_chunk(service)}"
+def subscribes_key(mas: str, agent: str, service: str) -> str:
+    """The liveliness token of one subscription (``.df_subscribe``): present while ``agent`` wants to
+    hear of the providers of ``service`` and its process is up."""
+    return f"{mas_prefix(mas)}/subscribes/{check_name(agent)}/{service_chunk(service)}"
 
 
-def provides_pattern(mas: str, service: str) -> str:
-    return f"{mas_prefix(mas)}/provides/*/{service_chunk(service)}"
+def subscribes_pattern(mas: str) -> str:
+    return f"{mas_prefix(mas)}/subscribes/*/*"
 
 
-def provider_of(key: str) -> str:
-    """The agent of a ``provides`` key."""
-    return key.rsplit("/", 2)[-2]
+def subscription_of(key: str) -> tuple[str, str]:
+    """(agent, service) of a ``subscribes`` key (``ValueError`` if the service chunk is not ours)."""
+    agent, chunk = key.rsplit("/", 2)[-2:]
+    if not chunk.startswith("s"):
+        raise ValueError(f"not a service chunk: {chunk[:40]!r}")
+    data = chunk[1:]
+    return agent, base64.urlsafe_b64decode(data + "=" * (-len(data) % 4)).decode()
