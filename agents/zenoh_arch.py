@@ -8,6 +8,9 @@ interpreter's parser and the ``Message`` goes to ``agent.deliver``. A message th
 reason and counted, through the transport's ``report_drop`` (the transport already drops what does
 not decode, is too large, names an unknown performative or comes from another MAS).
 
+The directory facilitator (``.df_*``) reaches the other processes through ``agents.directory``; a
+provider's notice to a subscriber here (``re`` = ``PROVIDER_NOTICE``) is checked and delivered from ``df``.
+
 Presence becomes percepts: ``agent_alive(Name)`` is added when agent ``Name`` of the MAS appears on
 the network and removed when it goes (its process exits, is killed, or its link lease expires), so
 ``+agent_alive(N)`` / ``-agent_alive(N)`` plans fire. An agent does not perceive itself.

@@ -22,8 +22,12 @@ QUERY_TIMEOUT = 2.0
 """Seconds a directory query waits for the processes of the MAS; it ends as soon as all have answered
 (on loopback a few ms), so this bounds only a hung process (``.df_search`` never hangs)."""
 
-#: Why a registration document is refused (counted and logged as drops, with ``identity``'s reasons).
-REGISTRATION_DROP_REASONS = ("bad_registration", "replayed")
+#: Why the directory facilitator's traffic is refused (counted and logged as drops, like envelopes): an
+#: answer that is no registration document or answers another query, a query or subscription token that
+#: cannot be read, a provider's notice that is not about its sender or goes to an agent that did not
+#: subscribe (``agents.zenoh_arch``); in the secure profile also ``identity.IDENTITY_DROP_REASONS``.
+DF_DROP_REASONS = ("bad_registration", "replayed", "bad_df_query", "bad_subscription", "bad_df_notice",
+                   "not_subscribed")
 
 
 def new_nonce() -> str:
