@@ -74,10 +74,11 @@ class NetworkDirectory(Directory):
         transport.on_subscription(self._on_remote_subscription)
 
     def register(self, agent: str, service: str) -> None:
-        with self._notices:
+        with self._notices:  # who is told is decided here; the messages go out after (no lock held on a send)
             super().register(agent, service)
-            for subscriber in list(self._remote_subscribers.get(service, ())):
-                self._send(provider_notice(agent, subscriber, service))
+            subscribers = list(self._remote_subscribers.get(service, ()))
+        for subscriber in subscribers:
+            self._send(provider_notice(agent, subscriber, service))
 
     def search(self, service: str) -> list[str]:
         return self._providers(service, self.transport.remote_registrations())
@@ -124,5 +125,6 @@ class NetworkDirectory(Directory):
             if subscriber in subscribers:
                 return  # it asked us when it subscribed: told already
             subscribers.append(subscriber)
-            for provider in jason_set_order(self.local_providers(service)):  # Jason's dfSubscribe
-                self._send(provider_notice(provider, subscriber, service))
+            providers = jason_set_order(self.local_providers(service))  # Jason's dfSubscribe: all current
+        for provider in providers:
+            self._send(provider_notice(provider, subscriber, service))
