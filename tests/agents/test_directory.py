@@ -52,20 +52,35 @@ BOOKS = {
 }
 
 
+def _assert_books(out: list[str]) -> None:
+    # each seller is told before its `ready` (so before the search); the sellers answer in any order
+    assert sorted(out[:3]) == [f'[buyer] told({name},"sell(book)")' for name in ("alice", "bob", "carol")], out
+    # the order of Java's HashSet, as Jason's search gives it; the type is ignored as in Jason
+    assert out[3:] == ["[buyer] found([carol,bob,alice])", "[buyer] found_with_type([carol,bob,alice])",
+                       "[buyer] nobody([])", "[buyer] after_leave([carol,alice])", "[buyer] gone(carol,[alice])",
+                       '[buyer] told_again(bob,"sell(book)")'], out
+
+
 def test_search_and_subscribe_reach_the_agents_of_other_processes_as_in_one_process(tmp_path):
     write_files(tmp_path, BOOKS)
     here: list[str] = []
     build_local_mas(load_mas2j(str(tmp_path / "books.mas2j")),
                     printer=lambda n, t: here.append(f"[{n}] {t}")).run(timeout=30)
+    _assert_books(here)
     run = mas_run(tmp_path / "books.mas2j", "--processes", "--timeout", "60", cwd=tmp_path)
     assert run.finish() == 0, run.err[-20:]
-    for out in (here, run.out):
-        # each seller is told before its `ready` (so before the search); the sellers answer in any order
-        assert sorted(out[:3]) == [f'[buyer] told({name},"sell(book)")' for name in ("alice", "bob", "carol")], out
-        # the order of Java's HashSet, as Jason's search gives it; the type is ignored as in Jason
-        assert out[3:] == ["[buyer] found([carol,bob,alice])", "[buyer] found_with_type([carol,bob,alice])",
-                           "[buyer] nobody([])", "[buyer] after_leave([carol,alice])", "[buyer] gone(carol,[alice])",
-                           '[buyer] told_again(bob,"sell(book)")'], out
+    _assert_books(run.out)
+
+
+def test_the_same_in_the_secure_profile(tmp_path):
+    """Every agent's key listed: answers and provider notices are signed by their agents and checked."""
+    write_files(tmp_path, {**BOOKS, "books.mas2j": 'MAS books { agents: buyer [key="keys"]; alice [key="keys"]; '
+                                                   'bob [key="keys"]; carol [key="keys"]; }\n'})
+    generate_keys(tmp_path / "keys", ["buyer", "alice", "bob", "carol"])
+    run = mas_run(tmp_path / "books.mas2j", "--processes", "--timeout", "60", cwd=tmp_path)
+    assert run.finish() == 0, run.err[-20:]
+    _assert_books(run.out)
+    assert not [line for line in run.err if "dropped" in line], run.err[-20:]
 
 
 def test_a_dead_process_registrations_and_subscriptions_vanish(tmp_path):
