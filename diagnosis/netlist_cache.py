@@ -39,7 +39,7 @@ def cached_netlist_model(path: str) -> SystemModel:
     where = os.path.abspath(path)
     header = (FORMAT, where, code_key(), text)
     entry = os.path.join(cache_path(), SUBDIRECTORY,
-                         f"{os.path.basename(path)[:40]}-{zlib.crc32(where.encode()):08x}.marshal")
+                         f"{os.path.basename(path)[:40]}-{zlib.crc32(os.fsencode(where)):08x}.marshal")
     try:
         with open(entry, "rb") as f:
             kept, fields = marshal.loads(f.read())   # one object: marshal.load from a file reads item by item
