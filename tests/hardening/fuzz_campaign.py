@@ -109,17 +109,21 @@ def main(argv: list[str] | None = None) -> int:
     folder = Path(args.found)
     folder.mkdir(parents=True, exist_ok=True)
     if args.worker:
+        from robot_bridge.processes import die_with_parent
+        die_with_parent()          # a worker never fuzzes on alone after its supervisor was stopped
         return worker(args.minutes, args.chunk, args.input_seconds, folder)
     # the supervisor: a worker that dies (SIGSEGV: the C stack) is named with its input and replaced
     import subprocess
+
+    from robot_bridge.processes import spawn
     started = time.monotonic()
     grand = {name: {"inputs": 0, "cpu_s": 0.0} for name in BOUNDARIES}
     crashes = escaped = 0
     while (left := args.minutes - (time.monotonic() - started) / 60) > 0.05:
-        worker_process = subprocess.Popen([sys.executable, "-m", "tests.hardening.fuzz_campaign", "--worker",
-                                           "--minutes", str(left), "--chunk", str(args.chunk), "--input-seconds",
-                                           str(args.input_seconds), "--found", str(folder)],
-                                          stdout=subprocess.PIPE, text=True)
+        worker_process = spawn([sys.executable, "-m", "tests.hardening.fuzz_campaign", "--worker",
+                                "--minutes", str(left), "--chunk", str(args.chunk), "--input-seconds",
+                                str(args.input_seconds), "--found", str(folder)],
+                               stdout=subprocess.PIPE, text=True)
         last = None
         for line in worker_process.stdout:
             print(line, end="", flush=True)
