@@ -3,7 +3,6 @@ however the parent ends: real processes, the parent killed with SIGKILL (no clea
 from __future__ import annotations
 
 import os
-import signal
 import subprocess
 import sys
 import time
