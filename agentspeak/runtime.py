@@ -18,6 +18,7 @@ from typing import Callable, Iterable
 from agentspeak.agent import Agent
 from agentspeak.arch import AgentArch
 from agentspeak.communication import Message
+from agentspeak.directory import DF_SENDER, Directory
 from agentspeak.parse_cache import cached_program   # not the parser: a file parsed before skips Lark
 from agentspeak.stdlib.registry import CURRENT
 from agentspeak.terms import Literal
@@ -72,6 +73,10 @@ class LocalArch(AgentArch):
     def clone_agent(self, agent: Agent, name: str) -> str:
         return self.runtime.clone_agent(agent, name)
 
+    def directory(self, agent: Agent) -> Directory:
+        """The directory facilitator of the MAS (``.df_*``): the runtime's (see ``LocalRuntime.directory``)."""
+        return self.runtime.get_directory()
+
     def act(self, agent: Agent, action: Literal):
         env = self.runtime.environment
         return env(agent, action) if env is not None else None
@@ -105,6 +110,8 @@ class LocalRuntime:
         self.source_dirs: list[str] = []     # where .create_agent and includes look (a project's aslSourcePath)
         self._yield_turn = False             # end the running agent's turn now (it created an agent)
         self._yield_to: Agent | None = None  # ... and run this one next, then the creator again
+        self.directory: Directory | None = None  # the DF (.df_*), made on first use; a bridge to other
+                                                 # processes puts its own back-end here (agents.directory)
 
     # -- set-up
     def add_agent(self, name: str, source: str | None = None, source_file: str = "<string>",
@@ -126,6 +133,16 @@ class LocalRuntime:
 
     def names(self) -> list[str]:
         return list(self.agents)
+
+    def get_directory(self) -> Directory:
+        """The directory facilitator of the agents of this runtime (made on first use)."""
+        if self.directory is None:
+            self.directory = Directory(self.tell_provider)
+        return self.directory
+
+    def tell_provider(self, subscriber: str, provider: str, service: str) -> None:
+        """The DF's ``tell provider(Provider, "Service")`` to ``subscriber`` (any thread)."""
+        self.route(Message(DF_SENDER, subscriber, "tell", Literal("provider", (Literal(provider), service))))
 
     def create_agent(self, name: str, source: str) -> str:
         """A new agent from an ``.asl`` file, at run time (Jason's ``.create_agent``): the file is looked
@@ -205,6 +222,8 @@ class LocalRuntime:
         agent.timers.clear()
         agent.mailbox.clear()
         self._timed.discard(agent)
+        if self.directory is not None:
+            self.directory.forget(name)
         return True
 
     def accepts_plans_from(self, sender: str) -> bool:
