@@ -145,6 +145,11 @@ def _exec_add_bel(ag: Agent, intention, im, frame, instr, at_end: bool = False, 
     added = ag.bb.add(lit, at_end=at_end)
     frame.pc += 1
     if added is not None:
+        plans = ag.plans
+        if (not new_focus and not ag.event_waiters and not plans.has_update_sub_plans and plans._index is not None
+                and not plans._var_plans and not plans._ns_plans
+                and (ADD, BEL, added.neg, added.functor, len(added.args)) not in plans._index):
+            return  # no plan for +b (PlanLibrary.relevant, inlined) and nobody waits: the event goes nowhere
         _post_belief_event(ag, Trigger(ADD, BEL, added), intention, new_focus)
 
 
