@@ -208,10 +208,11 @@ class BeliefBase:
         bucket = self._facts.get(key)
         return bucket.all() if bucket else []
 
-    def count_of_key(self, key: tuple) -> int:
-        """How many beliefs ``key`` (negated?, functor, arity) has (without sorting them as ``of_key`` does)."""
+    def args_of_key(self, key: tuple):
+        """The arguments (a tuple each) of the beliefs of ``key`` (negated?, functor, arity), in no particular
+        order: a view of the index, without sorting the beliefs as ``of_key`` does."""
         bucket = self._facts.get(key)
-        return len(bucket.entries) if bucket else 0
+        return bucket.entries.keys() if bucket else ()
 
     def clear_percepts(self) -> None:
         for lit in list(self.literals()):

@@ -54,3 +54,8 @@ d(K, L) :- b(K, L).
     assert len(lines) == len(queries)
     assert [tuple(line.split()) for line in lines] == [(m, m) for _, m in (line.split() for line in lines)]
     assert [line.split()[0] for line in lines] == ["4", "2", "2", "1", "4", "1", "1", "1", "5", "0", "1", "0"]
+    # a belief with an argument of another name space, which no variable without one binds: searched
+    src = src.replace("c(1).", "c(1). c(x::a). b(x::a, 1).")
+    lines = run_asl(src)
+    assert [tuple(line.split()) for line in lines] == [(m, m) for _, m in (line.split() for line in lines)]
+    assert [line.split()[0] for line in lines] == ["4", "2", "2", "1", "4", "1", "1", "1", "5", "0", "1", "0"]
