@@ -29,6 +29,9 @@ CYCLES_PER_TURN = 64
 """Reasoning cycles an agent runs before the next ready agent gets its turn (fairness)."""
 TURN_SECONDS = 0.005
 """... or fewer, when its cycles are slow: with many busy agents a round stays short."""
+URGENT_IN_ROW = 3
+"""Agents that a message with a deadline (an ask with a timeout, an answer) puts first, in a row, before an
+agent woken earlier gets its turn (see LocalRuntime._route_from)."""
 CLOCK_POLL_S = 0.02
 """How often an idle loop looks at timers that count in an environment's clock (one simulator step)."""
 
@@ -112,6 +115,8 @@ class LocalRuntime:
         self._yield_to: Agent | None = None  # ... and run this one next, then the creator again
         self.directory: Directory | None = None  # the DF (.df_*), made on first use; a bridge to other
                                                  # processes puts its own back-end here (agents.directory)
+        self._urgent_in_row = 0              # agents put first by a message with a deadline, in a row
+        self._urgent: set[str] = set()       # ... their names, until their turn
 
     # -- set-up
     def add_agent(self, name: str, source: str | None = None, source_file: str = "<string>",
@@ -256,7 +261,15 @@ class LocalRuntime:
                     and type(target.arch).wake is LocalArch.wake:
                 # in-process delivery from the loop's thread (Agent.deliver and wake, inlined)
                 target.mailbox.append(message)
-                if message.receiver not in self._ready_set:
+                if message.sent_at is not None and self._urgent_in_row < URGENT_IN_ROW:
+                    # an ask with a timeout, or an answer to an ask: a deadline in wall time runs, which the
+                    # receiver on a thread of its own would meet at once (Jason); it goes first, as an idle
+                    # agent whose timer is due does (the turns of the agents woken before it come after; at
+                    # most URGENT_IN_ROW such turns before one of theirs, so a chain of asks starves nobody)
+                    self._urgent_in_row += 1
+                    self._urgent.add(message.receiver)
+                    self._run_first(target)
+                elif message.receiver not in self._ready_set:
                     self._ready_set.add(message.receiver)
                     self.ready.append(target)
                 return
@@ -357,6 +370,13 @@ class LocalRuntime:
                     agent = busy.popleft()
                     woken_turns = 0
                 ready_set.discard(agent.name)
+                if self._urgent_in_row:  # (see _route_from)
+                    urgent = self._urgent
+                    if agent.name not in urgent or not ready:
+                        self._urgent_in_row = 0  # an agent woken before the urgent ones has its turn, or none waits
+                        urgent.clear()
+                    else:
+                        urgent.discard(agent.name)
                 CURRENT.agent = agent  # whose beliefs functions such as .count(Q) read
                 started = 0.0
                 for i in turn:

@@ -10,7 +10,9 @@ from agentspeak.program import ACHIEVE, ADD, PlanTerm, Plan, Trigger, body_varia
 from agentspeak.stdlib.registry import IAError, Suspend, internal_action, wrong_arguments
 from agentspeak.beliefs import SOURCE_SELF
 from agentspeak.directory import service_text
-from agentspeak.terms import NIL, Literal, Var, is_list, list_items, make_list, resolve, to_print_str, to_str
+from agentspeak.terms import (
+    LOCAL_NS_PREFIX, NIL, Literal, Var, is_list, list_items, make_list, resolve, to_print_str, to_str,
+)
 from agentspeak.unify import undo, unifies
 
 
@@ -361,6 +363,8 @@ def namespace(ctx, ns):
     if not isinstance(ns, Var) and not (isinstance(ns, Literal) and not ns.args):
         raise wrong_arguments(".namespace: the argument must be an atom or a variable")
     for name in _namespaces(ctx.agent):
+        if name.startswith(LOCAL_NS_PREFIX) and isinstance(ns, Var):
+            continue  # a variable never takes a local name space (Jason's Unifier.bind): it stays private
         mark = len(ctx.trail)
         if ctx.unify(ns, Literal(name)):
             yield
