@@ -11,17 +11,18 @@ the bridge does not take, is an error naming the file and line.
 from __future__ import annotations
 
 import logging
-from typing import NamedTuple      # not dataclasses: its import (inspect, ast...) was a tenth of `faultmas mas run`
+# not dataclasses (its import: inspect, ast... was a tenth of `faultmas mas run`), nor typing.NamedTuple (with
+# postponed annotations it compiles each field's annotation: 5 % of `faultmas mas run` for a small program)
+from collections import namedtuple
 
 log = logging.getLogger("faultmas.agents")
 
 
-class BridgeChoice(NamedTuple):
-    """A bridge name and its options, both as values (for ``create``) and as written (for a child's command line)."""
+class BridgeChoice(namedtuple("BridgeChoice", ("name", "options", "texts"), defaults=((),))):
+    """A bridge name (str) and its options, both as values (``options``, a dict, for ``create``) and as written
+    (``texts``, a tuple of ``"KEY=VALUE"``, for a child's command line)."""
 
-    name: str
-    options: dict
-    texts: tuple[str, ...] = ()
+    __slots__ = ()
 
     def agent_args(self) -> list[str]:
         """The same choice as ``faultmas agent run`` options."""

@@ -21,3 +21,6 @@ cdef class Agent:
 
     @cython.locals(intention=Intention, im=IntendedMeans, frame=Frame, top=IntendedMeans, f0=Frame)
     cpdef act(self)
+
+    @cython.locals(trigger=Trigger, intention=Intention, top=IntendedMeans, f0=Frame)
+    cpdef push_im(self, Event ev, plan, b)

@@ -720,7 +720,10 @@ class Agent:
                 # callee (nothing else refers to a finished caller).
                 if self.plans.has_meta:
                     self._goal_achieved(top)
-                top.result = resolve(top.result, top.b) if len(stack) > 1 else plan.trigger.literal
+                if len(stack) == 1:
+                    top.result = plan.trigger.literal
+                elif not _bindings_free(top.result):  # the usual chain keeps the first call's literal
+                    top.result = resolve(top.result, top.b)
                 top.plan = plan
                 top.b = b
                 top.event_literal = trigger.literal
@@ -1239,6 +1242,26 @@ def _simple_args(args: tuple) -> bool:
 
 
 _SOURCE_SELF_ONLY = (SOURCE_SELF,)
+
+
+def _bindings_free(lit: Term) -> bool:
+    """True for a literal that ``resolve`` would only copy: its arguments numbers, strings and atoms, its
+    annotations literals of those (a goal's ``g(1, 2)[source(self)]``)."""
+    if type(lit) is not Literal or lit.annot_tail is not None or not _constant_args(lit.args):
+        return False
+    for a in lit.annots or ():
+        if type(a) is not Literal or a.annots is not None or a.annot_tail is not None or not _constant_args(a.args):
+            return False
+    return True
+
+
+def _constant_args(args: tuple) -> bool:
+    for a in args:
+        ta = type(a)
+        if not (ta is int or ta is float or ta is str
+                or (ta is Literal and not a.args and a.annots is None and a.annot_tail is None)):
+            return False
+    return True
 
 
 class _PendingGoal:

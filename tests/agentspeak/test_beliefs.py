@@ -35,3 +35,27 @@ def test_deletion_event_and_initial_belief_source():
 def test_update_removes_first_matching_only():
     src = "p(1,a). p(2,b).\n!g.\n+!g <- -+p(3,c); .findall(X, p(X,_), L); .print(L).\n"
     assert run_asl(src) == ["[3,2]"]
+
+
+def test_count_agrees_with_the_search_for_every_shape_of_query():
+    # `.count(b(_, _), N)` counts the b/2 beliefs without a search (stdlib/beliefs._every_belief_of_key):
+    # the queries that need the search (repeated or bound variables, annotations, rules) still get it, and
+    # every count is the number of solutions .findall finds
+    queries = ["b(_, _)", "b(Y, Y)", "b(1, _)", "b(_, _)[x]", "b(_, _)[source(self)]", "~b(_, _)", "b(Z, _)",
+               "c(_)", "d(_, _)", "e(_)", "b(_, free)", "b(_)"]
+    body = "; ".join(f".count({q}, N{i}); .findall(x, {q}, L{i}); .length(L{i}, M{i}); .print(N{i}, \" \", M{i})"
+                     for i, q in enumerate(queries))
+    src = f"""b(1, 2). b(1, 3)[x]. b(2, 2). ~b(5, 5). c(1). d(0, 0).
+d(K, L) :- b(K, L).
+!g.
++!g <- +b(_, free); Z = 2; {body}.
+"""
+    lines = run_asl(src)
+    assert len(lines) == len(queries)
+    assert [tuple(line.split()) for line in lines] == [(m, m) for _, m in (line.split() for line in lines)]
+    assert [line.split()[0] for line in lines] == ["4", "2", "2", "1", "4", "1", "1", "1", "5", "0", "1", "0"]
+    # a belief with an argument of another name space, which no variable without one binds: searched
+    src = src.replace("c(1).", "c(1). c(x::a). b(x::a, 1).")
+    lines = run_asl(src)
+    assert [tuple(line.split()) for line in lines] == [(m, m) for _, m in (line.split() for line in lines)]
+    assert [line.split()[0] for line in lines] == ["4", "2", "2", "1", "4", "1", "1", "1", "5", "0", "1", "0"]

@@ -150,3 +150,22 @@ def test_a_tell_does_not_overtake_an_earlier_untell_of_the_same_sender_still_in_
 
     assert beliefs_after("untell", "tell") == ["sleeping(tom)[source(tom)]"]
     assert beliefs_after("tell", "untell") == []
+
+
+def test_a_belief_added_by_a_plan_is_built_complete():
+    # `+b(...)` with arguments bound to numbers, strings and atoms builds its belief without resolve
+    # (body._belief_literal): every slot as Literal's constructor makes it, with source(self)
+    from agentspeak.agent import Agent
+    from agentspeak.beliefs import SOURCE_SELF
+    from agentspeak.parser import parse_program
+    from agentspeak.terms import Literal
+
+    agent = Agent("r")
+    agent.load(parse_program('!g(3).\n+!g(X) <- Y = a; +b(X, Y, "s", 1.5, c); +~n; +f(g(X)).\n'))
+    for _ in range(8):
+        agent.cycle()
+    expected = {"b": Literal("b", (3, Literal("a"), "s", 1.5, Literal("c")), (SOURCE_SELF,)),
+                "n": Literal("n", (), (SOURCE_SELF,), True),
+                "f": Literal("f", (Literal("g", (3,)),), (SOURCE_SELF,))}
+    stored = {lit.functor: lit for lit in agent.bb.literals()}
+    assert {name: _slots(lit) for name, lit in stored.items()} == {name: _slots(lit) for name, lit in expected.items()}
