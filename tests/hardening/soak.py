@@ -183,8 +183,33 @@ def _declared(hub) -> int:
     return len(hub._publishers) + len(hub._declared)
 
 
+def _poses(world, robots: list[str]) -> dict[str, list[float]]:
+    """Every robot's ground-truth pose (x m, y m, yaw deg) at a task's start: with the seed, the fault and the
+    agents' log, what reproduces a task (``tests/hardening/soak_replay.py``)."""
+    return {r: [round(v, 3) for v in world.pose(r)] for r in robots}
+
+
+class _Stamped:
+    """The agents' lines to a file, each with the simulated time it was read at (the task markers too)."""
+
+    def __init__(self, path: str, world) -> None:
+        self.file, self.world, self.lock = open(path, "w"), world, threading.Lock()
+
+    def write(self, text: str) -> None:
+        with self.lock:
+            for line in text.splitlines(keepends=True):
+                self.file.write(f"{self.world.time:9.2f} {line}")
+            self.file.flush()
+
+    def flush(self) -> None:
+        pass
+
+    def close(self) -> None:
+        self.file.close()
+
+
 def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, seed: int, settle: float,
-         emit) -> dict:
+         emit, agent_log: str | None = None) -> dict:
     from agents.cooperative import build_world, run_agent_processes, team_scenario
     from robot_bridge.sim.server import SimServer
 
@@ -197,6 +222,8 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
     me = psutil.Process()
     rows: list[dict] = []
     hub_of: dict = {}
+    lines = _Stamped(agent_log, world) if agent_log else None
+    poses = _poses(world, robots)
     started = time.monotonic()
 
     def serve(hub):
@@ -220,6 +247,7 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
             hold_state["ended_by"] = f"soak error: {exc!r}"
 
     def tasks():
+        nonlocal poses
         hub = hub_of["hub"]
         n, faulty = 0, next((r.name, r.fault, []) for r in scenario.robots if r.fault != "none")
         task_sim, task_wall = 0.0, started
@@ -230,7 +258,8 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
             ended = log.final.get(n, {})
             step, detail = ended.get(faulty[0], (None, None))
             diagnosis = detail if step == "diagnosed" else step
-            row = {"task": n, "faulty": faulty[0], "fault": faulty[1], "diagnosis": diagnosis, "unturned": faulty[2],
+            row = {"task": n, "seed": seed, "faulty": faulty[0], "fault": faulty[1], "diagnosis": diagnosis,
+                   "unturned": faulty[2], "poses": poses,
                    "outcome": ("correct" if diagnosis == faulty[1] else "wrong") if done else "timeout",
                    "not_ended": sorted(set(robots) - set(ended)),
                    "sim_s": round(world.time - task_sim, 1), "wall_s": round(time.monotonic() - task_wall, 1),
@@ -255,13 +284,19 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
             n += 1
             task_sim, task_wall = world.time, time.monotonic()
             faulty = _next_task(n, world, bridges, hub, scenario.mas, rng, task_timeout)
+            poses = _poses(world, robots)
+            if lines is not None:
+                lines.write(f"== task {n}: {faulty[0]} {faulty[1]}, poses {json.dumps(poses)}\n")
 
     hold_state: dict = {}
     type_counts: dict = {}
     launched: dict = {}
     try:
-        run = run_agent_processes(scenario, ["--bridge", "zenoh"], task_timeout, world=world, serve=serve, hold=hold)
+        run = run_agent_processes(scenario, ["--bridge", "zenoh"], task_timeout, world=world, serve=serve, hold=hold,
+                                  out=lines)
     finally:
+        if lines is not None:
+            lines.close()
         for bridge in bridges.values():
             bridge.shutdown()
     summary = summarize(rows, hold_state.get("ended_by", "the first task failed"), run.died, run.frozen, started)
@@ -336,6 +371,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="wall seconds the agents may take to be idle once a task ended (default 30)")
     parser.add_argument("--seed", type=int, default=1000)
     parser.add_argument("--out", default=None, help="also write the JSON lines here")
+    parser.add_argument("--agent-log", default=None,
+                        help="write the agents' lines here, stamped with simulated time, a marker at each task")
     args = parser.parse_args(argv)
     out = open(args.out, "w") if args.out else None
 
@@ -345,7 +382,8 @@ def main(argv: list[str] | None = None) -> int:
         if out:
             out.write(line + "\n")
             out.flush()
-    summary = soak(args.sim_seconds, args.wall_seconds, args.task_timeout, args.seed, args.settle, emit)
+    summary = soak(args.sim_seconds, args.wall_seconds, args.task_timeout, args.seed, args.settle, emit,
+                   args.agent_log)
     emit({"summary": summary})
     if out:
         out.close()
