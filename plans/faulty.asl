@@ -4,7 +4,8 @@
 // diagnosis is still ambiguous, broadcastHelp -> with the first helper that accepts: it finds me
 // (findRobot; when it cannot, I turn to show it another side and it looks again), trackMe (I turn
 // first when it sees me nearly end-on), tryMove (turned round when my bumper stops it), giveMeFeedback
-// -> diagnose again with what the helper saw -> thanks. A weak wheel curls my first leg, so I may end anywhere near the helper, facing anywhere.
+// -> diagnose again with what the helper saw -> thanks. A weak wheel curls my first leg, so I may end
+// anywhere near the helper, facing anywhere.
 // The decision is the diagnoser's (.diagnose on plans/turtlebot_hardware.yaml); outcome/2 only names
 // the minimal diagnosis it returns. Steps worth timing are reported with .progress (agents/progress.py).
 //
