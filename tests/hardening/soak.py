@@ -189,6 +189,15 @@ def _poses(world, robots: list[str]) -> dict[str, list[float]]:
     return {r: [round(v, 3) for v in world.pose(r)] for r in robots}
 
 
+def _write_paths(path: str, world, robots: list[str], since: float, every: int = 5) -> None:
+    """Every robot's ground-truth path since ``since`` (simulated s; every ``every``-th logged point):
+    where a task that did not end correct took the robots, beside the agents' lines."""
+    paths = {r: [[round(p.time, 2), round(p.x, 3), round(p.y, 3), round(p.yaw_deg, 1)]
+                 for p in world.trajectory(r)[::every] if p.time >= since] for r in robots}
+    with open(path, "w") as out:
+        json.dump(paths, out)
+
+
 class _Stamped:
     """The agents' lines to a file, each with the simulated time it was read at (the task markers too)."""
 
@@ -274,6 +283,8 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
                    **_kept_by_simulator(world)}
             if n == 1:
                 type_counts["first"] = _type_counts()
+            if agent_log and row["outcome"] != "correct":
+                _write_paths(f"{agent_log}.task{n}.json", world, robots, task_sim)
             rows.append(row)
             emit(row)
             why = limit_reached()
@@ -372,7 +383,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=1000)
     parser.add_argument("--out", default=None, help="also write the JSON lines here")
     parser.add_argument("--agent-log", default=None,
-                        help="write the agents' lines here, stamped with simulated time, a marker at each task")
+                        help="write the agents' lines here, stamped with simulated time, a marker at each task; "
+                             "and the robots' paths of every task that did not end correct to PATH.taskN.json")
     args = parser.parse_args(argv)
     out = open(args.out, "w") if args.out else None
 
