@@ -230,12 +230,14 @@ class _Stamped:
 def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, seed: int, settle: float,
          emit, agent_log: str | None = None, task_wall_timeout: float = 900.0) -> dict:
     from agents.cooperative import build_world, run_agent_processes, team_scenario
+    from robot_bridge.sim.runner import shared_runner
     from robot_bridge.sim.server import SimServer
 
     first = team_scenario(6, 1, seed)
     scenario = replace(first, robots=tuple(replace(r, program=PROGRAM) for r in first.robots))
     robots = [r.name for r in scenario.robots]
     world, bridges = build_world(scenario)
+    runner = shared_runner(world)
     log = TaskLog(robots)
     rng = random.Random(seed)
     me = psutil.Process()
@@ -251,6 +253,8 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
         return SimServer(hub.session, scenario.mas, bridges).start().stop
 
     def limit_reached() -> str | None:
+        if runner.error is not None:     # the world stands still: no task can end (the soak names it, no hang)
+            return f"simulator failed: {runner.error!r}"
         if world.time >= sim_seconds:
             return "sim_seconds"
         if wall_seconds is not None and time.monotonic() - started >= wall_seconds:
@@ -271,7 +275,7 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
         n, faulty = 0, next((r.name, r.fault, []) for r in scenario.robots if r.fault != "none")
         task_sim, task_wall = 0.0, started
         while True:
-            done = log.wait_done(n, lambda: world.time - task_sim >= task_timeout,
+            done = log.wait_done(n, lambda: world.time - task_sim >= task_timeout or runner.error is not None,
                                  max(0.0, task_wall_timeout - (time.monotonic() - task_wall)))
             states, waited = _wait_idle(hub, scenario.mas, robots, settle)
             processes, ended_agents = _agent_processes(launched)
