@@ -140,9 +140,12 @@ class SimBridge(RobotBridge):
                 log.warning("%s: frame at %.2f s dropped: the detector failed (%d frames so far): %r",
                             self.robot, frame.time, self._detect_failures, exc)
             found = ()
-        self._seen = (frame.time, [percepts.robot_seen(self.observed or self._robot_at(frame.pose, d.angle_deg,
-                                                                                        d.depth_m),
-                                                       -d.angle_deg, d.depth_m, -d.yaw_deg) for d in found])
+        self._seen = (frame.time, [self._seen_percept(frame.pose, d) for d in found])
+
+    def _seen_percept(self, camera_pose: tuple[float, float, float], detection) -> Percept:
+        """``robot_seen`` for one detection: named after the robot standing there, angles in the robot's sense."""
+        name = self.observed or self._robot_at(camera_pose, detection.angle_deg, detection.depth_m)
+        return percepts.robot_seen(name, -detection.angle_deg, detection.depth_m, -detection.yaw_deg)
 
     def _robot_at(self, camera_pose: tuple[float, float, float], angle_deg: float, depth_m: float) -> str:
         """The robot whose body is where the markers were seen (within ``NAME_RADIUS_M``), else ``robot``.
