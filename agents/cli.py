@@ -141,14 +141,22 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         module.add_parser(sub)
         for chosen in {name for name, (owner, _) in COMMANDS.items() if owner == module_name} & set(sub.choices):
             _with_logging_options(sub.choices[chosen])
+        # the other commands' placeholders serve only the top level's --help (the usage line says COMMAND);
+        # made here they were a twentieth of a short `faultmas diagnose` (issue 23)
+        return parser
     for name, (_, help_text) in COMMANDS.items():
-        if name not in sub.choices:              # listed for --help and the usage line; never parsed here
-            sub.add_parser(name, help=help_text, add_help=False)
+        sub.add_parser(name, help=help_text, add_help=False)   # listed for --help; never parsed here
     return parser
 
 
 def setup_logging(args: argparse.Namespace) -> None:
-    """The root logger at the level asked (WARNING unless ``-v`` or ``--log-level``), lines on stderr."""
+    """The root logger at the level asked (WARNING unless ``-v`` or ``--log-level``), lines on stderr.
+
+    A command that writes no log lines says so (``set_defaults(logs=False)``, e.g. ``diagnose``): then logging
+    is set up only when asked for, as importing it is a tenth of a short run (issue 23); a warning of a library
+    it uses still reaches stderr (Python's last-resort handler), without the level and logger name."""
+    if not getattr(args, "logs", True) and not (args.log_level or args.verbose):
+        return
     import logging
 
     level = args.log_level or {0: "WARNING", 1: "INFO"}.get(args.verbose, "DEBUG")
@@ -168,7 +176,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.print_help()
             return 2
         setup_logging(args)
-        import agentspeak.lark_loader  # noqa: F401  every command refuses a replaced Lark 1.x at once, in one line
+        if getattr(args, "needs_lark", True):   # a command that may parse without Lark says so (diagnose: .bench)
+            import agentspeak.lark_loader  # noqa: F401  every command refuses a replaced Lark 1.x at once, in one line
         return int(args.func(args) or 0)
     except KeyboardInterrupt:
         return 130

@@ -8,6 +8,9 @@ interpreter's parser and the ``Message`` goes to ``agent.deliver``. A message th
 reason and counted, through the transport's ``report_drop`` (the transport already drops what does
 not decode, is too large, names an unknown performative or comes from another MAS).
 
+The directory facilitator (``.df_*``) reaches the other processes through ``agents.directory``; a
+provider's notice to a subscriber here (``re`` = ``PROVIDER_NOTICE``) is checked and delivered from ``df``.
+
 Presence becomes percepts: ``agent_alive(Name)`` is added when agent ``Name`` of the MAS appears on
 the network and removed when it goes (its process exits, is killed, or its link lease expires), so
 ``+agent_alive(N)`` / ``-agent_alive(N)`` plans fire. An agent does not perceive itself.
@@ -23,12 +26,14 @@ from collections import OrderedDict
 from functools import partial
 from typing import Iterable
 
+from agents.directory import PROVIDER_NOTICE, NetworkDirectory, notice_service
 from agents.transport.base import Transport
 from agents.transport.envelope import BadMessage, Envelope, make_envelope
 from agents.transport.trust import CODE_PERFORMATIVES, TrustPolicy
 from agentspeak.agent import Agent
 from agentspeak.beliefs import SOURCE_PERCEPT
 from agentspeak.communication import Message
+from agentspeak.directory import DF_SENDER
 from agentspeak.errors import FaultmasError
 from agentspeak.ground_terms import read_ground_term
 from agentspeak.parser import parse_term
@@ -168,6 +173,8 @@ class TransportBridge:
         if self._attached:
             return self
         self.runtime.remote = self.send_remote
+        self.runtime.directory = NetworkDirectory(self.runtime.tell_provider, self.transport,  # .df_* reach afar
+                                                  self.runtime.route)
         self.transport.on_control(self._on_control)
         for agent in self.runtime.agents.values():
             body = agent.arch if type(agent.arch) is not LocalArch else None
@@ -237,11 +244,27 @@ class TransportBridge:
             detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             self._refuse(agent, envelope, "unparsable_content", detail[:100])
             return
+        if envelope.in_reply_to == PROVIDER_NOTICE:
+            self._on_provider_notice(agent, envelope, content)
+            return
         if self.on_message is not None:
             self.on_message("in", agent.name, envelope)
         # no wake per message: the transport calls agent.wake once per batch
         agent.deliver(Message(envelope.sender, agent.name, envelope.performative, content,
                               msg_id=envelope.message_id, in_reply_to=envelope.in_reply_to), wake=False)
+
+    def _on_provider_notice(self, agent: Agent, envelope: Envelope, content: Term) -> None:
+        """A provider tells a subscriber of this process that it provides a service (``agents.directory``):
+        delivered as Jason's DF tells it, from ``df``, if it is about its sender and the agent subscribed."""
+        service = notice_service(envelope.sender, content) if envelope.performative == "tell" else None
+        if service is None:
+            self._refuse(agent, envelope, "bad_df_notice", "expected provider(<sender>, \"Service\")")
+        elif agent.name not in self.runtime.get_directory().subscribers_of(service):
+            self._refuse(agent, envelope, "not_subscribed", f"{agent.name} did not subscribe to {service[:60]!r}")
+        else:
+            if self.on_message is not None:
+                self.on_message("in", agent.name, envelope)
+            agent.deliver(Message(DF_SENDER, agent.name, "tell", content, msg_id=envelope.message_id), wake=False)
 
     def _refuse(self, agent: Agent, envelope: Envelope, reason: str, detail: str = "") -> None:
         agent.count_dropped(reason)

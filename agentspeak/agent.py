@@ -30,7 +30,7 @@ from agentspeak.program import ACHIEVE, ADD, BEL, DEL, META, Plan, Program, Trig
 from agentspeak.solver import SolveError, _true_k, solve_first
 from agentspeak.stdlib.registry import STDLIB, IAError, Registry, Suspend, yields_solutions
 from agentspeak.terms import (
-    _EXACT, INT_OPS, Arith, ArithmeticError_, Literal, NsTerm, Term, Var, rename, resolve, to_str, variables,
+    _EXACT, INT_OPS, NS_SEP, Arith, ArithmeticError_, Literal, NsTerm, Term, Var, rename, resolve, to_str, variables,
 )
 from agentspeak.unify import unify
 
@@ -83,6 +83,7 @@ class Agent:
         self.timer_lag = 0.0                   # how far the timer clock is behind the real one (see sense)
         self.timer_seen = 0.0                  # real time of the last look at the timers
         self.timer_busy = False                # busy at that look
+        self.timer_lost = 0.0                  # all lag ever counted (never reset): see communication._answer
         self.event_waiters: list = []          # (trigger pattern, intention, suspend)
         self.condition_waiters: list = []      # (intention, suspend)
         self.pending_futures = 0               # actions / awaited results in flight
@@ -343,8 +344,7 @@ class Agent:
             # environment's clock is polled (CLOCK_POLL_S), lateness there is no lost CPU.
             late = self.clock() - self.timer_lag - timers[0][0]
             if late > 0.0:
-                lag = self.timer_lag + late
-                self.timer_lag = lag if lag < TIMER_MAX_LAG else TIMER_MAX_LAG
+                self._count_lag(late)
         perceive = self._perceive
         if perceive is not None:
             percepts = perceive(self)
@@ -368,8 +368,7 @@ class Agent:
             if busy and self.timer_busy:
                 slow = now - self.timer_seen - TIMER_STEP
                 if slow > 0.0:
-                    lag = self.timer_lag + slow
-                    self.timer_lag = lag if lag < TIMER_MAX_LAG else TIMER_MAX_LAG
+                    self._count_lag(slow)
             self.timer_seen = now
             self.timer_busy = busy
             clock = now - self.timer_lag
@@ -387,6 +386,15 @@ class Agent:
             receive_message(self, self.mailbox.popleft())
             did = True
         return did
+
+    def _count_lag(self, lost: float) -> None:
+        """The agent lost ``lost`` seconds (see sense): its timer clock falls behind by as much (at most
+        TIMER_MAX_LAG), and ``timer_lost`` keeps the total, so what the agent answers later is stamped by
+        the time it would have answered on a thread of its own (agentspeak.communication._answer)."""
+        old = self.timer_lag
+        lag = old + lost
+        self.timer_lag = lag if lag < TIMER_MAX_LAG else TIMER_MAX_LAG
+        self.timer_lost += self.timer_lag - old
 
     def buf(self, percepts) -> None:
         """Belief update function: add new percepts, remove those no longer perceived."""
@@ -449,8 +457,11 @@ class Agent:
             if relevant is None:
                 relevant = plans.relevant(trigger)
             for a in args:  # (a loop: `Var in map(type, args)` costs 3x more for one argument)
-                if type(a) is Var:
-                    args = None  # variables in the event: bind by unification (shared or repeated ones)
+                ta = type(a)
+                if ta is Var or (ta is Literal and NS_SEP in a.functor) or ta is NsTerm:
+                    # variables in the event: bind by unification (shared or repeated ones); so too a value
+                    # whose name space a trigger's variable must match (agentspeak.unify.in_other_ns)
+                    args = None
                     break
         else:
             args = None

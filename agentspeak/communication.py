@@ -41,7 +41,7 @@ class Message:
     (``tell``, ``achieve``) never need one, and making it is a good part of an in-process send.
     ``.send`` builds messages without ``__init__`` (see ``agentspeak.agent._new``)."""
 
-    __slots__ = ("sender", "receiver", "performative", "content", "_msg_id", "in_reply_to", "sent_at")
+    __slots__ = ("sender", "receiver", "performative", "content", "_msg_id", "in_reply_to", "sent_at", "read_at")
 
     def __init__(self, sender: str, receiver: str, performative: str, content: Term,
                  msg_id: str | None = None, in_reply_to: str | None = None) -> None:
@@ -51,7 +51,8 @@ class Message:
         self.content = content
         self._msg_id = msg_id
         self.in_reply_to = in_reply_to
-        self.sent_at = None  # monotonic time a reply to an ask was sent (in this process), see .send
+        self.sent_at = None  # monotonic time an ask with a timeout, or a reply to an ask, was sent (in this process)
+        self.read_at = None  # an ask: when it was read, see _answer
 
     @property
     def msg_id(self) -> str:
@@ -174,6 +175,8 @@ def receive_message(agent: Any, msg: Message, by_default: bool = False) -> None:
     ``+!kqml_received`` plans are relevant)."""
     perf = msg.performative
     name = msg.sender
+    if perf in _ASKS:
+        msg.read_at = (time.monotonic(), agent.timer_lost)  # see _answer
     # replies to a pending ask resume the asking intention
     if msg.in_reply_to is not None and msg.in_reply_to in agent.pending_asks:
         agent.pending_asks.pop(msg.in_reply_to)(msg)
@@ -282,9 +285,27 @@ def _signal(agent, msg: Message, sender: Term) -> None:
             agent.post_external(Trigger(ADD, BEL, _annotate(item, sender)), force=False)
 
 
+def stamp_sent(msg: Message) -> None:
+    """An ask with a timeout: when it was sent. Its receiver, and the asker for the answer (stamped by
+    _answer), go first in this process's queue of woken agents (LocalRuntime._route_from)."""
+    msg.sent_at = time.monotonic()
+
+
 def _answer(agent, msg: Message, performative: str, content: Term) -> None:
+    """Reply to the ask ``msg``. An answer sent before the asker's timeout counts, even if the asker reads
+    it later (``.send``); it counts as sent when this agent would have sent it on a thread of its own, that is
+    without the time it lost since it read the ask: a ``.wait`` that ended late because the process ran other
+    agents or got no CPU, which its own timers do not count either (Agent._count_lag). Its own waits and work
+    count in full, and so does the time before it read the ask (wall time, as Jason's timeout)."""
     reply = Message(agent.name, msg.sender, performative, content, in_reply_to=msg.msg_id)
-    reply.sent_at = time.monotonic()  # an answer sent before the asker's timeout counts (see .send)
+    now = time.monotonic()
+    read = getattr(msg, "read_at", None)
+    if read is not None and agent.clock == time.monotonic:  # lost time is counted on the wall clock only
+        read_at, lost_then = read
+        lost = agent.timer_lost - lost_then
+        if lost > 0.0:
+            now = max(read_at, now - lost)
+    reply.sent_at = now
     agent.arch.send(agent, reply)
 
 
@@ -372,6 +393,7 @@ def _ask_how(agent, msg: Message, sender: Term) -> None:
 
 
 _FAST_PATH = frozenset(("tell", "achieve", "signal"))
+_ASKS = frozenset(("askOne", "askAll", "askHow"))
 
 _HANDLERS = {
     "tell": _tell, "untell": _untell, "achieve": _achieve, "unachieve": _unachieve,

@@ -30,7 +30,7 @@ from typing import Callable, TypeVar
 
 from agentspeak.program import Program, copy_program
 from agentspeak.stdlib.registry import FUNCTIONS, set_program_reader
-from agentspeak.user_cache import cache_dir
+from agentspeak.user_cache import cache_dir, code_files, write_entry
 
 T = TypeVar("T")
 
@@ -94,14 +94,7 @@ def code_key() -> tuple:
 
 def package_files(root: str) -> tuple:
     """(name, size, modification time) of the sources, grammars and compiled modules in ``root`` and ``root/stdlib``."""
-    files = []
-    for folder in (root, os.path.join(root, "stdlib")):
-        with os.scandir(folder) as entries:
-            for entry in entries:
-                if entry.name.endswith(_CODE_SUFFIXES):
-                    stat = entry.stat()
-                    files.append((os.path.relpath(entry.path, root), stat.st_size, stat.st_mtime_ns))
-    return tuple(sorted(files))
+    return code_files(root, ("", "stdlib"), _CODE_SUFFIXES)
 
 
 def _entry_name(kind: str, source_file: str, extra: tuple, text: str) -> str:
@@ -126,24 +119,4 @@ def _store(path, header: tuple, value: object) -> None:
         data = pickle.dumps(header, pickle.HIGHEST_PROTOCOL) + pickle.dumps(value, pickle.HIGHEST_PROTOCOL)
     except Exception:  # noqa: BLE001 - e.g. a plugin's function that pickle cannot name: not kept, still correct
         return
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        partial = path.with_name(f".{path.name}.{os.getpid()}")
-        partial.write_bytes(data)
-        os.replace(partial, path)      # readers see the old entry or the new one, never half of one
-        _prune(path.parent)
-    except OSError:                    # read-only home, full disk: correct, only slower
-        pass
-
-
-def _prune(directory) -> None:
-    """Keep the ``MAX_ENTRIES`` most recently written entries."""
-    entries = [e for e in os.scandir(directory) if e.name.endswith(".pickle")]
-    if len(entries) <= MAX_ENTRIES:
-        return
-    entries.sort(key=lambda e: e.stat().st_mtime_ns)
-    for entry in entries[:len(entries) - MAX_ENTRIES]:
-        try:
-            os.remove(entry.path)
-        except OSError:
-            pass
+    write_entry(path, data, MAX_ENTRIES)

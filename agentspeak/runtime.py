@@ -18,6 +18,7 @@ from typing import Callable, Iterable
 from agentspeak.agent import Agent
 from agentspeak.arch import AgentArch
 from agentspeak.communication import Message
+from agentspeak.directory import DF_SENDER, Directory
 from agentspeak.parse_cache import cached_program   # not the parser: a file parsed before skips Lark
 from agentspeak.stdlib.registry import CURRENT
 from agentspeak.terms import Literal
@@ -28,6 +29,9 @@ CYCLES_PER_TURN = 64
 """Reasoning cycles an agent runs before the next ready agent gets its turn (fairness)."""
 TURN_SECONDS = 0.005
 """... or fewer, when its cycles are slow: with many busy agents a round stays short."""
+URGENT_IN_ROW = 3
+"""Agents that a message with a deadline (an ask with a timeout, an answer) puts first, in a row, before an
+agent woken earlier gets its turn (see LocalRuntime._route_from)."""
 CLOCK_POLL_S = 0.02
 """How often an idle loop looks at timers that count in an environment's clock (one simulator step)."""
 
@@ -72,6 +76,10 @@ class LocalArch(AgentArch):
     def clone_agent(self, agent: Agent, name: str) -> str:
         return self.runtime.clone_agent(agent, name)
 
+    def directory(self, agent: Agent) -> Directory:
+        """The directory facilitator of the MAS (``.df_*``): the runtime's (see ``LocalRuntime.directory``)."""
+        return self.runtime.get_directory()
+
     def act(self, agent: Agent, action: Literal):
         env = self.runtime.environment
         return env(agent, action) if env is not None else None
@@ -105,6 +113,10 @@ class LocalRuntime:
         self.source_dirs: list[str] = []     # where .create_agent and includes look (a project's aslSourcePath)
         self._yield_turn = False             # end the running agent's turn now (it created an agent)
         self._yield_to: Agent | None = None  # ... and run this one next, then the creator again
+        self.directory: Directory | None = None  # the DF (.df_*), made on first use; a bridge to other
+                                                 # processes puts its own back-end here (agents.directory)
+        self._urgent_in_row = 0              # agents put first by a message with a deadline, in a row
+        self._urgent: set[str] = set()       # ... their names, until their turn
 
     # -- set-up
     def add_agent(self, name: str, source: str | None = None, source_file: str = "<string>",
@@ -126,6 +138,16 @@ class LocalRuntime:
 
     def names(self) -> list[str]:
         return list(self.agents)
+
+    def get_directory(self) -> Directory:
+        """The directory facilitator of the agents of this runtime (made on first use)."""
+        if self.directory is None:
+            self.directory = Directory(self.tell_provider)
+        return self.directory
+
+    def tell_provider(self, subscriber: str, provider: str, service: str) -> None:
+        """The DF's ``tell provider(Provider, "Service")`` to ``subscriber`` (any thread)."""
+        self.route(Message(DF_SENDER, subscriber, "tell", Literal("provider", (Literal(provider), service))))
 
     def create_agent(self, name: str, source: str) -> str:
         """A new agent from an ``.asl`` file, at run time (Jason's ``.create_agent``): the file is looked
@@ -205,6 +227,8 @@ class LocalRuntime:
         agent.timers.clear()
         agent.mailbox.clear()
         self._timed.discard(agent)
+        if self.directory is not None:
+            self.directory.forget(name)
         return True
 
     def accepts_plans_from(self, sender: str) -> bool:
@@ -237,7 +261,15 @@ class LocalRuntime:
                     and type(target.arch).wake is LocalArch.wake:
                 # in-process delivery from the loop's thread (Agent.deliver and wake, inlined)
                 target.mailbox.append(message)
-                if message.receiver not in self._ready_set:
+                if message.sent_at is not None and self._urgent_in_row < URGENT_IN_ROW:
+                    # an ask with a timeout, or an answer to an ask: a deadline in wall time runs, which the
+                    # receiver on a thread of its own would meet at once (Jason); it goes first, as an idle
+                    # agent whose timer is due does (the turns of the agents woken before it come after; at
+                    # most URGENT_IN_ROW such turns before one of theirs, so a chain of asks starves nobody)
+                    self._urgent_in_row += 1
+                    self._urgent.add(message.receiver)
+                    self._run_first(target)
+                elif message.receiver not in self._ready_set:
                     self._ready_set.add(message.receiver)
                     self.ready.append(target)
                 return
@@ -338,6 +370,13 @@ class LocalRuntime:
                     agent = busy.popleft()
                     woken_turns = 0
                 ready_set.discard(agent.name)
+                if self._urgent_in_row:  # (see _route_from)
+                    urgent = self._urgent
+                    if agent.name not in urgent or not ready:
+                        self._urgent_in_row = 0  # an agent woken before the urgent ones has its turn, or none waits
+                        urgent.clear()
+                    else:
+                        urgent.discard(agent.name)
                 CURRENT.agent = agent  # whose beliefs functions such as .count(Q) read
                 started = 0.0
                 for i in turn:

@@ -15,11 +15,11 @@ import operator
 from typing import Iterator, Protocol
 
 from agentspeak.terms import (
-    _EXACT, INT_OPS, And, AnnotatedVar, Arith, ArithmeticError_, Cons, Func, Literal, Not, NsTerm, Or, Rel, Term, Var,
-    compare, deref, in_ns, is_list, list_items, make_list, resolve, split_ns, to_str,
+    _EXACT, INT_OPS, NS_SEP, And, AnnotatedVar, Arith, ArithmeticError_, Cons, Func, Literal, Not, NsTerm, Or, Rel,
+    Term, Var, compare, deref, in_ns, is_list, list_items, make_list, resolve, split_ns, to_str,
 )
 from agentspeak.copier import rule_copier
-from agentspeak.unify import undo, unify, unify_annots_all
+from agentspeak.unify import in_other_ns, undo, unify, unify_annots_all
 
 log = logging.getLogger("faultmas.agentspeak")
 
@@ -503,7 +503,10 @@ def _compile_fact_literal(f: Literal, then):
                     mark = len(trail)
                     trail.append(single)
                     for fact in found:
-                        b[single] = fact.args[0]
+                        a0 = fact.args[0]
+                        if type(a0) is Literal and NS_SEP in a0.functor and in_other_ns(a0):
+                            continue  # not for a variable of the default name space (unify.in_other_ns)
+                        b[single] = a0
                         if k is _true_k or k():
                             return True
                         while len(trail) > mark + 1:
@@ -536,7 +539,10 @@ def _compile_fact_literal(f: Literal, then):
                 mark = len(trail)
                 trail.append(single)
                 for fact in found:
-                    b[single] = fact.args[0]
+                    a0 = fact.args[0]
+                    if type(a0) is Literal and NS_SEP in a0.functor and in_other_ns(a0):
+                        continue  # not for a variable of the default name space (unify.in_other_ns)
+                    b[single] = a0
                     if then(kb, b, trail, k):
                         return True
                     while len(trail) > mark + 1:
@@ -638,7 +644,9 @@ def _compile_unify(f: Rel):
                     raise SolveError("wrong_arguments", str(exc)) from None
                 if type(y) is Func or type(x) is Func:
                     raise SolveError("wrong_arguments", f"{to_str(f, b)}: a function argument is unbound")
-        if type(x) is Var and type(y) is not Var:  # `X = value` with X free: bind, no unify call
+        ty = type(y)
+        # `X = value` with X free: bind, no unify call (unless the value's name space is to be looked at)
+        if type(x) is Var and ty is not Var and ty is not NsTerm and (ty is not Literal or NS_SEP not in y.functor):
             b[x] = y
             trail.append(x)
             if k is _true_k or k():

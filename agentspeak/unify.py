@@ -12,8 +12,8 @@ from __future__ import annotations
 from typing import Iterator
 
 from agentspeak.terms import (
-    LOCAL_NS_PREFIX, NIL, And, AnnotatedVar, Arith, Bindings, Cons, Func, Literal, Not, NsTerm, Or, Rel, Term, Var,
-    deref, list_items, make_list, ns_atom, split_ns,
+    DEFAULT_NS_NAME, LOCAL_NS_PREFIX, NIL, NS_SEP, And, AnnotatedVar, Arith, Bindings, Cons, Func, Literal, Not, NsTerm, Or,
+    Rel, Term, Var, deref, list_items, make_list, ns_atom, split_ns,
 )
 
 
@@ -38,7 +38,9 @@ def unify(a: Term, c: Term, b: Bindings, trail: list) -> bool:
             if tx is Var:
                 v = b.get(x)
                 if v is None:
-                    if type(y) is Var:
+                    ty = type(y)
+                    # a variable, or a value whose name space must be looked at (NS_SEP: see in_other_ns)
+                    if ty is Var or ty is NsTerm or (ty is Literal and NS_SEP in y.functor):
                         if not _unify_general(x, y, b, trail):
                             return False
                         continue
@@ -83,10 +85,24 @@ def _unify_general(a: Term, c: Term, b: Bindings, trail: list) -> bool:
             continue
         tx, ty = type(x), type(y)
         if tx is Var:
+            if ty is Literal:
+                if NS_SEP in y.functor and in_other_ns(y):
+                    return False
+            elif ty is NsTerm:
+                if not _unify_var_ns_term(x, y, b, trail):
+                    return False
+                continue
             b[x] = y
             trail.append(x)
             continue
         if ty is Var:
+            if tx is Literal:
+                if NS_SEP in x.functor and in_other_ns(x):
+                    return False
+            elif tx is NsTerm:
+                if not _unify_var_ns_term(y, x, b, trail):
+                    return False
+                continue
             b[y] = x
             trail.append(y)
             continue
@@ -170,6 +186,23 @@ def _unify_general(a: Term, c: Term, b: Bindings, trail: list) -> bool:
     return True
 
 
+def in_other_ns(lit: Literal) -> bool:
+    """Is ``lit`` of a name space other than the default one? Then no variable without a name space binds it:
+    Jason's parser gives a variable the name space it is written in (the default one, but for a variable
+    written as a formula in a module: ``NsTerm``), and ``Unifier.bind`` binds a variable to a literal only
+    if their name spaces unify (``X = ns::b`` fails, ``NS::X = ns::b`` binds NS and X). Callers test
+    ``NS_SEP in lit.functor`` first, so a literal of the default name space costs one substring test."""
+    f = lit.functor
+    return NS_SEP in f and f[0] != "'"
+
+
+def _unify_var_ns_term(v: Var, t: NsTerm, b: Bindings, trail: list) -> bool:
+    """A free variable without a name space against ``NS::body`` (Jason's ``bind``: the name spaces unify,
+    so ``NS`` becomes ``default``, and the variable takes the body: ``X = NS::b`` binds X to b,
+    ``X = ns::Y`` fails)."""
+    return unify(t.ns, ns_atom(DEFAULT_NS_NAME), b, trail) and unify(v, t.body, b, trail)
+
+
 def unify_ns(x: NsTerm, other: Term, b: Bindings, trail: list, x_left: bool) -> bool:
     """``NS::body = other`` (``x_left``: x is the left side, whose annotations must be a subset). With
     ``other`` a literal, NS unifies with its name space (``default`` when it has none) and the body with
@@ -215,6 +248,8 @@ def _unify_annotated_var(x: Term, y: Term, b: Bindings, trail: list) -> bool:
         return False
     value = deref(av.var, b)
     if type(value) is Var:
+        if NS_SEP in other.functor and in_other_ns(other):
+            return False  # a variable of the default name space (Jason's bind, see in_other_ns)
         bind(value, other.without_annots(), b, trail)
         return True
     return unify(value, other, b, trail) if av is x else unify(other, value, b, trail)

@@ -8,7 +8,6 @@ Imports are lazy so ``import diagnosis`` stays cheap (python-sat loads on first 
 """
 from __future__ import annotations
 
-from typing import Any
 
 __all__ = ["load_model", "SystemModel", "Diagnoser", "DiagnosisResult", "DiagnosisService",
            "RuleEngine", "load_rules", "observation_of"]
@@ -18,7 +17,7 @@ _WHERE = {"load_model": "diagnosis.loader", "SystemModel": "diagnosis.model", "D
           "observation_of": "diagnosis.service", "RuleEngine": "diagnosis.rules", "load_rules": "diagnosis.rules"}
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> object:
     if name in _WHERE:
         import importlib
         return getattr(importlib.import_module(_WHERE[name]), name)

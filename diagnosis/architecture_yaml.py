@@ -65,7 +65,7 @@ def load_architecture(source: YamlSource) -> SystemModel:
             source.error(item, f"node {node_name!r} subscribes to topic {topic!r} but no node publishes it")
 
     def topic_ab(topic: str) -> int:
-        return builder.pool.id(("ABtopic", topic))
+        return builder.variable(("ABtopic", topic))
 
     for topic, nodes in producers.items():  # AB(m) -> OR_n (AB(n) | OR AB(m_in))
         causes = []

@@ -6,41 +6,31 @@ Weak fault model: ``!AB(g) -> (y <-> TYPE(inputs))``, nothing said about a fault
 """
 from __future__ import annotations
 
+import os
 import re
-from dataclasses import dataclass
-from pathlib import Path
-from typing import Mapping
+from collections import namedtuple
+from collections.abc import Mapping
 
 from agentspeak.errors import SourceError
 from agentspeak.source_text import read_source
 from diagnosis.builder import ModelBuilder
 from diagnosis.model import SystemModel
+from diagnosis.simulation import netlist_code
 
 GATE_TYPES = ("and", "nand", "or", "nor", "xor", "xnor", "not", "buf")
 _DECL = re.compile(r"^(INPUT|OUTPUT)\s*\(\s*([^\s()]+)\s*\)$", re.IGNORECASE)
 _GATE = re.compile(r"^([^\s=()]+)\s*=\s*([A-Za-z]+)\s*\(([^()]*)\)$")
 
 
-@dataclass(frozen=True)
-class Gate:
-    name: str
-    type: str
-    inputs: tuple[str, ...]
-    line: int
+Gate = namedtuple("Gate", "name type inputs line")            # inputs: tuple[str, ...]; line: in the file
+Netlist = namedtuple("Netlist", "name source inputs outputs gates")
+"""A parsed netlist; ``gates`` in topological order (inputs before the gates they feed). Named tuples, not
+dataclasses: a netlist read for the first time should not pay ``dataclasses``' import (issue 23)."""
 
 
-@dataclass(frozen=True)
-class Netlist:
-    name: str
-    source: str
-    inputs: tuple[str, ...]
-    outputs: tuple[str, ...]
-    gates: tuple[Gate, ...]   # in topological order (inputs before the gates they feed)
-
-
-def parse_bench(path: str | Path, text: str | None = None) -> Netlist:
+def parse_bench(path: str | os.PathLike, text: str | None = None) -> Netlist:
     """Read a .bench file; errors name file:line and what was expected."""
-    path = str(path)
+    path = os.fspath(path)
     text = read_source(path, "netlist") if text is None else text
     lines = text.splitlines()
     inputs: list[str] = []
@@ -81,7 +71,7 @@ def parse_bench(path: str | Path, text: str | None = None) -> Netlist:
     for name, number in outputs:
         if name not in defined:
             fail(number, f"OUTPUT({name}) is not defined by any INPUT or gate")
-    return Netlist(Path(path).stem, path, tuple(inputs), tuple(n for n, _ in outputs),
+    return Netlist(os.path.splitext(os.path.basename(path))[0], path, tuple(inputs), tuple(n for n, _ in outputs),
                    _topological(gates, path, lines))
 
 
@@ -154,6 +144,7 @@ def netlist_model(netlist: Netlist) -> SystemModel:
         b.readers[gate.name] = tuple(readers.get(gate.name, ()))
     b.gates = tuple((g.name, g.type, g.inputs) for g in netlist.gates)
     b.primary_inputs = netlist.inputs
+    b.simulation = netlist_code(b.gates, b.primary_inputs)
     for gate in netlist.gates:
         ab = b.ab(gate.name)
         y = b.atom(gate.name)
@@ -183,5 +174,5 @@ def _gate_clauses(kind: str, y: int, xs: list[int], b: ModelBuilder) -> list[lis
     return clauses
 
 
-def load_bench_model(path: str | Path) -> SystemModel:
+def load_bench_model(path: str | os.PathLike) -> SystemModel:
     return netlist_model(parse_bench(path))

@@ -1,10 +1,13 @@
 """Incremental construction of a ``SystemModel``: variable numbering and clause collection."""
 from __future__ import annotations
 
-from pysat.formula import IDPool
-
-from diagnosis.formula import Ab, Atom, Formula, Literal, to_cnf
 from diagnosis.model import SystemModel
+
+TYPE_CHECKING = False     # typing.TYPE_CHECKING without importing typing (issue 23: start-up)
+if TYPE_CHECKING:
+    from types import CodeType
+
+    from diagnosis.formula import Formula, Literal
 
 
 class ModelBuilder:
@@ -14,7 +17,7 @@ class ModelBuilder:
         self.name = name
         self.source = source
         self.kind = kind
-        self.pool = IDPool()
+        self._ids: dict[tuple, int] = {}   # ("AB", c), ("atom", name), ("aux", n) -> its variable, from 1
         self.components: list[str] = []
         self.observables: dict[str, int] = {}
         self.observable_kinds: dict[str, str] = {}
@@ -24,17 +27,32 @@ class ModelBuilder:
         self.output_of: dict[str, str] = {}
         self.gates: tuple[tuple[str, str, tuple[str, ...]], ...] = ()
         self.primary_inputs: tuple[str, ...] = ()
+        self.simulation: CodeType | None = None
+
+    @property
+    def top(self) -> int:
+        """The highest variable numbered so far."""
+        return len(self._ids)
+
+    def variable(self, key: tuple) -> int:
+        """The variable of ``key`` (any hashable), numbered on first use."""
+        var = self._ids.get(key)
+        if var is None:
+            var = self._ids[key] = len(self._ids) + 1
+        return var
 
     def ab(self, component: str) -> int:
-        return self.pool.id(("AB", component))
+        return self.variable(("AB", component))
 
     def atom(self, name: str) -> int:
-        return self.pool.id(("atom", name))
+        return self.variable(("atom", name))
 
     def aux(self) -> int:
-        return self.pool.id(("aux", self.pool.top + 1))
+        return self.variable(("aux", len(self._ids) + 1))
 
     def var_of(self, literal: Literal) -> int:
+        from diagnosis.formula import Ab
+
         return self.ab(literal.component) if isinstance(literal, Ab) else self.atom(literal.name)
 
     def add_component(self, name: str) -> None:
@@ -48,6 +66,8 @@ class ModelBuilder:
         return var
 
     def add_formula(self, formula: Formula) -> None:
+        from diagnosis.formula import to_cnf
+
         self.clauses.extend(tuple(c) for c in to_cnf(formula, self.var_of, self.aux))
 
     def add_clause(self, clause: list[int] | tuple[int, ...]) -> None:
@@ -57,9 +77,10 @@ class ModelBuilder:
         return SystemModel(
             name=self.name, source=self.source, components=tuple(self.components),
             ab_var={c: self.ab(c) for c in self.components}, observables=dict(self.observables),
-            clauses=tuple(self.clauses), num_vars=self.pool.top, held=tuple(self.held), kind=self.kind,
+            clauses=tuple(self.clauses), num_vars=self.top, held=tuple(self.held), kind=self.kind,
             observable_kinds=dict(self.observable_kinds), readers=dict(self.readers),
-            output_of=dict(self.output_of), gates=self.gates, primary_inputs=self.primary_inputs)
+            output_of=dict(self.output_of), gates=self.gates, primary_inputs=self.primary_inputs,
+            simulation=self.simulation)
 
 
-__all__ = ["ModelBuilder", "Ab", "Atom"]
+__all__ = ["ModelBuilder"]

@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
 from diagnosis.limits import DEFAULT_MAX_MEMORY_MB, RunLimits
 
@@ -32,7 +31,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help=f"resident memory limit in MiB; beyond it the run stops with an error (exit 3) "
                         f"(default {DEFAULT_MAX_MEMORY_MB})")
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.set_defaults(func=run)
+    # logs=False: nothing here logs (logging is set up only for -v); needs_lark=False: only a .yaml model's
+    # formulas are parsed with Lark, and diagnosis.formula makes the refusal of a replaced Lark 1.x itself
+    p.set_defaults(func=run, logs=False, needs_lark=False)
 
 
 def read_observations(path: str) -> dict[str, bool]:

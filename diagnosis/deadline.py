@@ -8,12 +8,14 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Protocol
 
+TYPE_CHECKING = False     # typing.TYPE_CHECKING without importing typing (issue 23: start-up)
+if TYPE_CHECKING:
+    from typing import Protocol
 
-class Interruptible(Protocol):
-    def interrupt(self) -> None: ...
-    def clear_interrupt(self) -> None: ...
+    class Interruptible(Protocol):
+        def interrupt(self) -> None: ...
+        def clear_interrupt(self) -> None: ...
 
 
 class _Watchdog:

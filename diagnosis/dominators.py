@@ -12,7 +12,7 @@ post-dominator is the nearest common ancestor, in the tree built so far, of the 
 """
 from __future__ import annotations
 
-from typing import Collection, Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 
 SINK = ""  # the virtual node after every observed signal
 

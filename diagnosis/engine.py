@@ -27,45 +27,56 @@ from RC2 (core-guided MaxSAT). Time limits interrupt the solver through one shar
 (``deadline``). The totalizer and RC2 are imported when first needed: most queries use neither, and a
 short ``faultmas diagnose`` is mostly start-up (issue 23).
 
-The default solver is Glucose 4: it releases the GIL while solving (other threads of the agent keep
+The default solver is Glucose 4 (python-sat's, made by ``diagnosis.sat`` without importing ``pysat.solvers``,
+for start-up): it releases the GIL while solving (other threads of the agent keep
 running) and honours ``interrupt()``, which the time limits rely on; CaDiCaL in python-sat does neither.
 """
 from __future__ import annotations
 
+import itertools
 import math
 import threading
 import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass
-from typing import Callable, Iterator, Mapping, Sequence
-
-from pysat.solvers import Solver
 
 from diagnosis.deadline import Deadline
 from diagnosis.dominators import post_dominator_chains, reverse_topological
 from diagnosis.known import KnownDiagnoses
 from diagnosis.hitting_sets import HittingSetSolver, next_diagnosis
 from diagnosis.hs_tree import tree_levels
-from diagnosis.simulation import BatchSimulator, Compiled, compile_netlist
+from diagnosis.simulation import BatchSimulator, Compiled, netlist_code, simulation_function
 from diagnosis.model import SystemModel
+from diagnosis.sat import make_solver
 
 DEFAULT_SOLVER = "glucose4"
 _RC2_SOLVER = {"glucose4": "g4", "glucose3": "g3", "minisat22": "m22", "cadical195": "cd19"}
 
 
-@dataclass
 class DiagnosisResult:
     """Minimal diagnoses (each a list of component names in model order), smallest first.
 
     ``min_cardinality`` is the size of the smallest diagnosis (None when there is none, or it was not
-    reached in time); ``complete`` is True when every minimal diagnosis within the bound is listed.
+    reached in time); ``complete`` is True when every minimal diagnosis within the bound is listed;
+    ``consistent_with_model`` is False when no set of faults explains the observations.
+    (A plain class, not a dataclass: ``dataclasses`` is a sixth of a short ``faultmas diagnose``, issue 23.)
     """
-    diagnoses: list[list[str]]
-    min_cardinality: int | None
-    complete: bool
-    seconds: float
-    max_card: int | None = None
-    consistent_with_model: bool = True  # False: no set of faults explains the observations
+    __slots__ = ("diagnoses", "min_cardinality", "complete", "seconds", "max_card", "consistent_with_model")
+
+    def __init__(self, diagnoses: list[list[str]], min_cardinality: int | None, complete: bool, seconds: float,
+                 max_card: int | None = None, consistent_with_model: bool = True) -> None:
+        self.diagnoses = diagnoses
+        self.min_cardinality = min_cardinality
+        self.complete = complete
+        self.seconds = seconds
+        self.max_card = max_card
+        self.consistent_with_model = consistent_with_model
+
+    def __eq__(self, other: object) -> bool:
+        return type(other) is DiagnosisResult and all(getattr(self, f) == getattr(other, f) for f in self.__slots__)
+
+    def __repr__(self) -> str:
+        return f"DiagnosisResult({', '.join(f'{f}={getattr(self, f)!r}' for f in self.__slots__)})"
 
     def to_json(self) -> dict:
         return {"diagnoses": self.diagnoses, "min_cardinality": self.min_cardinality,
@@ -80,11 +91,13 @@ _TREE_LIMIT = 3  # size bounds up to which the hitting-set tree enumerates (``hs
 _STRUCTURE_CACHE = 8  # observed-signal sets whose post-dominators are kept per model
 
 
-@dataclass(frozen=True)
 class _Structure:
     """Post-dominators of a netlist's gates for one set of observed signals, as health variables."""
-    chains: dict[int, tuple[int, ...]]   # v -> v and its post-dominators, nearest first
-    parent: dict[int, int]               # v -> its immediate post-dominator
+    __slots__ = ("chains", "parent")
+
+    def __init__(self, chains: dict[int, tuple[int, ...]], parent: dict[int, int]) -> None:
+        self.chains = chains   # v -> v and its post-dominators, nearest first
+        self.parent = parent   # v -> its immediate post-dominator
 
 
 class TimedOut(Exception):
@@ -112,7 +125,7 @@ class Diagnoser:
     def __init__(self, model: SystemModel, solver: str = DEFAULT_SOLVER) -> None:
         self.model = model
         self._lock = threading.Lock()
-        self._solver = Solver(name=solver, bootstrap_with=[list(c) for c in model.clauses])
+        self._solver = make_solver(solver, model.clauses)
         self._ab = [model.ab_var[c] for c in model.components]
         self._component_of = {v: c for c, v in model.ab_var.items()}
         self._index = {c: i for i, c in enumerate(model.components)}
@@ -121,15 +134,16 @@ class Diagnoser:
         self._solver_name = solver
         self._healthy = [-v for v in self._ab]
         self._position = {v: i for i, v in enumerate(self._ab)}
-        self._gate_order = reverse_topological(model.readers) if model.readers else []
+        self._gate_order: list[str] | None = None    # netlists: reverse topological, made when first needed
         self._structures: dict[frozenset[str], _Structure] = {}
         self._compiled: tuple[Compiled, dict[int, int], dict[str, int]] | None = None
-        if model.gates:  # a netlist: compiled for batch simulation once, like the solver is loaded once
-            self._compiled = (compile_netlist(model.gates, model.primary_inputs),
+        if model.gates:  # a netlist: compiled for batch simulation once (by its model), like the solver is loaded once
+            code = model.simulation or netlist_code(model.gates, model.primary_inputs)
+            self._compiled = (simulation_function(code),
                               {model.ab_var[g[0]]: i for i, g in enumerate(model.gates)},
                               {g[0]: i for i, g in enumerate(model.gates)})
         negative_ab = {-v for v in self._ab}
-        self.monotone = not any(lit in negative_ab for clause in model.clauses for lit in clause)
+        self.monotone = negative_ab.isdisjoint(itertools.chain.from_iterable(model.clauses))
         try:  # prefer "healthy" so the solver's first guesses are small fault sets
             self._solver.set_phases([-v for v in self._ab])
         except NotImplementedError:
@@ -250,8 +264,10 @@ class Diagnoser:
 
     def _structure(self, observations: Mapping[str, bool]) -> _Structure | None:
         """Post-dominators for the signals observed (netlists only; None for other models)."""
-        if not self._gate_order:
+        if not self.model.readers:
             return None
+        if self._gate_order is None:
+            self._gate_order = reverse_topological(self.model.readers)
         key = frozenset(observations)
         found = self._structures.get(key)
         if found is None:

@@ -16,16 +16,16 @@ check on a 3,500-gate circuit costs under a millisecond instead of about two.
 from __future__ import annotations
 
 import itertools
-from typing import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 
-from pysat.solvers import Solver
+from diagnosis.sat import make_solver
 
 
 class HittingSetSolver:
     """Candidates that hit every conflict seen so far and contain no blocked set."""
 
     def __init__(self, first_free_var: int, solver: str, ubound: int = 1) -> None:
-        self.solver = Solver(name=solver)
+        self.solver = make_solver(solver)
         self.top = first_free_var - 1
         # the totalizer counts up to ubound; raised when a higher level asks. Its size grows with the
         # bound, but one built for the final small bound searches much faster than one raised to it.

@@ -21,7 +21,7 @@ to ``engine._TREE_LIMIT``); larger bounds take the hitting-set solver route.
 from __future__ import annotations
 
 import bisect
-from typing import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 
 from diagnosis.known import KnownDiagnoses
 

@@ -14,12 +14,12 @@ stays below the limit never imports psutil (its import is a large part of a shor
 """
 from __future__ import annotations
 
+import io
 import os
 import resource
 import sys
 import threading
 import time
-from typing import TextIO
 
 #: Exit status of a run stopped by a limit (0: answered, 2: bad input).
 EXIT_LIMIT = 3
@@ -36,7 +36,7 @@ class RunLimits:
     """``with RunLimits(timeout, max_memory_mb) as limits: limits.phase("reading the model") ...``"""
 
     def __init__(self, timeout: float | None, max_memory_mb: float | None = DEFAULT_MAX_MEMORY_MB,
-                 err: TextIO | None = None, prog: str = "faultmas diagnose") -> None:
+                 err: "io.TextIOBase | None" = None, prog: str = "faultmas diagnose") -> None:
         self.timeout = timeout
         self.max_bytes = None if max_memory_mb is None else int(max_memory_mb * 1024 * 1024)
         self.err = err or sys.stderr

@@ -5,26 +5,28 @@ YAML nor the formula parser (Lark), whose imports would be most of a short ``fau
 """
 from __future__ import annotations
 
-from pathlib import Path
-from typing import TYPE_CHECKING
+import os
 
 from agentspeak.errors import SourceError
 
+TYPE_CHECKING = False     # typing.TYPE_CHECKING without importing typing (issue 23: start-up)
 if TYPE_CHECKING:
     from diagnosis.model import SystemModel
 
 
-def load_model(path: str | Path) -> SystemModel:
-    """A ``.bench`` netlist, or a ``.yaml``/``.yml`` file whose first key is ``system`` or ``architecture``."""
-    path = Path(path)
-    if not path.is_file():
-        raise SourceError("no such model file", file=str(path))
-    if path.suffix.lower() == ".bench":
-        from diagnosis.bench import load_bench_model
+def load_model(path: str | os.PathLike) -> SystemModel:
+    """A ``.bench`` netlist, or a ``.yaml``/``.yml`` file whose first key is ``system`` or ``architecture``.
+    A netlist read before, unchanged, comes from the user's cache (``diagnosis.netlist_cache``)."""
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise SourceError("no such model file", file=path)
+    suffix = os.path.splitext(path)[1].lower()
+    if suffix == ".bench":
+        from diagnosis.netlist_cache import cached_netlist_model
 
-        return load_bench_model(path)
-    if path.suffix.lower() not in (".yaml", ".yml"):
-        raise SourceError("a model is a .yaml system description or a .bench netlist", file=str(path))
+        return cached_netlist_model(path)
+    if suffix not in (".yaml", ".yml"):
+        raise SourceError("a model is a .yaml system description or a .bench netlist", file=path)
     from diagnosis.architecture_yaml import load_architecture
     from diagnosis.system_yaml import load_system
     from diagnosis.yaml_source import YamlSource

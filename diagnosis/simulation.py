@@ -12,7 +12,8 @@ All-ones is -1 (Python integers are infinite two's complement), so ``~`` is the 
 """
 from __future__ import annotations
 
-from typing import Callable, Hashable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
+from types import CodeType
 
 Gates = Sequence[tuple[str, str, tuple[str, ...]]]   # (output signal, type, input signals), topological
 Compiled = Callable[[list[int], list[int], list[int]], list[int]]
@@ -23,6 +24,20 @@ _OPS = {"and": " & ", "nand": " & ", "or": " | ", "nor": " | ", "xor": " ^ ", "x
 
 def compile_netlist(gates: Gates, inputs: Sequence[str]) -> Compiled:
     """run(input lanes, K, P) -> lanes of every gate output (gate order), one Python line per gate."""
+    return simulation_function(netlist_code(gates, inputs))
+
+
+def simulation_function(code: CodeType) -> Compiled:
+    """The ``run`` function defined by ``netlist_code``'s code."""
+    namespace: dict = {}
+    exec(code, namespace)  # generated from parsed gate types only
+    return namespace["run"]
+
+
+def netlist_code(gates: Gates, inputs: Sequence[str]) -> CodeType:
+    """The compiled module that defines ``run`` (see ``compile_netlist``). Compiling is most of the cost (a tenth
+    of a short ``faultmas diagnose`` on c1908), so a netlist's model keeps this code (``SystemModel.simulation``,
+    kept between runs by ``netlist_cache``: ``marshal`` stores code objects as ``.pyc`` files do)."""
     var = {x: f"x{i}" for i, x in enumerate(inputs)}
     lines = ["def run(inp, K, P):"]
     if inputs:
@@ -34,9 +49,7 @@ def compile_netlist(gates: Gates, inputs: Sequence[str]) -> Compiled:
         var[name] = f"g{i}"
         lines.append(f"    g{i} = ({expr}) & K[{i}] | P[{i}]")
     lines.append(f"    return [{', '.join(f'g{i}' for i in range(len(gates)))}]")
-    namespace: dict = {}
-    exec(compile("\n".join(lines), "<netlist>", "exec"), namespace)  # generated from parsed gate types only
-    return namespace["run"]
+    return compile("\n".join(lines), "<netlist>", "exec")
 
 
 class BatchSimulator:

@@ -14,13 +14,14 @@ from abc import ABC, abstractmethod
 from collections import Counter
 from contextlib import contextmanager
 from threading import get_ident
-from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Mapping, Sequence
 
 from agents.transport.envelope import (BATCH_BYTES, BATCH_SEPARATOR, DEFAULT_MAX_SIZE, QUESTIONS, BadMessage,
                                        Envelope, decode, split_batch)
 from agents.transport.drop_log import DropLog
 from agents.transport.keys import check_name
 from agents.transport.outbox import Outbox
+from agents.transport.registrations import QUERY_TIMEOUT
 from agents.transport.status import AgentStatus
 
 if TYPE_CHECKING:
@@ -177,6 +178,10 @@ class Transport(ABC):
         self._presence = Presence()
         self._control_callbacks: list[OnControl] = []
         self._status_callbacks: list[OnStatus] = []
+        self.registrations: Callable[[tuple[str, str] | None], Mapping[str, Sequence[str]]] | None = None
+        """The directory facilitator's registrations of this process's agents, {agent: services}: what
+        this process answers directory queries with (set by ``agents.directory.NetworkDirectory``). Called
+        with (subscriber, service) when the query comes from an agent that subscribes to the service."""
         self._opened = False
 
     # -- life cycle ---------------------------------------------------------------------------
@@ -423,6 +428,39 @@ class Transport(ABC):
     @abstractmethod
     def collect_status(self, timeout: float = 1.0) -> list[AgentStatus]:
         """The latest published status of every agent of the MAS, in all processes."""
+
+    # -- directory facilitator (agents.directory) --------------------------------------------------
+    def local_registrations(self, subscribed: tuple[str, str] | None = None) -> dict[str, list[str]]:
+        """{agent: services} of the registered agents of this process that have any; ``subscribed``: the
+        asker is agent (subscriber, service) of another process, which the directory remembers."""
+        source = self.registrations
+        if source is None:
+            return {}
+        if subscribed is not None and subscribed[0] in self._agents:
+            subscribed = None  # our own agent: the directory tells it directly
+        return {agent: list(services) for agent, services in source(subscribed).items()
+                if services and agent in self._agents}
+
+    @abstractmethod
+    def remote_registrations(self, timeout: float = QUERY_TIMEOUT,
+                             subscribe: tuple[str, str] | None = None) -> dict[str, list[str]]:
+        """{agent: services} of the agents of the other processes of the MAS, each checked (signed by
+        that agent in the secure profile); waits at most ``timeout`` for a process that does not answer.
+        ``subscribe`` = (agent of this process, service): each process that answers also learns that
+        the agent subscribes to the service, in one step with its answer (``local_registrations``)."""
+
+    @abstractmethod
+    def announce_subscription(self, agent: str, service: str) -> None:
+        """Let the other processes know that ``agent`` (of this process) subscribed to ``service``."""
+
+    @abstractmethod
+    def withdraw_subscription(self, agent: str, service: str) -> None: ...
+
+    @abstractmethod
+    def on_subscription(self, callback: Callable[[str, str, bool], None]) -> None:
+        """``callback(agent, service, present)`` (on a thread of the transport, never a network
+        thread: it may send) for each subscription of an agent of another process: those there are
+        now, then each that comes or goes, each change once."""
 
     # -- what a concrete transport provides ------------------------------------------------------
     @abstractmethod

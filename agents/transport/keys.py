@@ -2,6 +2,8 @@
 network never see each other's traffic, and an access-control rule can name one MAS by prefix."""
 from __future__ import annotations
 
+import base64
+
 from agents.transport.envelope import is_valid_name
 
 ROOT = "faultmas"
@@ -50,3 +52,36 @@ def status_pattern(mas: str) -> str:
 def last_chunk(key: str) -> str:
     """The agent name at the end of an ``alive``/``status`` key."""
     return key.rsplit("/", 1)[-1]
+
+
+def df_key(mas: str, agent: str) -> str:
+    """The queryable that answers with the services ``agent`` has registered (``.df_register``)."""
+    return f"{mas_prefix(mas)}/df/{check_name(agent)}"
+
+
+def df_pattern(mas: str) -> str:
+    return f"{mas_prefix(mas)}/df/*"
+
+
+def service_chunk(service: str) -> str:
+    """A service (any text, e.g. ``sell(book)``) as one key chunk: ``s`` + its UTF-8 in unpadded base64url."""
+    return "s" + base64.urlsafe_b64encode(service.encode()).rstrip(b"=").decode()
+
+
+def subscribes_key(mas: str, agent: str, service: str) -> str:
+    """The liveliness token of one subscription (``.df_subscribe``): present while ``agent`` wants to
+    hear of the providers of ``service`` and its process is up."""
+    return f"{mas_prefix(mas)}/subscribes/{check_name(agent)}/{service_chunk(service)}"
+
+
+def subscribes_pattern(mas: str) -> str:
+    return f"{mas_prefix(mas)}/subscribes/*/*"
+
+
+def subscription_of(key: str) -> tuple[str, str]:
+    """(agent, service) of a ``subscribes`` key (``ValueError`` if the service chunk is not ours)."""
+    agent, chunk = key.rsplit("/", 2)[-2:]
+    if not chunk.startswith("s"):
+        raise ValueError(f"not a service chunk: {chunk[:40]!r}")
+    data = chunk[1:]
+    return agent, base64.urlsafe_b64decode(data + "=" * (-len(data) % 4)).decode()

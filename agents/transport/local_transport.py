@@ -44,6 +44,8 @@ class LocalTransport(Transport):
         self.bus = bus or LocalBus()
         self.wire = wire
         self._statuses: dict[str, AgentStatus] = {}
+        self._subscribed: set[tuple[str, str]] = set()                        # (agent, service) announced
+        self._subscription_callbacks: list[Callable[[str, str, bool], None]] = []
 
     def _open(self) -> None:
         with self.bus.lock:
@@ -62,6 +64,8 @@ class LocalTransport(Transport):
 
     def _detach(self, agent: str) -> None:
         self._statuses.pop(agent, None)
+        for subscriber, service in [k for k in self._subscribed if k[0] == agent]:
+            self.withdraw_subscription(subscriber, service)
         for peer in self.bus.peers(self.mas):
             peer._presence.update(agent, False)
 
@@ -81,6 +85,38 @@ class LocalTransport(Transport):
         owner = self.bus.owner(self.mas, receiver)
         if owner is not None:
             owner.receive_bytes(receiver, payload, f"local:{receiver}")
+
+    # -- directory facilitator: the peers' registrations and subscriptions are read directly
+    def remote_registrations(self, timeout: float = 0.0,
+                             subscribe: tuple[str, str] | None = None) -> dict[str, list[str]]:
+        found: dict[str, list[str]] = {}
+        for peer in self.bus.peers(self.mas):
+            if peer is not self:
+                found.update(peer.local_registrations(subscribe))
+        return found
+
+    def announce_subscription(self, agent: str, service: str) -> None:
+        if (agent, service) not in self._subscribed:
+            self._subscribed.add((agent, service))
+            self._tell_peers(agent, service, True)
+
+    def withdraw_subscription(self, agent: str, service: str) -> None:
+        if (agent, service) in self._subscribed:
+            self._subscribed.discard((agent, service))
+            self._tell_peers(agent, service, False)
+
+    def on_subscription(self, callback: Callable[[str, str, bool], None]) -> None:
+        self._subscription_callbacks.append(callback)
+        for peer in self.bus.peers(self.mas):
+            if peer is not self:
+                for agent, service in sorted(peer._subscribed):
+                    callback(agent, service, True)
+
+    def _tell_peers(self, agent: str, service: str, present: bool) -> None:
+        for peer in self.bus.peers(self.mas):
+            if peer is not self:
+                for callback in list(peer._subscription_callbacks):
+                    callback(agent, service, present)
 
     def _publish_control(self, message: dict[str, Any]) -> None:
         for peer in self.bus.peers(self.mas):

@@ -5,20 +5,25 @@ Per agent: a subscriber on ``faultmas/<mas>/agent/<name>/inbox`` and a livelines
 reach the inbox). Per process: a liveliness subscriber with history (presence), a subscriber on
 ``faultmas/<mas>/control``, one on ``faultmas/<mas>/status/*`` and a queryable there that answers
 with the latest status of the local agents (in the secure profile a status is signed by its agent and a
-receiver refuses any other). Messages are put reliably with congestion control
+receiver refuses any other); a queryable on ``faultmas/<mas>/df/*`` that answers with the directory
+facilitator's registrations of the local agents (``registrations``), and a liveliness subscriber with
+history on ``faultmas/<mas>/subscribes/*/*``, the subscriptions of other processes' agents (a token per
+``.df_subscribe``; see ``agents.directory``). Messages are put reliably with congestion control
 BLOCK on a cached publisher per receiver (a burst from the agents' thread in batches, see
 ``outbox``); agents of this process are served without the network.
 """
 from __future__ import annotations
 
 import json
+import queue
 import threading
 from typing import Any, Callable
 
 from agents.transport import keys
 from agents.transport.base import Transport, log
 from agents.transport.config import ZenohOptions, build_config, listen_endpoints
-from agents.transport.envelope import DEFAULT_MAX_SIZE, BadMessage, Envelope
+from agents.transport.envelope import DEFAULT_MAX_SIZE, BadMessage, Envelope, is_valid_name
+from agents.transport.registrations import QUERY_TIMEOUT, encode_services, new_nonce, open_services
 from agents.transport.status import AgentStatus
 
 
@@ -42,6 +47,12 @@ class ZenohTransport(Transport):
         self._tokens: dict[str, Any] = {}
         self._statuses: dict[str, AgentStatus] = {}
         self._declared: list[Any] = []
+        self._subscribed: dict[tuple[str, str], Any] = {}   # (agent, service) -> liveliness token
+        self._subscriptions: set[tuple[str, str]] = set()   # remote ones seen present (history may repeat one)
+        self._subscription_callbacks: list[Callable[[str, str, bool], None]] = []
+        self._subscription_lock = threading.Lock()
+        self._subscription_queue: queue.SimpleQueue = queue.SimpleQueue()  # changes to report; None: stop
+        self._subscription_thread: threading.Thread | None = None
 
     def _open(self) -> None:
         import zenoh
@@ -56,18 +67,26 @@ class ZenohTransport(Transport):
             self.session.declare_subscriber(keys.control_key(self.mas), self._on_control),
             self.session.declare_subscriber(keys.status_pattern(self.mas), self._on_status),
             self.session.declare_queryable(keys.status_pattern(self.mas), self._on_status_query),
+            self.session.declare_queryable(keys.df_pattern(self.mas), self._on_df_query),
+            liveliness.declare_subscriber(keys.subscribes_pattern(self.mas), self._on_subscribes, history=True),
         ]
+        self._subscription_thread = threading.Thread(target=self._report_subscriptions, daemon=True,
+                                                     name="faultmas-df-subscriptions")
+        self._subscription_thread.start()
         self._control_publisher = self.session.declare_publisher(
             keys.control_key(self.mas), congestion_control=zenoh.CongestionControl.BLOCK,
             reliability=zenoh.Reliability.RELIABLE)
 
     def _close(self) -> None:
-        for entity in [*self._publishers.values(), self._control_publisher, *self._declared]:
+        self._subscription_queue.put(None)
+        for entity in [*self._publishers.values(), self._control_publisher, *self._subscribed.values(),
+                       *self._declared]:
             try:
                 entity.undeclare()
             except Exception:  # already gone with the session
                 pass
         self._publishers.clear()
+        self._subscribed.clear()
         self._declared = []
         if self._owns_session:
             self.session.close()
@@ -105,6 +124,8 @@ class ZenohTransport(Transport):
                 log.debug("inbox of %s closed: %s", agent, exc)
 
     def _detach(self, agent: str) -> None:
+        for (subscriber, service) in [k for k in self._subscribed if k[0] == agent]:
+            self.withdraw_subscription(subscriber, service)
         for table in (self._tokens, self._inboxes):  # presence first: nobody should send any more
             entity = table.pop(agent, None)
             if entity is not None:
@@ -215,6 +236,104 @@ class ZenohTransport(Transport):
             if asked.intersects(zenoh.KeyExpr(key)):
                 status = self._statuses.get(agent) or self.status_of(agent, busy=False)
                 query.reply(key, self._sealed_status(status))
+
+    # -- directory facilitator --------------------------------------------------------------------
+    def _on_df_query(self, query: Any) -> None:
+        import zenoh
+
+        asked = zenoh.KeyExpr(str(query.key_expr))
+        try:
+            request = json.loads(query.payload.to_bytes()) if query.payload is not None else None
+            nonce, subscribed = request["nonce"], request.get("subscribe")
+            if not isinstance(nonce, str) or len(nonce) > 64 or subscribed is not None and not (
+                    isinstance(subscribed, list) and len(subscribed) == 2 and is_valid_name(subscribed[0])
+                    and isinstance(subscribed[1], str)):
+                raise ValueError("expected {\"nonce\": str[, \"subscribe\": [agent, service]]}")
+        except (ValueError, TypeError, KeyError, RecursionError) as exc:
+            self._drop("bad_df_query", str(query.key_expr), None, str(exc)[:80])
+            return
+        registrations = self.local_registrations(tuple(subscribed) if subscribed is not None else None)
+        for agent, services in registrations.items():
+            key = keys.df_key(self.mas, agent)
+            if asked.intersects(zenoh.KeyExpr(key)):
+                query.reply(key, encode_services(self.mas, agent, services, nonce, self.identity))
+
+    def remote_registrations(self, timeout: float = QUERY_TIMEOUT,
+                             subscribe: tuple[str, str] | None = None) -> dict[str, list[str]]:
+        import zenoh
+
+        nonce = new_nonce()
+        request = {"nonce": nonce} if subscribe is None else {"nonce": nonce, "subscribe": list(subscribe)}
+        found: dict[str, list[str]] = {}
+        # every reply, unconsolidated: an outsider's reply on an agent's key must not displace the agent's
+        for reply in self.session.get(keys.df_pattern(self.mas), payload=json.dumps(request), timeout=timeout,
+                                      consolidation=zenoh.ConsolidationMode.NONE):
+            if reply.ok is None:
+                continue
+            where = str(reply.ok.key_expr)
+            if keys.last_chunk(where) in self._agents:
+                continue  # this process's own agents: the local directory has them
+            try:
+                agent, services = open_services(reply.ok.payload.to_bytes(), self.mas, nonce, self.identity,
+                                                self.max_message_size)
+            except BadMessage as bad:
+                self._drop(bad.reason, where, bad.sender, bad.detail)
+                continue
+            if keys.last_chunk(where) != agent:
+                self._drop("bad_registration", where, agent, "the document names another agent")
+                continue
+            found[agent] = services
+        return found
+
+    def announce_subscription(self, agent: str, service: str) -> None:
+        if (agent, service) not in self._subscribed:
+            self._subscribed[(agent, service)] = self.session.liveliness().declare_token(
+                keys.subscribes_key(self.mas, agent, service))
+
+    def withdraw_subscription(self, agent: str, service: str) -> None:
+        token = self._subscribed.pop((agent, service), None)
+        if token is not None:
+            token.undeclare()
+
+    def on_subscription(self, callback: Callable[[str, str, bool], None]) -> None:
+        with self._subscription_lock:
+            self._subscription_callbacks.append(callback)
+            now = sorted(self._subscriptions)
+        for agent, service in now:
+            self._subscription_queue.put((agent, service, True, callback))
+
+    def _on_subscribes(self, sample: Any) -> None:
+        import zenoh
+
+        where = str(sample.key_expr)
+        try:
+            agent, service = keys.subscription_of(where)
+        except ValueError as exc:
+            self._drop("bad_subscription", where, None, str(exc)[:80])
+            return
+        if agent in self._agents:
+            return  # this process's own: its directory knows them
+        present = sample.kind == zenoh.SampleKind.PUT
+        with self._subscription_lock:
+            if ((agent, service) in self._subscriptions) == present:
+                return  # seen twice (history and live): one change
+            (self._subscriptions.add if present else self._subscriptions.discard)((agent, service))
+            if self._subscription_callbacks:
+                self._subscription_queue.put((agent, service, present, None))
+
+    def _report_subscriptions(self) -> None:
+        """Hand subscription changes to the callbacks on a thread of ours: they send messages, which a
+        Zenoh callback must not (a blocking put there could wait on Zenoh's own threads)."""
+        while True:
+            item = self._subscription_queue.get()
+            if item is None:
+                return
+            agent, service, present, only = item
+            for callback in [only] if only is not None else list(self._subscription_callbacks):
+                try:
+                    callback(agent, service, present)
+                except Exception:
+                    log.exception("directory: a subscription callback failed")
 
     # -- control and status ----------------------------------------------------------------------
     def _publish_control(self, message: dict[str, Any]) -> None:

@@ -41,10 +41,11 @@ def count(ctx, query, result):
 def abolish(ctx, pattern):
     """Remove every belief that unifies with ``pattern`` (posting -b events)."""
     agent = ctx.agent
-    from agentspeak.terms import AnnotatedVar, NsTerm
+    from agentspeak.terms import DEFAULT_NS_NAME, AnnotatedVar, NsTerm, Var
     from agentspeak.unify import unifies
-    if isinstance(pattern, AnnotatedVar):  # `_[source(a)]`: any belief with these annotations
-        facts = list(agent.bb.literals())
+    if isinstance(pattern, Var):  # `_`, `X`, `_[source(a)]`: any belief (with these annotations) of the
+        # default name space, the variable's (Jason's Agent.abolish unifies the pattern with every belief)
+        facts = agent.bb.in_namespace(DEFAULT_NS_NAME)
     elif isinstance(pattern, NsTerm):  # `ns::_`, `N::b(_)`: the beliefs of a name space, of every one
         facts = agent.bb.in_every_ns(pattern.body)[0]
     elif isinstance(pattern, Literal):

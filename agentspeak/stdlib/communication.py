@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from concurrent.futures import Future
 
-from agentspeak.communication import Message
-from agentspeak.stdlib.registry import Suspend, internal_action, wrong_arguments
+from agentspeak.communication import Message, stamp_sent
+from agentspeak.stdlib.registry import IAError, Suspend, internal_action, wrong_arguments
 from agentspeak.terms import NIL, Literal, Var, list_items, make_list, to_str
 
 _ASK = ("askOne", "askAll", "askHow")
@@ -39,7 +39,7 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
         # the usual send: one receiver named by an atom, no answer awaited (the checks below pass)
         msg = Message.__new__(Message)  # Message(agent.name, receiver.functor, performative.functor, content)
         msg.sender, msg.receiver, msg.performative = agent.name, receiver.functor, performative.functor
-        msg.content, msg._msg_id, msg.in_reply_to, msg.sent_at = content, None, None, None
+        msg.content, msg._msg_id, msg.in_reply_to, msg.sent_at, msg.read_at = content, None, None, None, None
         agent.arch.send(agent, msg)
         return True
     if not isinstance(performative, Literal) or performative.args:
@@ -58,10 +58,14 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
             agent.arch.send(agent, msg)
         return True
     # a synchronous ask: wait for the replies
+    if timeout is not None and not isinstance(timeout, (int, float)):
+        raise wrong_arguments(".send: the timeout is a number of milliseconds")
     futures = []
     asks = set()  # the ids of the messages this ask sent
     for name in names:
         msg = Message(sender, name, perf, content)
+        if timeout is not None:
+            stamp_sent(msg)  # a deadline runs: the receiver reads it first (LocalRuntime._route_from)
         asks.add(msg.msg_id)
         fut: Future = Future()
         futures.append(fut)
@@ -75,7 +79,11 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
 
     def on_result(c, replies) -> bool:
         values = [_answer_value(perf, r, content) for r in replies]
-        return c.unify(answer, values[0] if len(values) == 1 and not isinstance(receiver, type(NIL)) and len(names) == 1 and not _is_list(receiver) else make_list(values))
+        value = values[0] if len(values) == 1 and not isinstance(receiver, type(NIL)) and len(names) == 1 and not _is_list(receiver) else make_list(values)
+        if not c.unify(answer, value):  # Jason's TransitionSystem.resumeSyncAskIntention
+            raise IAError("ask_failed", f"reply of an ask message ('{to_str(value)}') does not unify with fourth "
+                                        f"argument of .send ('{to_str(answer, c.b)}')")
+        return True
 
     def on_timeout(c) -> bool:
         for fut in futures:
@@ -83,11 +91,7 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
         c.unify(answer, Literal("timeout"))  # Jason goes on even when the answer pattern does not match
         return True
 
-    seconds = None
-    if timeout is not None:
-        if not isinstance(timeout, (int, float)):
-            raise wrong_arguments(".send: the timeout is a number of milliseconds")
-        seconds = timeout / 1000.0
+    seconds = None if timeout is None else timeout / 1000.0
 
     def answer_waiting(deadline: float) -> bool:
         # an answer sent in time but not read yet (this agent got no CPU meanwhile) is not a timeout

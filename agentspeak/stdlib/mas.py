@@ -9,7 +9,10 @@ import re
 from agentspeak.program import ACHIEVE, ADD, PlanTerm, Plan, Trigger, body_variables, substitute
 from agentspeak.stdlib.registry import IAError, Suspend, internal_action, wrong_arguments
 from agentspeak.beliefs import SOURCE_SELF
-from agentspeak.terms import NIL, Literal, Var, is_list, list_items, make_list, resolve, to_print_str, to_str
+from agentspeak.directory import service_text
+from agentspeak.terms import (
+    LOCAL_NS_PREFIX, NIL, Literal, Var, is_list, list_items, make_list, resolve, to_print_str, to_str,
+)
 from agentspeak.unify import undo, unifies
 
 
@@ -360,6 +363,8 @@ def namespace(ctx, ns):
     if not isinstance(ns, Var) and not (isinstance(ns, Literal) and not ns.args):
         raise wrong_arguments(".namespace: the argument must be an atom or a variable")
     for name in _namespaces(ctx.agent):
+        if name.startswith(LOCAL_NS_PREFIX) and isinstance(ns, Var):
+            continue  # a variable never takes a local name space (Jason's Unifier.bind): it stays private
         mark = len(ctx.trail)
         if ctx.unify(ns, Literal(name)):
             yield
@@ -402,64 +407,41 @@ def add_nested_source(ctx, lit, source, result):
     return ctx.unify(result, nested_source(lit, source))
 
 
-# ---------------------------------------------------------------------- directory facilitator (local)
-def _df(ctx) -> dict:
-    """The directory of the MAS this agent runs in (agents of one in-process run share it)."""
-    runtime = getattr(ctx.agent.arch, "runtime", None)
-    if runtime is None:
-        raise IAError("ia_failed", "no directory facilitator here: .df_* work among the agents of one "
-                                   "`faultmas mas run` (not across processes)")
-    return runtime.__dict__.setdefault("directory", {"services": {}, "subscribers": {}})
-
-
-def _service_key(service, kind) -> tuple:
-    return (_text(service), _text(kind) if kind is not None else "")
-
-
-def _tell_provider(ctx, subscriber: str, provider: str, service) -> None:
-    from agentspeak.communication import Message
-    ctx.agent.arch.send(ctx.agent, Message("df", subscriber, "tell", Literal("provider", (Literal(provider), service))))
+# ---------------------------------------------------------------------- directory facilitator
+# Jason's jason.stdlib.df_*: the semantics are agentspeak.directory's; the architecture gives the directory
+# of the MAS (the in-process one, or the one that reaches the agents of other processes: agents.directory).
+def _directory(ctx):
+    find = getattr(ctx.agent.arch, "directory", None)
+    if find is None:
+        raise IAError("ia_failed", f"the architecture of {ctx.agent.name} has no directory facilitator")
+    return find(ctx.agent)
 
 
 @internal_action(".df_register", args=(1, 2))
 def df_register(ctx, service, kind=None):
-    """``.df_register(S[, Type])``: this agent provides service S; subscribers get ``provider(Ag, S)``."""
-    df = _df(ctx)
-    key = _service_key(service, kind)
-    providers = df["services"].setdefault(key, [])
-    me = ctx.agent.name
-    if me not in providers:
-        providers.append(me)
-        for subscriber in df["subscribers"].get(key, []):
-            _tell_provider(ctx, subscriber, me, service)
+    """``.df_register(S[, Type])``: this agent provides service S (the type is ignored, as in Jason's
+    local infrastructure); subscribers of S are told ``provider(Ag, "S")``."""
+    _directory(ctx).register(ctx.agent.name, service_text(service))
 
 
 @internal_action(".df_deregister", args=(1, 2))
 def df_deregister(ctx, service, kind=None):
     """``.df_deregister(S[, Type])``: this agent no longer provides S."""
-    providers = _df(ctx)["services"].get(_service_key(service, kind), [])
-    if ctx.agent.name in providers:
-        providers.remove(ctx.agent.name)
+    _directory(ctx).deregister(ctx.agent.name, service_text(service))
 
 
 @internal_action(".df_search", args=(2, 3))
 def df_search(ctx, service, kind_or_result, result=None):
-    """``.df_search(S[, Type], L)``: L is the list of the agents providing S."""
-    kind, result = (None, kind_or_result) if result is None else (kind_or_result, result)
-    providers = _df(ctx)["services"].get(_service_key(service, kind), [])
-    return ctx.unify(result, make_list([Literal(p) for p in providers]))
+    """``.df_search(S[, Type], L)``: L is the list of the agents providing S, in any process of the MAS."""
+    result = kind_or_result if result is None else result
+    return ctx.unify(result, make_list([Literal(p) for p in _directory(ctx).search(service_text(service))]))
 
 
 @internal_action(".df_subscribe", args=(1, 2))
 def df_subscribe(ctx, service, kind=None):
-    """``.df_subscribe(S[, Type])``: be told ``provider(Ag, S)`` (from ``df``) for each provider of S."""
-    df = _df(ctx)
-    key = _service_key(service, kind)
-    subscribers = df["subscribers"].setdefault(key, [])
-    if ctx.agent.name not in subscribers:
-        subscribers.append(ctx.agent.name)
-        for provider in df["services"].get(key, []):
-            _tell_provider(ctx, ctx.agent.name, provider, service)
+    """``.df_subscribe(S[, Type])``: be told ``provider(Ag, "S")`` (from ``df``) for each provider of S,
+    now and whenever one registers."""
+    _directory(ctx).subscribe(ctx.agent.name, service_text(service))
 
 
 # ---------------------------------------------------------------------- small terms and lists

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import textwrap
 
+import pytest
+
 from tests.agentspeak.harness import run_asl
 
 
@@ -149,6 +151,70 @@ def test_an_answer_sent_before_the_askers_timeout_is_taken_though_read_after_it(
         clock.now += 10.0  # the asker gets the CPU again long after its deadline
         cycles("a", 5)
         assert lines == [expected]
+
+
+@pytest.mark.parametrize("queued, late, timeout, expected", [
+    (0.0, 0.25, 200, "a: v(1)[source(b)]"),  # the mock's wait ended 250 ms late: not the mock's doing
+    (0.05, 0.25, 200, "a: v(1)[source(b)]"),  # ... after it read the ask 50 ms after it was sent
+    (0.15, 0.0, 200, "a: timeout"),          # it read the ask 150 ms late: wall time, as Jason's timeout
+    (0.0, 0.25, 50, "a: timeout"),           # a wait of 100 ms is too long for 50 ms
+])
+def test_an_answer_counts_as_sent_when_the_answerer_would_have_sent_it_on_a_thread_of_its_own(
+        monkeypatch, queued, late, timeout, expected):
+    # Jason's suite, send.asl test_timeout_send: the mock answers through a +? plan that waits 100 ms; the
+    # asker gives it 200 ms, then 50 ms. The process reaches the mock `queued` s after the ask was sent, and
+    # comes back to it `late` s after its wait's deadline (it ran other agents, or got no CPU), which the
+    # mock's own timers count as lost time (lag): on a thread of its own it would have gone on at the
+    # deadline. So does its answer. The asker itself gets the CPU again long after its deadline.
+    clock, lines, cycles = _agents(monkeypatch, {"a": asl(f"""
+        !start.
+        +!start <- .send(b, askOne, v(X), A, {timeout}); .print(A).
+    """), "b": asl("""
+        +?v(X) <- .wait(100); X = 1.
+    """)})
+    cycles("a", 3)
+    clock.now += queued
+    cycles("b", 6)  # reads the ask, starts the wait
+    assert lines == []
+    clock.now += 0.1 + late
+    cycles("b", 6)  # the wait ends, the answer goes
+    clock.now += 10.0
+    cycles("a", 5)
+    assert lines == [expected]
+
+
+def test_the_receiver_of_an_ask_with_a_timeout_goes_before_agents_woken_earlier():
+    # Jason runs the asked agent on a thread of its own: it reads the ask at once. Here the agents of a run
+    # take turns; one woken by an ask with a timeout (or by an answer to an ask) goes first, as an agent whose
+    # timer is due does, but at most URGENT_IN_ROW in a row before an agent woken earlier, so none starves
+    import threading
+
+    from agentspeak.communication import Message, stamp_sent
+    from agentspeak.runtime import URGENT_IN_ROW, LocalRuntime
+    from agentspeak.terms import Literal
+    runtime = LocalRuntime()
+    names = ["c", "b", "d", "e", "f"]
+    for name in names:
+        runtime.add_agent(name, "")
+    runtime.ready.clear()
+    runtime.busy.clear()
+    runtime._ready_set.clear()
+    runtime._loop_thread = threading.get_ident()  # delivered from the loop's own thread, as agents send
+
+    def send(to: str, performative: str, deadline: bool) -> None:
+        msg = Message("a", to, performative, Literal("v", (1,)))
+        if deadline:
+            stamp_sent(msg)
+        runtime.route(msg)
+
+    send("c", "tell", False)
+    send("b", "askOne", True)
+    assert [ag.name for ag in runtime.ready] == ["b", "c"]
+    assert URGENT_IN_ROW == 3
+    send("d", "askOne", True)
+    send("e", "askOne", True)
+    send("f", "askOne", True)  # a fourth in a row waits behind c
+    assert [ag.name for ag in runtime.ready] == ["e", "d", "b", "c", "f"]
 
 
 # -- .drop_all_intentions (stdlib/drop_all_intentions.java; Jason's suite: stdlib/drop_all_intentions.asl) --
