@@ -29,6 +29,8 @@ from agents.transport.status import AgentStatus
 
 INBOX_CAPACITY = 8192
 """Samples an inbox holds before Zenoh stops taking more for it (reliable puts then wait: no loss)."""
+DRAIN_JOIN_TIMEOUT = 10.0
+"""Seconds ``unregister``/``close`` wait for an inbox thread to hand over what it holds and end."""
 
 
 class ZenohTransport(Transport):
@@ -44,6 +46,7 @@ class ZenohTransport(Transport):
         self._publishers: dict[str, Any] = {}
         self._publish_lock = threading.Lock()
         self._inboxes: dict[str, Any] = {}
+        self._drains: dict[str, threading.Thread] = {}
         self._tokens: dict[str, Any] = {}
         self._statuses: dict[str, AgentStatus] = {}
         self._declared: list[Any] = []
@@ -99,8 +102,10 @@ class ZenohTransport(Transport):
         key = keys.inbox_key(self.mas, agent)
         subscriber = self.session.declare_subscriber(key, zenoh.handlers.FifoChannel(INBOX_CAPACITY))
         self._inboxes[agent] = subscriber
-        threading.Thread(target=self._drain, args=(agent, subscriber.handler, key), daemon=True,
-                         name=f"faultmas-inbox-{agent}").start()
+        drain = threading.Thread(target=self._drain, args=(agent, subscriber.handler, key), daemon=True,
+                                 name=f"faultmas-inbox-{agent}")
+        self._drains[agent] = drain
+        drain.start()
         self._tokens[agent] = self.session.liveliness().declare_token(keys.alive_key(self.mas, agent))
 
     def _drain(self, agent: str, channel: Any, key: str) -> None:
@@ -131,6 +136,19 @@ class ZenohTransport(Transport):
             if entity is not None:
                 entity.undeclare()
         self._statuses.pop(agent, None)
+        self._join_drain(agent)
+
+    def _join_drain(self, agent: str) -> None:
+        """Wait for the inbox thread, which ends once its subscriber is undeclared. Left running, it
+        may still be inside Zenoh's ``recv`` when the interpreter shuts down: on waking it would ask
+        for the GIL, CPython would end the thread with ``pthread_exit``, and the forced unwind through
+        Zenoh's Rust frames aborts the whole process ("FATAL: exception not rethrown", SIGABRT)."""
+        drain = self._drains.pop(agent, None)
+        if drain is not None and drain is not threading.current_thread():
+            drain.join(timeout=DRAIN_JOIN_TIMEOUT)
+            if drain.is_alive():
+                log.warning("inbox thread of %s still running %.0f s after its inbox closed",
+                            agent, DRAIN_JOIN_TIMEOUT)
 
     def _put(self, receiver: str, envelope: Envelope, encoded: Callable[[], bytes]) -> bool:
         publisher = self._publishers.get(receiver)

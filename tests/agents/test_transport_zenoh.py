@@ -207,7 +207,43 @@ def test_ten_thousand_bad_payloads_during_a_conversation():
             logger.removeHandler(handler)
             flooder.stop()
             partner.stop()
-    assert partner.process.returncode == 0 and flooder.process.returncode == 0
+    for child in (partner, flooder):
+        assert child.process.returncode == 0, f"{child.process.args[3:7]} ended {child.process.returncode}: " \
+                                              f"{child.stderr[-3000:]}"
+
+
+def inbox_threads(*agents: str) -> list[str]:
+    """Which of ``agents`` still have an inbox thread in this process."""
+    names = {t.name for t in threading.enumerate()}
+    return [agent for agent in agents if f"faultmas-inbox-{agent}" in names]
+
+
+def test_unregister_and_close_end_the_inbox_threads_before_they_return():
+    """A thread of ours left inside Zenoh's ``recv`` when the interpreter shuts down aborts the process:
+    woken by the closed inbox, it asks for the GIL, CPython ends it with ``pthread_exit``, and the forced
+    unwind through Zenoh's Rust frames gives SIGABRT ("FATAL: exception not rethrown"), the rare -6 of a
+    probe child under load. So no inbox thread outlives ``unregister`` or ``close``, even one busy with a
+    backlog of messages."""
+    mas = unique_mas()
+    with ZenohTransport(mas) as sender:
+        receiver = ZenohTransport(mas, ZenohOptions(connect=tuple(sender.endpoints))).open()
+        try:
+            sender.register("quinn", Inbox())
+            for cycle in range(3):
+                inbox = Inbox()
+                receiver.register("rita", inbox)
+                assert sender.wait_for_agents(["rita"], timeout=30)
+                for i in range(500):
+                    sender.send(Envelope(mas, "quinn", ("rita",), "tell", f"n({cycle},{i})"))
+                assert inbox.get(timeout=10) is not None     # its thread is at work
+                receiver.unregister("rita")
+                assert inbox_threads("quinn", "rita") == ["quinn"], cycle
+                assert poll(lambda: "rita" not in sender.alive_agents(), timeout=30)
+            receiver.register("sam", Inbox())
+        finally:
+            receiver.close()
+        assert inbox_threads("quinn", "sam") == ["quinn"]
+    assert inbox_threads("quinn") == []
 
 
 def test_stop_control_reaches_every_process_of_the_mas_only():

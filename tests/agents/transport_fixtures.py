@@ -38,12 +38,16 @@ class Child:
         self.process = subprocess.Popen([sys.executable, *args], cwd=REPO, env=env, text=True,
                                         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         self.lines: list[str] = []
+        self.errors: list[str] = []    # its standard error, read as it comes (a full pipe would stall it)
         self._new_line = threading.Condition()
-        threading.Thread(target=self._read, daemon=True).start()
+        self._readers = [threading.Thread(target=self._read, daemon=True),
+                         threading.Thread(target=self._read_errors, daemon=True)]
+        for reader in self._readers:
+            reader.start()
         ready = self.wait_line(ready_prefix, ready_timeout)
         if ready is None:
             self.stop()
-            raise RuntimeError(f"child {args} not ready: {self.process.stderr.read()[-2000:]}")
+            raise RuntimeError(f"child {args} not ready: {self.stderr[-2000:]}")
         self.endpoints: list[str] = (json.loads(ready.split(" ", 1)[1]) if ready.startswith("READY ")
                                      else ready.split(" listening on ", 1)[-1].split())
 
@@ -52,6 +56,15 @@ class Child:
             with self._new_line:
                 self.lines.append(line.rstrip("\n"))
                 self._new_line.notify_all()
+
+    def _read_errors(self) -> None:
+        for line in self.process.stderr:
+            self.errors.append(line)
+
+    @property
+    def stderr(self) -> str:
+        """What the child wrote on standard error so far (all of it once it has ended and been stopped)."""
+        return "".join(self.errors)
 
     def wait_line(self, prefix: str, timeout: float = 30.0) -> str | None:
         """The first output line starting with ``prefix`` (waiting for it), or ``None``."""
@@ -75,10 +88,13 @@ class Child:
         except OSError:
             pass
         try:
-            return self.process.wait(timeout)
+            code = self.process.wait(timeout)
         except subprocess.TimeoutExpired:
             self.process.kill()
-            return self.process.wait()
+            code = self.process.wait()
+        for reader in self._readers:   # the pipes end with the process: the last lines are in
+            reader.join(timeout=5)
+        return code
 
 
 def probe(mode: str, mas: str, name: str, connect: Sequence[str] = (), *extra: str) -> Child:
