@@ -74,11 +74,14 @@ campaign: speedups
 
 # The soak (tests/hardening/soak.py): one team of 6 that stays up and diagnoses fault after fault until
 # SOAK_SIM_SECONDS of simulated time (default 1 h) or SOAK_WALL_SECONDS of wall time; RSS slopes (this process
-# and every agent), threads, descriptors, Zenoh declarations, stuck intentions, per task.
+# and every agent), threads, descriptors, Zenoh declarations, stuck intentions, per task. Each task's robot poses are
+# in its row and the agents' lines in soak-agents.log (with the paths of a task that did not end correct), so a
+# task can be replayed: python -m tests.hardening.soak_replay soak.jsonl N
 SOAK_SIM_SECONDS ?= 3600
 SOAK_WALL_SECONDS ?= 36000
 soak: speedups
-	$(PY) -m tests.hardening.soak --sim-seconds $(SOAK_SIM_SECONDS) --wall-seconds $(SOAK_WALL_SECONDS) --out soak.jsonl
+	$(PY) -m tests.hardening.soak --sim-seconds $(SOAK_SIM_SECONDS) --wall-seconds $(SOAK_WALL_SECONDS) --out soak.jsonl \
+		--agent-log soak-agents.log
 
 # Jason 3.3.2's own AgentSpeak unit tests, run unchanged from ../shared (see tests/jason_suite), in one
 # process and with --processes (both run; fails unless every executed test passed in both); prints

@@ -3,8 +3,9 @@
 // goToDestination -> on failure diagnoseAlone (own sensors + the model-based diagnoser) -> if the
 // diagnosis is still ambiguous, broadcastHelp -> with the first helper that accepts: it finds me
 // (findRobot; when it cannot, I turn to show it another side and it looks again), trackMe (I turn
-// first when it sees me nearly end-on), tryMove, giveMeFeedback -> diagnose again with what the helper
-// saw -> thanks. A weak wheel curls my first leg, so I may end anywhere near the helper, facing anywhere.
+// first when it sees me nearly end-on), tryMove (turned round when my bumper stops it), giveMeFeedback
+// -> diagnose again with what the helper saw -> thanks. A weak wheel curls my first leg, so I may end
+// anywhere near the helper, facing anywhere.
 // The decision is the diagnoser's (.diagnose on plans/turtlebot_hardware.yaml); outcome/2 only names
 // the minimal diagnosis it returns. Steps worth timing are reported with .progress (agents/progress.py).
 //
@@ -209,19 +210,33 @@ where_i_am(unknown) :- not team_pose(_, _, _).    // no start_pose: the helper l
 +!showSide(H, Ds, Trial, Seen) <- !afterTrack(H, Ds, Trial, Seen).
 
 +!afterTrack(H, Ds, _, trackMe(_, lost)) <- .print(H, " lost sight of me"); !findMe(H, Ds).
-+!afterTrack(H, Ds, Trial, Before) : test_move(M) & answer_timeout(T) & encoders(L, R)
-   <- .my_name(Me);
-      .abolish(saw_over_current(_));
++!afterTrack(H, Ds, Trial, Before) : test_move(M) & encoders(L, R)
+   <- .abolish(saw_over_current(_));
+      .abolish(blocked);
       -+leg_start(L, R);
       .print("test motion: ", M, " m while ", H, " watches");
       !testMotion(M);
+      !afterMotion(H, Ds, Trial, Before).
+
++!testMotion(M) <- move(M).
+-!testMotion(M)[reason(bumper)] <- +blocked.
+-!testMotion(M)[reason(R)] <- .print("the test motion failed too (", R, ")").
+
+// A motion stopped by my bumper (a wall, a robot in front of me) shows what is in my way, not what my wheels
+// can do: that motion is not diagnosed. I turn round (my other side faces the helper, as it should) and try
+// again; blocked both ways, I give the helper up for another.
++!afterMotion(H, Ds, Trial, _) : blocked & max_trials(N) & Trial < N
+   <- .print("something stopped my test motion: I turn round and try again");
+      !turnInPlace(180);
+      !tryMove(H, Ds, Trial + 1).
++!afterMotion(H, Ds, _, _) : blocked
+   <- .print("something stopped my test motion both ways"); !nextHelper(H, Ds).
++!afterMotion(H, Ds, Trial, Before) : answer_timeout(T)
+   <- .my_name(Me);
       .send(H, askOne, giveMeFeedback(Me, _), After, T);
       !checkAnswer(H, After);
       !ownObservations(Own);
       !withFeedback(H, Ds, Trial, Own, Before, After).
-
-+!testMotion(M) <- move(M).
--!testMotion(M)[reason(R)] <- .print("the test motion failed too (", R, ")").
 
 +!checkAnswer(H, timeout) <- .print(H, " did not answer in time"); .fail.
 +!checkAnswer(H, false) <- .print(H, " could not answer"); .fail.

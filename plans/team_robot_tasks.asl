@@ -7,13 +7,19 @@
 // localisation's pose, which team_pose composes with odometry). The robot was repaired since its last
 // diagnosis, so it forgets that diagnosis's state (it suspects itself no more and may help again), then
 // goes to its destination again; its steps are reported with .progress as in the first task.
+// A task that ran past its budget may have left a conversation going (a diagnosis waiting for a helper, a
+// search for a robot that has a new task too): the new task ends it, on both sides, so that the robot is
+// free to help and nobody waits for an answer about the old task.
 { include("team_robot.asl") }
 
 +task(N, X, Y, Yaw)
-   <- .abolish(task(_, _, _, _));
+   <- .drop_all_intentions;
+      .abolish(task(_, _, _, _));
       .abolish(self_suspect); .abolish(diagnosing); .abolish(on_mission);
       .abolish(tried(_)); .abolish(helper(_)); .abolish(canHelp); .abolish(candidates(_));
-      .abolish(finds(_, _)); .abolish(saw_over_current(_)); .abolish(leg_start(_, _));
+      .abolish(finds(_, _)); .abolish(saw_over_current(_)); .abolish(leg_start(_, _)); .abolish(blocked);
+      .abolish(helping(_)); .abolish(help_at(_, _)); .abolish(stepped(_)); .abolish(home_yaw(_));
+      .abolish(noThanks); .abolish(thanks);
       .abolish(start_pose(_, _, _));
       +start_pose(X, Y, Yaw);
       .progress(task, N);

@@ -79,6 +79,19 @@ def test_an_immobile_robot_seen_end_on_is_found_by_a_side_step():
     assert marks_of(result, "robot_found")
 
 
+def test_a_test_motion_stopped_by_a_wall_is_not_taken_for_dead_motors():
+    # issue 22's soak: a robot of a long-lived team stood where its last task left it, by a wall; its first
+    # leg bumped into the wall, and the side it turned to show the helper faced the wall too, so its test
+    # motion stopped at once (bumper): no ticks, no motion seen, and the diagnoser concluded both motors
+    # dead. A blocked test motion is not diagnosed now: the robot turns round and tries again
+    # (touching the wall at x = 5, side-on to the helper 1.6 m away to the south-west: facing into the wall)
+    placement = Scenario((RobotSetup("faulty", 4.8, 0.0, -45.0, "left_actuator", "faulty.asl"),
+                          RobotSetup("helper", 3.67, -1.13, 45.0)), seed=5)
+    result = run_scenario(placement, processes=False, timeout=120)
+    assert result.finished, [(m.agent, m.step, m.detail) for m in result.marks]
+    assert result.robots[0].diagnosis == "left_actuator"
+
+
 def test_a_helper_killed_mid_way_is_replaced_by_another():
     base = paper_scenario("left_actuator", seed=4)
     scenario = Scenario(base.robots + (RobotSetup("helper2", 0.0, 1.5, 0.0),), seed=4)

@@ -16,8 +16,10 @@ be idle (an agent still busy then has a stuck intention); every agent process fo
 Zenoh declarations of this process's hub; what the simulator keeps that may grow (the camera renderer's
 static layers, the trajectory rows kept: both bounded) and the gc-tracked objects. The summary gives the
 least-squares slope of each RSS per hour of simulated time, over the run and over its second half (after
-the bounded stores filled), and the object types that grew from the second task to the last. A task that ends neither diagnosed nor arrived within ``--task-timeout`` wall seconds is
-named (``timeout``) and the next task starts anyway.
+the bounded stores filled), and the object types that grew from the second task to the last. A task that ends
+neither diagnosed nor arrived within ``--task-timeout`` simulated seconds (what the robots did, whatever the
+machine's load: on 2 shared cores the simulator ran at 0.45-0.9x real time) or ``--task-wall-timeout`` wall
+seconds (a hang) is named (``timeout``) and the next task starts anyway.
 
 ``python -m tests.hardening.soak --sim-seconds 3600 --out soak.jsonl`` (one JSON line per task, then the
 summary line); ``--wall-seconds`` caps it, and the summary says which limit ended it."""
@@ -31,6 +33,7 @@ import sys
 import threading
 import time
 from dataclasses import replace
+from typing import Callable
 
 import psutil
 
@@ -91,10 +94,17 @@ class TaskLog:
                 self.final.setdefault(self.task[report.agent], {}).setdefault(report.agent, (report.step, report.detail))
             self.changed.notify_all()
 
-    def wait_done(self, task: int, timeout: float) -> bool:
-        """Wait until every robot has ended ``task`` (its destination reached, or a diagnosis)."""
+    def wait_done(self, task: int, expired: Callable[[], bool], timeout: float) -> bool:
+        """Wait until every robot has ended ``task`` (its destination reached, or a diagnosis), ``expired()``
+        (checked twice a second: the task's simulated budget) or ``timeout`` wall seconds."""
+        deadline = time.monotonic() + timeout
         with self.changed:
-            return self.changed.wait_for(lambda: len(self.final.get(task, {})) == len(self.robots), timeout)
+            while len(self.final.get(task, {})) < len(self.robots):
+                left = deadline - time.monotonic()
+                if left <= 0 or expired():
+                    return False
+                self.changed.wait(min(0.5, left))
+            return True
 
 
 def _wait_idle(hub, mas: str, robots: list[str], timeout: float) -> tuple[dict, float]:
@@ -183,20 +193,58 @@ def _declared(hub) -> int:
     return len(hub._publishers) + len(hub._declared)
 
 
+def _poses(world, robots: list[str]) -> dict[str, list[float]]:
+    """Every robot's ground-truth pose (x m, y m, yaw deg) at a task's start: with the seed, the fault and the
+    agents' log, what reproduces a task (``tests/hardening/soak_replay.py``)."""
+    return {r: [round(v, 3) for v in world.pose(r)] for r in robots}
+
+
+def _write_paths(path: str, world, robots: list[str], since: float, every: int = 5) -> None:
+    """Every robot's ground-truth path since ``since`` (simulated s; every ``every``-th logged point):
+    where a task that did not end correct took the robots, beside the agents' lines."""
+    paths = {r: [[round(p.time, 2), round(p.x, 3), round(p.y, 3), round(p.yaw_deg, 1)]
+                 for p in world.trajectory(r)[::every] if p.time >= since] for r in robots}
+    with open(path, "w") as out:
+        json.dump(paths, out)
+
+
+class _Stamped:
+    """The agents' lines to a file, each with the simulated time it was read at (the task markers too)."""
+
+    def __init__(self, path: str, world) -> None:
+        self.file, self.world, self.lock = open(path, "w"), world, threading.Lock()
+
+    def write(self, text: str) -> None:
+        with self.lock:
+            for line in text.splitlines(keepends=True):
+                self.file.write(f"{self.world.time:9.2f} {line}")
+            self.file.flush()
+
+    def flush(self) -> None:
+        pass
+
+    def close(self) -> None:
+        self.file.close()
+
+
 def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, seed: int, settle: float,
-         emit) -> dict:
+         emit, agent_log: str | None = None, task_wall_timeout: float = 900.0) -> dict:
     from agents.cooperative import build_world, run_agent_processes, team_scenario
+    from robot_bridge.sim.runner import shared_runner
     from robot_bridge.sim.server import SimServer
 
     first = team_scenario(6, 1, seed)
     scenario = replace(first, robots=tuple(replace(r, program=PROGRAM) for r in first.robots))
     robots = [r.name for r in scenario.robots]
     world, bridges = build_world(scenario)
+    runner = shared_runner(world)
     log = TaskLog(robots)
     rng = random.Random(seed)
     me = psutil.Process()
     rows: list[dict] = []
     hub_of: dict = {}
+    lines = _Stamped(agent_log, world) if agent_log else None
+    poses = _poses(world, robots)
     started = time.monotonic()
 
     def serve(hub):
@@ -205,6 +253,8 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
         return SimServer(hub.session, scenario.mas, bridges).start().stop
 
     def limit_reached() -> str | None:
+        if runner.error is not None:     # the world stands still: no task can end (the soak names it, no hang)
+            return f"simulator failed: {runner.error!r}"
         if world.time >= sim_seconds:
             return "sim_seconds"
         if wall_seconds is not None and time.monotonic() - started >= wall_seconds:
@@ -220,17 +270,20 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
             hold_state["ended_by"] = f"soak error: {exc!r}"
 
     def tasks():
+        nonlocal poses
         hub = hub_of["hub"]
         n, faulty = 0, next((r.name, r.fault, []) for r in scenario.robots if r.fault != "none")
         task_sim, task_wall = 0.0, started
         while True:
-            done = log.wait_done(n, max(0.0, task_timeout - (time.monotonic() - task_wall)))
+            done = log.wait_done(n, lambda: world.time - task_sim >= task_timeout or runner.error is not None,
+                                 max(0.0, task_wall_timeout - (time.monotonic() - task_wall)))
             states, waited = _wait_idle(hub, scenario.mas, robots, settle)
             processes, ended_agents = _agent_processes(launched)
             ended = log.final.get(n, {})
             step, detail = ended.get(faulty[0], (None, None))
             diagnosis = detail if step == "diagnosed" else step
-            row = {"task": n, "faulty": faulty[0], "fault": faulty[1], "diagnosis": diagnosis, "unturned": faulty[2],
+            row = {"task": n, "seed": seed, "faulty": faulty[0], "fault": faulty[1], "diagnosis": diagnosis,
+                   "unturned": faulty[2], "poses": poses,
                    "outcome": ("correct" if diagnosis == faulty[1] else "wrong") if done else "timeout",
                    "not_ended": sorted(set(robots) - set(ended)),
                    "sim_s": round(world.time - task_sim, 1), "wall_s": round(time.monotonic() - task_wall, 1),
@@ -245,6 +298,8 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
                    **_kept_by_simulator(world)}
             if n == 1:
                 type_counts["first"] = _type_counts()
+            if agent_log and row["outcome"] != "correct":
+                _write_paths(f"{agent_log}.task{n}.json", world, robots, task_sim)
             rows.append(row)
             emit(row)
             why = limit_reached()
@@ -254,17 +309,24 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
                 return
             n += 1
             task_sim, task_wall = world.time, time.monotonic()
-            faulty = _next_task(n, world, bridges, hub, scenario.mas, rng, task_timeout)
+            faulty = _next_task(n, world, bridges, hub, scenario.mas, rng, task_wall_timeout)
+            poses = _poses(world, robots)
+            if lines is not None:
+                lines.write(f"== task {n}: {faulty[0]} {faulty[1]}, poses {json.dumps(poses)}\n")
 
     hold_state: dict = {}
     type_counts: dict = {}
     launched: dict = {}
     try:
-        run = run_agent_processes(scenario, ["--bridge", "zenoh"], task_timeout, world=world, serve=serve, hold=hold)
+        run = run_agent_processes(scenario, ["--bridge", "zenoh"], task_wall_timeout, world=world, serve=serve, hold=hold,
+                                  out=lines)
     finally:
+        if lines is not None:
+            lines.close()
         for bridge in bridges.values():
             bridge.shutdown()
-    summary = summarize(rows, hold_state.get("ended_by", "the first task failed"), run.died, run.frozen, started)
+    summary = summarize(rows, hold_state.get("ended_by", "the first task failed"), run.died, run.frozen, started,
+                        task_timeout)
     if "first" in type_counts and "last" in type_counts:
         first, last = type_counts["first"], type_counts["last"]
         growth = {t: last.get(t, 0) - first.get(t, 0) for t in set(first) | set(last)}
@@ -280,7 +342,7 @@ def _slope(xs: list[float], ys: list[float]) -> float:
     return float(np.polyfit(xs, ys, 1)[0])
 
 
-def summarize(rows: list[dict], ended_by: str, died, frozen, started: float) -> dict:
+def summarize(rows: list[dict], ended_by: str, died, frozen, started: float, task_timeout: float = 240.0) -> dict:
     settled = rows[1:] or rows  # the first task loads the interpreter, models, Zenoh and caches: not a leak
     hours = [r["sim_total_s"] / 3600 for r in settled]
     half_time = (settled[0]["sim_total_s"] + settled[-1]["sim_total_s"]) / 2 if settled else 0.0
@@ -297,6 +359,9 @@ def summarize(rows: list[dict], ended_by: str, died, frozen, started: float) -> 
         "sim_hours": round(rows[-1]["sim_total_s"] / 3600, 3) if rows else 0.0,
         "wall_hours": round((time.monotonic() - started) / 3600, 3),
         "outcomes": {o: sum(r["outcome"] == o for r in rows) for o in ("correct", "wrong", "timeout")},
+        "task_sim_s_max": max((r["sim_s"] for r in rows), default=None),
+        "task_wall_s_max": max((r["wall_s"] for r in rows), default=None),
+        "tasks_longer_than_budget_in_wall_time": sum(r["wall_s"] > task_timeout for r in rows),
         "died": died, "agents_ended": sorted({a for r in rows for a in r["ended_agents"]}), "frozen": frozen,
         "tasks_with_stuck_intentions": sum(bool(r["stuck"]) for r in rows),
         "max_settle_s": max((r["settle_s"] for r in rows), default=None),
@@ -330,12 +395,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sim-seconds", type=float, default=3600.0, help="simulated time to reach (default 1 h)")
     parser.add_argument("--wall-seconds", type=float, default=None,
                         help="also stop after this much wall time (the summary says which limit ended it)")
+    parser.add_argument("--task-wall-timeout", type=float, default=900.0,
+                        help="wall seconds a task may take before it is named a timeout whatever the simulated "
+                             "time (a hang; default 900)")
     parser.add_argument("--task-timeout", type=float, default=240.0,
-                        help="wall seconds a task may take before it is named a timeout (default 240)")
+                        help="simulated seconds a task may take before it is named a timeout (default 240)")
     parser.add_argument("--settle", type=float, default=30.0,
                         help="wall seconds the agents may take to be idle once a task ended (default 30)")
     parser.add_argument("--seed", type=int, default=1000)
     parser.add_argument("--out", default=None, help="also write the JSON lines here")
+    parser.add_argument("--agent-log", default=None,
+                        help="write the agents' lines here, stamped with simulated time, a marker at each task; "
+                             "and the robots' paths of every task that did not end correct to PATH.taskN.json")
     args = parser.parse_args(argv)
     out = open(args.out, "w") if args.out else None
 
@@ -345,7 +416,8 @@ def main(argv: list[str] | None = None) -> int:
         if out:
             out.write(line + "\n")
             out.flush()
-    summary = soak(args.sim_seconds, args.wall_seconds, args.task_timeout, args.seed, args.settle, emit)
+    summary = soak(args.sim_seconds, args.wall_seconds, args.task_timeout, args.seed, args.settle, emit,
+                   args.agent_log, args.task_wall_timeout)
     emit({"summary": summary})
     if out:
         out.close()

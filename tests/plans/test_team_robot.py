@@ -25,3 +25,20 @@ def test_a_robot_found_healthy_after_a_false_alarm_helps_the_others_again():
 
 def test_a_robot_with_a_diagnosed_fault_never_helps():
     assert not decided("[left_encoder,right_encoder]")
+
+
+def test_a_new_task_ends_what_the_last_one_left_going():
+    # issue 22's soak: a task past its budget left a robot helping (searching for a robot that had a new task
+    # by then) or diagnosing (asking round after round for a helper) into the next task, busy for it
+    path = plans_dir().joinpath("team_robot_tasks.asl")
+    runtime = LocalRuntime(printer=lambda name, text: None)
+    robot = runtime.add_agent("robot1", program=parse_program(path.read_text(), str(path)), source_file=str(path),
+                              extra_beliefs=[parse_term("helping(robot2)"), parse_term("help_at(robot2, unknown)"),
+                                             parse_term("diagnosing"), parse_term("self_suspect")],
+                              extra_goals=[parse_term("awaitHelper([[left_motor]], 1)")])
+    runtime.add_agent("fleet", source="!go.\n+!go <- .wait(300); .send(robot1, tell, task(7, 1.0, 2.0, 90.0)).\n")
+    runtime.run(timeout=2, stop_when_idle=False)
+    goals = {str(im.event_literal).split("(")[0] for i in robot.intentions() for im in i.stack}
+    assert "awaitHelper" not in goals and "askForHelp" not in goals, goals
+    assert solve_first(robot, parse_term("available"), {})
+    assert solve_first(robot, parse_term("start_pose(1.0, 2.0, 90.0)"), {})

@@ -98,6 +98,51 @@ def test_camera_bridge_perceives_through_the_pixels():
         bridge.shutdown()
 
 
+def test_camera_bridge_perceives_every_robot_in_view_not_only_the_nearest():
+    # issue 22's soak: a helper of a long-lived team looked for a robot standing behind another one, a little
+    # to the side; the bridge reported only the detector's best pair (the nearer robot), so the search turned
+    # past the robot it looked for, round after round, until the task's budget was spent
+    pytest.importorskip("perception.detect")
+    world = World(seed=4)
+    world.add_robot("nearer", x=1.3, y=0.35, yaw_deg=90.0)
+    world.add_robot("sought", x=2.4, y=-0.45, yaw_deg=90.0)
+    bridge = SimBridge("watcher", world=world, camera=True, drive=False)
+    bridge.setup()
+    try:
+        world.run(0.3)
+        seen = {p.args[0]: p.args for p in bridge.percepts() if p.name == "robot_seen"}
+        assert set(seen) == {"nearer", "sought"}
+        assert seen["nearer"][1] > 0 > seen["sought"][1]                         # left, right of the centre
+        assert seen["nearer"][2] == pytest.approx(1.3, abs=0.2) and seen["sought"][2] == pytest.approx(2.4, abs=0.25)
+    finally:
+        bridge.shutdown()
+
+
+def test_a_frame_the_detector_fails_on_is_dropped_and_the_world_runs_on(caplog):
+    # issue 22's soak: an exception in the detector (a SystemError out of OpenCV) ended the simulator's thread,
+    # so the whole team stood still until the soak's wall limit
+    world = World(seed=4)
+    world.add_robot("seen", x=1.5, yaw_deg=90.0)
+    bridge = SimBridge("watcher", world=world, camera=True, drive=False)
+    bridge.setup()
+    detect, failures = bridge._detect, []
+
+    def fails_once(rgb, depth, camera):
+        if not failures:
+            failures.append(1)
+            raise SystemError("bad argument to internal function")
+        return detect(rgb, depth, camera)
+    bridge._detect = fails_once
+    try:
+        world.run(0.5)
+        assert failures and world.time == pytest.approx(0.5)
+        assert "the detector failed" in caplog.text
+        pytest.importorskip("perception.detect")
+        assert any(p.name == "robot_seen" for p in bridge.percepts())     # later frames are seen again
+    finally:
+        bridge.shutdown()
+
+
 def test_frames_are_rendered_when_read_and_the_same_whenever_read():
     from robot_bridge.sim.camera import DeferredFrame, frames_rendered
 
