@@ -49,6 +49,17 @@ _SEQ = b',"seq":'
 _SIG_LENGTH = 88  # base64 of 64 bytes
 
 
+
+def claimed_agent(document: bytes) -> Any:
+    """The agent a signed JSON document says it is from (its ``agent`` field; None when the document is not a
+    JSON object): the ``sender_of`` that ``Identity.open`` checks the signature against. Bad JSON is
+    ``BadMessage("not_json")``."""
+    try:
+        data = json.loads(document)
+    except (ValueError, RecursionError) as exc:
+        raise BadMessage("not_json", str(exc)[:80]) from None
+    return data.get("agent") if isinstance(data, dict) else None
+
 class IdentityError(ValueError):
     """A key file that cannot be used: names the file and why."""
 

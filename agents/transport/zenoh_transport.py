@@ -25,6 +25,7 @@ from agents.transport import keys
 from agents.transport.base import Transport, log
 from agents.transport.config import ZenohOptions, build_config, listen_endpoints
 from agents.transport.envelope import DEFAULT_MAX_SIZE, BadMessage, Envelope, is_valid_name
+from agents.transport.identity import claimed_agent
 from agents.transport.proved_presence import HEARTBEAT, ProvedPresence
 from agents.transport.registrations import QUERY_TIMEOUT, encode_services, new_nonce, open_services
 from agents.transport.status import AgentStatus
@@ -208,17 +209,10 @@ class ZenohTransport(Transport):
             self._proof.expire()
 
     def _on_heartbeat(self, sample: Any) -> None:
-        def agent_of(document: bytes) -> Any:
-            try:
-                data = json.loads(document)
-            except (ValueError, RecursionError) as exc:
-                raise BadMessage("not_json", str(exc)[:80]) from None
-            return data.get("agent") if isinstance(data, dict) else None
-
         key = str(sample.key_expr)
         try:
-            document, seq = self.identity.open(sample.payload.to_bytes(), agent_of)
-            agent = agent_of(document)
+            document, seq = self.identity.open(sample.payload.to_bytes(), claimed_agent)
+            agent = claimed_agent(document)
             if agent != keys.last_chunk(key):
                 raise BadMessage("bad_signature", f"a heartbeat of {agent} put on {key}", agent)
             self.identity.check_fresh(agent, "heartbeat", seq)
@@ -279,14 +273,7 @@ class ZenohTransport(Transport):
         if self.identity is None:
             return AgentStatus.decode(payload)
 
-        def agent_of(document: bytes) -> Any:
-            try:
-                data = json.loads(document)
-            except (ValueError, RecursionError) as exc:
-                raise BadMessage("not_json", str(exc)[:80]) from None
-            return data.get("agent") if isinstance(data, dict) else None
-
-        document, seq = self.identity.open(payload, agent_of)
+        document, seq = self.identity.open(payload, claimed_agent)
         status = AgentStatus.decode(document)
         self.identity.check_fresh(status.agent, "status", seq)
         self._proof.proved(status.agent)
