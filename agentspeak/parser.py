@@ -591,7 +591,10 @@ def parse_program(text: str, source_file: str = "<string>", base_dir: str | None
     # the functions known decide whether `ns.f(...)` is a call: a function registered later must not
     # meet a parse made before it
     key = (text, source_file, len(FUNCTIONS.functions), namespace)
-    cached = _PARSED.get(key) or _PARSED.get(key + (tuple(source_path),))
+    # an expanded program is kept only for a file parsed on its own (``_seen`` None): inside another file's
+    # includes it lacks what that file included before it (helper.asl, included after faulty.asl, skips
+    # geometry.asl), and kept so, an agent of helper.asl alone later in the process ran without geometry.asl
+    cached = _PARSED.get(key) or (_PARSED.get(key + (tuple(source_path),)) if _seen is None else None)
     if cached is not None:
         return copy_program(cached)
     program, errors = _parse(text, source_file, stop_at_first=True, namespace=namespace)
@@ -606,6 +609,8 @@ def parse_program(text: str, source_file: str = "<string>", base_dir: str | None
         # the included files are read now; the expanded program is kept like any other (100 agents that
         # include the same library parse it once)
         program = _expand_includes(program, source_file, base_dir, _seen, source_path)
+        if _seen is not None:
+            return program  # depends on what the including file included before: not kept (see above)
         key = key + (tuple(source_path),)
     if len(_PARSED) >= _PARSED_MAX:
         try:

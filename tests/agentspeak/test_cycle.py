@@ -169,6 +169,30 @@ def test_include_directive(tmp_path):
     assert lines == ["from_lib"]
 
 
+def test_a_file_run_alone_after_another_file_included_it_still_gets_its_own_includes(tmp_path):
+    # in-process runs in a row (pytest, a notebook, an eval worker): team_robot.asl includes faulty.asl then
+    # helper.asl, both including geometry.asl, so helper.asl's inclusion skips it; the parse cache kept that
+    # helper.asl without geometry.asl, and a later run of helper.asl alone had no geometry rules (undiagnosed)
+    (tmp_path / "lib.asl").write_text("double(X, Y) :- Y = X * 2.\n")
+    (tmp_path / "first.asl").write_text('{ include("lib.asl") }\n')
+    (tmp_path / "second.asl").write_text('{ include("lib.asl") }\n!go.\n+!go : double(2, Y) <- .print(Y).\n'
+                                         '+!go <- .print(no_lib).\n')
+    (tmp_path / "team.asl").write_text('{ include("first.asl") }\n{ include("second.asl") }\n')
+    from agentspeak.parser import parse_program
+    from agentspeak.runtime import LocalRuntime
+
+    def run(name: str) -> list[str]:
+        lines: list[str] = []
+        rt = LocalRuntime(printer=lambda n, t: lines.append(t))
+        path = tmp_path / name
+        rt.add_agent("ag", program=parse_program(path.read_text(), str(path)))
+        rt.run(timeout=5)
+        return lines
+
+    assert run("team.asl") == ["4"]
+    assert run("second.asl") == ["4"]
+
+
 def test_a_subgoal_binds_the_callers_variables_when_an_argument_has_annotations():
     # Regression: the finished subgoal was unified back through the plan's own trigger, which had
     # lost the annotations of the event's arguments, so the caller's S = val(3)[source(b)] did not
