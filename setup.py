@@ -56,7 +56,7 @@ def _forget_stale_translations() -> None:
     records the new digest. The C file of every module whose digest differs from the last build's goes."""
     built = SPEEDUPS["built_digests"](HERE / "agentspeak")
     for module in SPEEDUPS["COMPILED_MODULES"]:
-        source = SPEEDUPS["source_path"](module, HERE / "agentspeak")
+        source = Path(SPEEDUPS["source_path"](module, HERE / "agentspeak"))
         if built.get(module) != SPEEDUPS["source_digest"](source):
             (BUILD_DIR / source.relative_to(HERE)).with_suffix(".c").unlink(missing_ok=True)
 
@@ -99,7 +99,7 @@ class BuildWithManifest(build_ext):
         (package_dir / SPEEDUPS["MANIFEST"]).write_text(json.dumps(record, indent=1, sort_keys=True) + "\n")
         for module, compiled in SPEEDUPS["compiled_files"](package_dir).items():
             if module not in built:   # not made by this build from the source on disk: never imported, so gone
-                compiled.unlink()
+                os.remove(compiled)
                 print(f"faultmas: removed the compiled {module} of an older build")
         print(f"faultmas: {len(built)} of {len(self.extensions) - 1} interpreter modules compiled; camera "
               f"z-buffer loop {'compiled' if zbuffer.exists() else 'not compiled (numpy draws)'}")

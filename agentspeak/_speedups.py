@@ -25,11 +25,16 @@ from __future__ import annotations
 import importlib.machinery
 import os
 import sys
-from pathlib import Path
 
 # Imported where used, not here: this module runs at every start of faultmas (issue 23: start-up time), and
 # hashlib, logging, shlex, shutil, sysconfig and importlib.util are needed only by the build or on a stale
-# build (json to read the record).
+# build (json to read the record). Paths are strings (``os.path``), taken as ``str`` or ``os.PathLike``:
+# importing ``pathlib`` (with ``urllib.parse``, ``fnmatch``...) was a tenth of a short ``faultmas diagnose``.
+
+TYPE_CHECKING = False     # typing.TYPE_CHECKING without importing typing
+if TYPE_CHECKING:
+    from typing import Union
+    StrPath = Union[str, "os.PathLike[str]"]
 
 # The interpreter's modules, compiled when a C compiler and Cython are at hand. Left out: the parser (a
 # Lark transformer, already served by lark-cython), the command line and the project-file reader (cold
@@ -50,30 +55,36 @@ MANIFEST = "_speedups.json"
 PURE_ENV = "FAULTMAS_PURE_PYTHON"
 REBUILD = "make speedups (or: python setup.py build_ext --inplace)"
 
-_PACKAGE_DIR = Path(__file__).resolve().parent
+_PACKAGE_DIR = os.path.dirname(os.path.realpath(__file__))
 
 
-def source_path(module: str, package_dir: Path = _PACKAGE_DIR) -> Path:
+def source_path(module: str, package_dir: StrPath = _PACKAGE_DIR) -> str:
     """``agentspeak.stdlib.lists`` -> ``<package_dir>/stdlib/lists.py``."""
-    return package_dir.joinpath(*module.split(".")[1:]).with_suffix(".py")
+    return os.path.join(package_dir, *module.split(".")[1:]) + ".py"
 
 
-def source_digest(path: Path) -> str:
+def _declarations(path: StrPath) -> str:
+    """The ``.pxd`` beside a module's ``.py`` (it may not exist)."""
+    return os.path.splitext(os.fspath(path))[0] + ".pxd"
+
+
+def source_digest(path: StrPath) -> str:
     """SHA-256 of a module's ``.py`` and, if there is one, of the ``.pxd`` beside it (its C types)."""
     import hashlib
 
-    digest = hashlib.sha256(path.read_bytes())
-    declarations = path.with_suffix(".pxd")
-    if declarations.exists():
-        digest.update(b"\0pxd\0" + declarations.read_bytes())
+    with open(path, "rb") as f:
+        digest = hashlib.sha256(f.read())
+    if os.path.exists(_declarations(path)):
+        with open(_declarations(path), "rb") as f:
+            digest.update(b"\0pxd\0" + f.read())
     return digest.hexdigest()
 
 
-def source_stamp(path: Path) -> str:
+def source_stamp(path: StrPath) -> str:
     """Size and modification time of a module's ``.py`` and ``.pxd``: what the build saw, cheaply compared at
     every start (as Python's own ``.pyc`` check); only a file whose stamp differs is hashed."""
     stamps = []
-    for file in (path, path.with_suffix(".pxd")):
+    for file in (path, _declarations(path)):
         try:
             info = os.stat(file)
         except OSError:
@@ -101,10 +112,12 @@ def c_compiler_available() -> bool:
     return bool(command) and shutil.which(command[0]) is not None
 
 
-def compiled_files(package_dir: Path) -> dict[str, Path]:
+def compiled_files(package_dir: StrPath) -> dict[str, str]:
     """Every module of the package with a compiled file beside its source, listed or not (a file left by an
     older build must not be imported either): ``{module: its compiled file}``. (``os.walk``: this runs at
     every start, and three ``Path.rglob`` cost several times more.)"""
+    package_dir = os.fspath(package_dir)
+    package = os.path.basename(os.path.normpath(package_dir))
     found = {}
     suffixes = sorted(importlib.machinery.EXTENSION_SUFFIXES, key=len, reverse=True)   # the longest first
     for folder, dirs, files in os.walk(package_dir):
@@ -113,23 +126,24 @@ def compiled_files(package_dir: Path) -> dict[str, Path]:
         for name in files:
             suffix = next((x for x in suffixes if name.endswith(x)), None)
             if suffix is not None and name[:-len(suffix)] + ".py" in names:
-                parts = Path(folder, name[:-len(suffix)]).relative_to(package_dir).parts
-                found[".".join((package_dir.name, *parts))] = Path(folder, name)
+                parts = os.path.relpath(os.path.join(folder, name[:-len(suffix)]), package_dir).split(os.sep)
+                found[".".join((package, *parts))] = os.path.join(folder, name)
     return found
 
 
-def built_digests(package_dir: Path = _PACKAGE_DIR) -> dict[str, str]:
+def built_digests(package_dir: StrPath = _PACKAGE_DIR) -> dict[str, str]:
     """The source digests the last build recorded, by module (empty: no build, or an unreadable record)."""
     import json
 
     try:
-        built = json.loads((package_dir / MANIFEST).read_text())
+        with open(os.path.join(package_dir, MANIFEST), encoding="utf-8") as f:
+            built = json.load(f)
     except (OSError, ValueError):
         return {}
     return built if isinstance(built, dict) else {}
 
 
-def modules_to_load_from_source(package_dir: Path = _PACKAGE_DIR) -> tuple[dict[str, Path], list[str]]:
+def modules_to_load_from_source(package_dir: StrPath = _PACKAGE_DIR) -> tuple[dict[str, str], list[str]]:
     """Which compiled modules must not be used: ``{module: its .py}`` (none, or all of them), and the stale
     ones (edited since the build, or left by an older one) that made it all."""
     present = {m: source_path(m, package_dir) for m in compiled_files(package_dir)}
@@ -142,7 +156,7 @@ def modules_to_load_from_source(package_dir: Path = _PACKAGE_DIR) -> tuple[dict[
     stale = sorted(m for m, src in present.items()
                    if not (stamps.get(m) == source_stamp(src) and m in built) and built.get(m) != source_digest(src))
     # a listed module the build did not compile (its C compile failed: the extensions are optional)
-    stale += sorted(m for m in COMPILED_MODULES if m not in present and source_path(m, package_dir).exists())
+    stale += sorted(m for m in COMPILED_MODULES if m not in present and os.path.exists(source_path(m, package_dir)))
     # all or none: compiled modules share C types (agent.so reads intentions.Frame's fields directly,
     # see the .pxd files), so one module from source means every module from source
     return (present if stale else {}), stale
@@ -152,7 +166,7 @@ class _FromSource:
     """Imports the listed modules from their ``.py`` file, ahead of the compiled file beside it (a meta path
     finder: ``find_spec`` is all the protocol asks)."""
 
-    def __init__(self, sources: dict[str, Path]) -> None:
+    def __init__(self, sources: dict[str, str]) -> None:
         import importlib.util     # now, not in find_spec: importing it there would ask this finder again
 
         self.sources = sources

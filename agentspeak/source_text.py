@@ -3,19 +3,21 @@
 Why: ``Path.read_text()`` raises ``UnicodeDecodeError`` (a traceback, no line) for a file saved in
 Latin-1 or a binary file given by mistake; every loader of the project (``.asl``, ``.mas2j``, ``.yaml``,
 ``.bench``, observations ``.json``) reads through here so the user gets ``file:line:column: not UTF-8``.
-Not compiled (``agentspeak/_speedups.py``): cold code.
+Not compiled (``agentspeak/_speedups.py``): cold code. No ``pathlib`` (``open``, which takes both): its import was a
+tenth of a short ``faultmas diagnose``, which reads its files here (issue 23).
 """
 from __future__ import annotations
 
-from pathlib import Path
+import os
 
 from agentspeak.errors import SourceError
 
 
-def read_source(path: str | Path, what: str = "file") -> str:
+def read_source(path: str | os.PathLike, what: str = "file") -> str:
     """The text of ``path`` (UTF-8); ``SourceError`` naming file, line and column of the first byte
     that is not UTF-8. ``OSError`` (no such file...) is left to the caller, which knows what it wanted."""
-    data = Path(path).read_bytes()
+    with open(path, "rb") as f:
+        data = f.read()
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
