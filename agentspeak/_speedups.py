@@ -115,19 +115,22 @@ def c_compiler_available() -> bool:
 def compiled_files(package_dir: StrPath) -> dict[str, str]:
     """Every module of the package with a compiled file beside its source, listed or not (a file left by an
     older build must not be imported either): ``{module: its compiled file}``. (``os.walk``: this runs at
-    every start, and three ``Path.rglob`` cost several times more.)"""
+    every start, and three ``Path.rglob`` cost several times more; each name is tested against all suffixes at
+    once, by ``str.endswith``, before the one it has is looked for.)"""
     package_dir = os.fspath(package_dir)
     package = os.path.basename(os.path.normpath(package_dir))
     found = {}
-    suffixes = sorted(importlib.machinery.EXTENSION_SUFFIXES, key=len, reverse=True)   # the longest first
+    suffixes = tuple(sorted(importlib.machinery.EXTENSION_SUFFIXES, key=len, reverse=True))   # the longest first
     for folder, dirs, files in os.walk(package_dir):
         dirs[:] = [d for d in dirs if d != "__pycache__"]
+        where = os.path.relpath(folder, package_dir)
+        prefix = package if where == os.curdir else ".".join((package, *where.split(os.sep)))
         names = set(files)
         for name in files:
-            suffix = next((x for x in suffixes if name.endswith(x)), None)
-            if suffix is not None and name[:-len(suffix)] + ".py" in names:
-                parts = os.path.relpath(os.path.join(folder, name[:-len(suffix)]), package_dir).split(os.sep)
-                found[".".join((package, *parts))] = os.path.join(folder, name)
+            if name.endswith(suffixes):
+                stem = name[:-len(next(x for x in suffixes if name.endswith(x)))]
+                if stem + ".py" in names:
+                    found[f"{prefix}.{stem}"] = os.path.join(folder, name)
     return found
 
 

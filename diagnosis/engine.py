@@ -24,8 +24,9 @@ candidates ("exactly H faulty": propagation) and returns a conflict from its cor
 
 Models with fault modes use the bound on the model's solver directly. The minimum cardinality comes
 from RC2 (core-guided MaxSAT). Time limits interrupt the solver through one shared watchdog thread
-(``deadline``). The totalizer and RC2 are imported when first needed: most queries use neither, and a
-short ``faultmas diagnose`` is mostly start-up (issue 23).
+(``deadline``). The totalizer and RC2 are imported when first needed, as are the hitting-set solver and the
+post-dominators (bounds over 3): most queries use none of them, and a short ``faultmas diagnose`` is mostly
+start-up (issue 23).
 
 The default solver is Glucose 4 (python-sat's, made by ``diagnosis.sat`` without importing ``pysat.solvers``,
 for start-up): it releases the GIL while solving (other threads of the agent keep
@@ -38,16 +39,17 @@ import math
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
 
 from diagnosis.deadline import Deadline
-from diagnosis.dominators import post_dominator_chains, reverse_topological
 from diagnosis.known import KnownDiagnoses
-from diagnosis.hitting_sets import HittingSetSolver, next_diagnosis
 from diagnosis.hs_tree import tree_levels
 from diagnosis.simulation import BatchSimulator, Compiled, netlist_code, simulation_function
 from diagnosis.model import SystemModel
 from diagnosis.sat import make_solver
+
+TYPE_CHECKING = False     # typing.TYPE_CHECKING without importing typing
+if TYPE_CHECKING:
+    from diagnosis.hitting_sets import HittingSetSolver
 
 DEFAULT_SOLVER = "glucose4"
 _RC2_SOLVER = {"glucose4": "g4", "glucose3": "g3", "minisat22": "m22", "cadical195": "cd19"}
@@ -102,6 +104,24 @@ class _Structure:
 
 class TimedOut(Exception):
     """A SAT call hit the query's deadline."""
+
+
+class _Query:
+    """``with _Query(lock, deadline, solver):`` one query at a time on a solver; its deadline's timer ends with it.
+    (A class, not ``contextlib.contextmanager``: importing contextlib was 2 % of a short ``faultmas diagnose``.)"""
+    __slots__ = ("lock", "deadline", "solver")
+
+    def __init__(self, lock: threading.Lock, deadline: Deadline, solver: object) -> None:
+        self.lock, self.deadline, self.solver = lock, deadline, solver
+
+    def __enter__(self) -> None:
+        self.lock.acquire()
+
+    def __exit__(self, *exc: object) -> None:
+        try:
+            self.deadline.release(self.solver)
+        finally:
+            self.lock.release()
 
 
 def _collect(stream: Iterator[list[str]], max_count: int | None) -> tuple[list[list[str]], bool]:
@@ -189,14 +209,9 @@ class Diagnoser:
             raise TimedOut
         return result
 
-    @contextmanager
-    def _query(self, deadline: Deadline) -> Iterator[None]:
+    def _query(self, deadline: Deadline) -> _Query:
         """One query at a time on this solver; its deadline's timer ends with it."""
-        with self._lock:
-            try:
-                yield
-            finally:
-                deadline.release(self._solver)
+        return _Query(self._lock, deadline, self._solver)
 
     def _abnormal(self) -> list[str]:
         model = self._solver.get_model()
@@ -260,12 +275,16 @@ class Diagnoser:
         return check
 
     def _hitting_sets(self, levels: int) -> HittingSetSolver:
+        from diagnosis.hitting_sets import HittingSetSolver
+
         return HittingSetSolver(self.model.num_vars + 1, self._solver_name, ubound=min(levels, _EAGER_BOUND))
 
     def _structure(self, observations: Mapping[str, bool]) -> _Structure | None:
         """Post-dominators for the signals observed (netlists only; None for other models)."""
         if not self.model.readers:
             return None
+        from diagnosis.dominators import post_dominator_chains, reverse_topological
+
         if self._gate_order is None:
             self._gate_order = reverse_topological(self.model.readers)
         key = frozenset(observations)
@@ -361,6 +380,8 @@ class Diagnoser:
     def _conflict_levels(self, base: list[int], limit: int, deadline: Deadline,
                          structure: _Structure | None,
                          simulator: "Callable[[], BatchSimulator | None]") -> Iterator[list[str]]:
+        from diagnosis.hitting_sets import next_diagnosis
+
         hs = self._hitting_sets(limit)
         check = self._check(base, deadline)
         try:
@@ -525,6 +546,8 @@ class Diagnoser:
 
     def _one_level(self, base: list[int], k: int, deadline: Deadline) -> Iterator[list[str]]:
         """Every diagnosis of size <= k, when k is the minimum cardinality (so all are minimal)."""
+        from diagnosis.hitting_sets import next_diagnosis
+
         if self.monotone:
             hs = self._hitting_sets(k)
             check = self._check(base, deadline)
@@ -568,6 +591,8 @@ class Diagnoser:
             if c not in self.model.ab_var:
                 raise KeyError(f"unknown component {c!r} in model {self.model.name!r}")
         known = set(first or ())
+        from diagnosis.hitting_sets import next_diagnosis
+
         with self._query(deadline):
             base = self._base(observations)
             if self.monotone:
