@@ -65,7 +65,7 @@ def source_path(module: str, package_dir: StrPath = _PACKAGE_DIR) -> str:
 
 def _declarations(path: StrPath) -> str:
     """The ``.pxd`` beside a module's ``.py`` (it may not exist)."""
-    return os.path.splitext(os.fspath(path))[0] + ".pxd"
+    return os.fspath(path).removesuffix(".py") + ".pxd"
 
 
 def source_digest(path: StrPath) -> str:
@@ -114,23 +114,26 @@ def c_compiler_available() -> bool:
 
 def compiled_files(package_dir: StrPath) -> dict[str, str]:
     """Every module of the package with a compiled file beside its source, listed or not (a file left by an
-    older build must not be imported either): ``{module: its compiled file}``. (``os.walk``: this runs at
-    every start, and three ``Path.rglob`` cost several times more; each name is tested against all suffixes at
-    once, by ``str.endswith``, before the one it has is looked for.)"""
+    older build must not be imported either): ``{module: its compiled file}``. (``os.scandir``, each folder
+    once: this runs at every start, where ``os.walk`` cost twice as much and three ``Path.rglob`` several times
+    more; each name is tested against all suffixes at once by ``str.endswith`` before the one it has is found.)"""
     package_dir = os.fspath(package_dir)
-    package = os.path.basename(os.path.normpath(package_dir))
     found = {}
     suffixes = tuple(sorted(importlib.machinery.EXTENSION_SUFFIXES, key=len, reverse=True))   # the longest first
-    for folder, dirs, files in os.walk(package_dir):
-        dirs[:] = [d for d in dirs if d != "__pycache__"]
-        where = os.path.relpath(folder, package_dir)
-        prefix = package if where == os.curdir else ".".join((package, *where.split(os.sep)))
-        names = set(files)
-        for name in files:
+    folders = [(package_dir, os.path.basename(os.path.normpath(package_dir)))]     # (folder, its module name)
+    while folders:
+        folder, prefix = folders.pop()
+        with os.scandir(folder) as scan:
+            entries = list(scan)
+        names = {entry.name for entry in entries}
+        for entry in entries:
+            name = entry.name
             if name.endswith(suffixes):
                 stem = name[:-len(next(x for x in suffixes if name.endswith(x)))]
                 if stem + ".py" in names:
-                    found[f"{prefix}.{stem}"] = os.path.join(folder, name)
+                    found[f"{prefix}.{stem}"] = entry.path
+            elif name != "__pycache__" and entry.is_dir(follow_symlinks=False):   # as os.walk
+                folders.append((entry.path, f"{prefix}.{name}"))
     return found
 
 
