@@ -42,3 +42,16 @@ def test_a_startup_row_fails_when_the_output_is_not_the_expected_one() -> None:
     assert timing.error == "" and timing.cell() != "FAILED"
     _check(timing, _timed(timing, [sys.executable, "-c", "print('bye')"]), "hello")
     assert "expected 'hello'" in timing.error and timing.cell() == "FAILED"
+
+
+def test_the_floor_loads_the_solver_extension_and_nothing_of_faultmas_and_reads_no_file(tmp_path: Path) -> None:
+    """The floor must stay what its docstring says every python-sat tool runs: were it to read the netlist or import
+    faultmas, 'reachable' would no longer bound what is possible."""
+    floor = Path(__file__).resolve().parents[2] / "benchmarks" / "startup_floor.py"
+    done = subprocess.run([sys.executable, "-X", "importtime", str(floor), "diagnose", str(tmp_path / "missing.bench"),
+                           "--obs", str(tmp_path / "missing.json"), "--max-card", "3", "--json"],
+                          capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    assert done.returncode == 0 and done.stdout == "", done.stderr
+    imported = {line.rsplit("|", 1)[-1].strip() for line in done.stderr.splitlines() if line.startswith("import time")}
+    assert {"argparse", "json", "pysolvers"} <= imported
+    assert not {m for m in imported if m.split(".")[0] in ("agents", "agentspeak", "diagnosis", "pysat", "shutil")}
