@@ -38,12 +38,15 @@ if TYPE_CHECKING:
 
 # The interpreter's modules, compiled when a C compiler and Cython are at hand. Left out: the parser (a
 # Lark transformer, already served by lark-cython), the command line and the project-file reader (cold
-# code), and this module (it decides what is imported from where). agent.py is compiled only together with
-# agent.pxd: compiled as a plain class, the reasoning cycle ran count 13% slower than from source (CPython
-# 3.11's specialised attribute access beats the generic lookups compiled code makes on plain objects).
+# code), ``errors`` (exception classes: compiled they are ordinary Python classes all the same, and a compiled
+# module there would make ``faultmas diagnose``, which needs only it, source_text and user_cache, pay the
+# stale-source check: see ``_Guard``), and this module (it decides what is imported from where). agent.py is
+# compiled only together with agent.pxd: compiled as a plain class, the reasoning cycle ran count 13% slower
+# than from source (CPython 3.11's specialised attribute access beats the generic lookups compiled code makes on
+# plain objects).
 COMPILED_MODULES = (
     "agentspeak.agent", "agentspeak.arch", "agentspeak.beliefs", "agentspeak.body", "agentspeak.communication",
-    "agentspeak.copier", "agentspeak.errors", "agentspeak.fork", "agentspeak.ground_terms",
+    "agentspeak.copier", "agentspeak.fork", "agentspeak.ground_terms",
     "agentspeak.intentions", "agentspeak.program", "agentspeak.runtime", "agentspeak.solver",
     "agentspeak.terms", "agentspeak.unify",
     "agentspeak.stdlib.bdi", "agentspeak.stdlib.beliefs", "agentspeak.stdlib.communication",
@@ -168,23 +171,41 @@ def modules_to_load_from_source(package_dir: StrPath = _PACKAGE_DIR) -> tuple[di
     return (present if stale else {}), stale
 
 
-class _FromSource:
-    """Imports the listed modules from their ``.py`` file, ahead of the compiled file beside it (a meta path
-    finder: ``find_spec`` is all the protocol asks)."""
+class _Guard:
+    """The guard on ``sys.meta_path`` (first): before the first compiled module of the package is imported, it runs
+    the check (``modules_to_load_from_source``, with one warning naming what is stale); from then on it hands out
+    the ``.py`` of every module the check rejected (all or none) and leaves everything else to the finders after it.
 
-    def __init__(self, sources: dict[str, str]) -> None:
-        import importlib.util     # now, not in find_spec: importing it there would ask this finder again
+    Why at the first compiled module and not at ``import agentspeak``: the check reads the build's record and the
+    size and time of every compiled module's source, a short command's whole budget for a few percent (issue 23),
+    and a command that imports only plain modules of the package (``faultmas diagnose``: errors, source_text,
+    user_cache) imports nothing it could be wrong about. Until then it finds each ``agentspeak.*`` module as the
+    path finder after it would, to see whether that is a compiled file (an extension module's loader)."""
 
-        self.sources = sources
-        self._spec = importlib.util.spec_from_file_location
+    def __init__(self) -> None:
+        self.sources: dict[str, str] | None = None     # {module: its .py} once checked
 
     def find_spec(self, fullname, path=None, target=None):
+        if not fullname.startswith("agentspeak."):
+            return None
+        if self.sources is None:
+            spec = importlib.machinery.PathFinder.find_spec(fullname, path, target)
+            if spec is None or not isinstance(spec.loader, importlib.machinery.ExtensionFileLoader):
+                return spec                          # a plain module (found once: returned, not looked up again)
+            self.sources = {}                        # (the check's own imports are not the package's)
+            self.sources = _check()
+            if fullname not in self.sources:
+                return spec
         source = self.sources.get(fullname)
-        return None if source is None else self._spec(fullname, source)
+        if source is None:
+            return None
+        from importlib.util import spec_from_file_location   # only when something runs from source
+
+        return spec_from_file_location(fullname, source)
 
 
-def install() -> None:
-    """Called once by ``agentspeak/__init__.py``, before any compiled module can be imported."""
+def _check() -> dict[str, str]:
+    """``modules_to_load_from_source``, the stale modules named in one warning: ``{module: its .py}``."""
     sources, stale = modules_to_load_from_source()
     if stale:
         import logging
@@ -192,8 +213,13 @@ def install() -> None:
         logging.getLogger("faultmas.speedups").warning("compiled %s not built from the source on disk (edited since, left by an older build, or "
                     "not compiled by the last one): %s; the interpreter runs from source until you run %s",
                     "module" if len(stale) == 1 else "modules", ", ".join(stale), REBUILD)
-    if sources:
-        sys.meta_path.insert(0, _FromSource(sources))
+    return sources
+
+
+def install() -> None:
+    """Called once by ``agentspeak/__init__.py``, before any compiled module can be imported: puts the guard first
+    on ``sys.meta_path`` (``_Guard``; the check itself runs when the first compiled module is looked for)."""
+    sys.meta_path.insert(0, _Guard())
 
 
 def describe() -> str:

@@ -35,7 +35,6 @@ running) and honours ``interrupt()``, which the time limits rely on; CaDiCaL in 
 from __future__ import annotations
 
 import itertools
-import math
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -380,6 +379,8 @@ class Diagnoser:
     def _conflict_levels(self, base: list[int], limit: int, deadline: Deadline,
                          structure: _Structure | None,
                          simulator: "Callable[[], BatchSimulator | None]") -> Iterator[list[str]]:
+        import math    # here, as next_diagnosis: the tree (bounds up to 3) needs neither (start-up: issue 23)
+
         from diagnosis.hitting_sets import next_diagnosis
 
         hs = self._hitting_sets(limit)

@@ -7,7 +7,6 @@ scanning every known diagnosis; the scan is used when it is not.
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Iterable, Sequence
 
 
@@ -39,9 +38,11 @@ class KnownDiagnoses:
 
     def within(self, candidate: Sequence[int]) -> bool:
         """Is some known diagnosis a subset of (or equal to) the candidate?"""
+        from math import comb    # here: only the hitting-set route (bounds over 3) asks (start-up: issue 23)
+
         n = len(candidate)
         sizes = [s for s in self.by_size if s <= n]
-        if sum(math.comb(n, s) for s in sizes) <= self.count:
+        if sum(comb(n, s) for s in sizes) <= self.count:
             return any(frozenset(sub) in self.by_size[s] for s in sizes
                        for sub in itertools.combinations(candidate, s))
         whole = frozenset(candidate)

@@ -37,7 +37,7 @@ def _copy_of_the_tree(tmp_path: Path) -> Path:
 @pytest.mark.skipif(not BUILT, reason="the compiled parts are not built here (make speedups)")
 def test_a_module_the_compiler_fails_on_is_left_out_and_runs_from_source(tmp_path):
     copy = _copy_of_the_tree(tmp_path)
-    for edited in (copy / "agentspeak" / "errors.py", copy / "robot_bridge" / "sim" / "_zbuffer.pyx"):
+    for edited in (copy / "agentspeak" / "copier.py", copy / "robot_bridge" / "sim" / "_zbuffer.pyx"):
         edited.write_text(edited.read_text() + "\n# edited after the build\n")
     env = {k: v for k, v in os.environ.items() if k != _speedups.PURE_ENV}
     env["CC"] = str(tmp_path / "no-such-compiler")
@@ -45,17 +45,17 @@ def test_a_module_the_compiler_fails_on_is_left_out_and_runs_from_source(tmp_pat
                           capture_output=True, text=True, timeout=280)
     output = done.stdout + done.stderr
     assert done.returncode == 0, output[-3000:]                # optional: the build goes on
-    assert 'building extension "agentspeak.errors" failed' in output
+    assert 'building extension "agentspeak.copier" failed' in output
     manifest = json.loads((copy / "agentspeak" / _speedups.MANIFEST).read_text())
-    assert "agentspeak.errors" not in manifest and "agentspeak.unify" in manifest
+    assert "agentspeak.copier" not in manifest and "agentspeak.unify" in manifest
     compiled = _speedups.compiled_files(copy / "agentspeak")
-    assert "agentspeak.errors" not in compiled, "an older build's file was left in the tree"
+    assert "agentspeak.copier" not in compiled, "an older build's file was left in the tree"
     assert "agentspeak.unify" in compiled
     assert not list((copy / "robot_bridge" / "sim").glob("_zbuffer.*.so"))   # the camera draws with numpy
 
     env = {**env, "PYTHONPATH": str(copy)}
-    done = subprocess.run([sys.executable, "-c", "import agentspeak.errors as m; print(m.__file__)"], cwd=copy,
+    done = subprocess.run([sys.executable, "-c", "import agentspeak.copier as m; print(m.__file__)"], cwd=copy,
                           env=env, capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
-    assert done.stdout.strip() == str(copy / "agentspeak" / "errors.py")
-    assert "agentspeak.errors" in done.stderr and "make speedups" in done.stderr
+    assert done.stdout.strip() == str(copy / "agentspeak" / "copier.py")
+    assert "agentspeak.copier" in done.stderr and "make speedups" in done.stderr
