@@ -74,6 +74,22 @@ def test_an_edited_module_runs_the_whole_interpreter_from_source_with_a_warning(
 
 
 @pytest.mark.skipif(not BUILT, reason="the compiled interpreter is not built")
+def test_the_check_runs_before_the_first_compiled_module_also_after_plain_ones(tmp_path):
+    """The guard checks when a compiled module is first looked for (not at ``import agentspeak``): a process that
+    imports only plain modules (``faultmas diagnose``) skips it, one that imports plain modules first still gets
+    every compiled module from source once one source changed."""
+    copy = _copy_of_the_package(tmp_path)
+    edited = copy / "fork.py"
+    edited.write_text(edited.read_text() + "\nEDITED_AFTER_THE_BUILD = True\n")
+    files, stderr = _where(["agentspeak.errors", "agentspeak.source_text", "agentspeak.user_cache"], tmp_path)
+    assert all(f.endswith(".py") for f in files.values()) and "make speedups" not in stderr
+    files, stderr = _where(["agentspeak.errors", "agentspeak.source_text", "agentspeak.unify", "agentspeak.fork"],
+                           tmp_path)
+    assert files["agentspeak.unify"] == str(copy / "unify.py") and files["agentspeak.fork"] == str(edited)
+    assert "agentspeak.fork" in stderr and "make speedups" in stderr
+
+
+@pytest.mark.skipif(not BUILT, reason="the compiled interpreter is not built")
 def test_an_edited_declaration_file_counts_as_an_edited_module(tmp_path):
     copy = _copy_of_the_package(tmp_path)
     declarations = copy / "intentions.pxd"
