@@ -215,7 +215,8 @@ def _diagnosis_rows(tmp: Path, repeats: int) -> list[str]:
 
     The floor (``benchmarks/startup_floor.py``: the interpreter, argparse parsing the same command line, json and
     python-sat's solver extension, what every python-sat command-line tool runs before its first file) runs
-    interleaved with both sides, with the same arguments; per circuit, "reachable" is the script over the floor:
+    interleaved with both sides, with the same arguments; per circuit, "reachable" is the script over the floor
+    (in seconds: the floor's runs beside that circuit's, under the same load; its row: all of them):
     the best ratio any such tool can reach there, and a target above it is out of reach at this interpreter."""
     from diagnosis.bench import parse_bench
     from benchmarks.bench_diagnosis import make_instances
@@ -236,7 +237,7 @@ def _diagnosis_rows(tmp: Path, repeats: int) -> list[str]:
         (_, observations), = make_instances(netlist, 1, [2], seed=zlib.crc32(name.encode()))
         obs = tmp / f"{name}.json"
         obs.write_text(json.dumps({k: int(v) for k, v in observations.items()}))
-        ours, theirs, first = Timing(), Timing(), Timing()
+        ours, theirs, first, floor_here = Timing(), Timing(), Timing(), Timing()
         ours_answer = theirs_answer = None
         arguments = [str(bench), "--obs", str(obs), "--max-card", "3", "--json"]
         diagnose = [str(FAULTMAS), "diagnose", *arguments]
@@ -252,7 +253,10 @@ def _diagnosis_rows(tmp: Path, repeats: int) -> list[str]:
             _check(theirs, child)
             if not theirs.error:
                 theirs_answer = sorted(sorted(d) for d in json.loads(child.stdout))
-            _check(floor, _timed(floor, floor_cmd))
+            _check(floor_here, _timed(floor_here, floor_cmd))   # beside this circuit's runs: the same load
+        floor.wall += floor_here.wall
+        floor.cpu += floor_here.cpu
+        floor.error = floor.error or floor_here.error
         if not (ours.error or theirs.error) and ours_answer != theirs_answer:
             ours.error = f"{len(ours_answer)} diagnoses, the script found {len(theirs_answer)} (not the same)"
         counts = None
@@ -260,17 +264,17 @@ def _diagnosis_rows(tmp: Path, repeats: int) -> list[str]:
             if floor_count is None:
                 floor_count = instruction_count(floor_cmd, user_env())
             counts = (instruction_count(diagnose, env), instruction_count(baseline, user_env()))
-        circuits.append((f"{name} ({len(netlist.gates)} gates)", ours, theirs, first, counts))
-    for label, ours, theirs, first, counts in circuits:
+        circuits.append((f"{name} ({len(netlist.gates)} gates)", ours, theirs, first, floor_here, counts))
+    for label, ours, theirs, first, floor_here, counts in circuits:
         ratio, ratios = _ratio_cells(ours, theirs)
-        best, bests = _ratio_cells(floor, theirs)
+        best, bests = _ratio_cells(floor_here, theirs)
         instructions, best_count = "", None
         if counts is not None:
             mine, script_count = counts
             if mine and script_count and floor_count:
                 best_count = script_count / floor_count
-                instructions = (f"  {mine:>20.0f} / {script_count:>6.0f} / {script_count / mine:>4.1f}x"
-                                f" / {best_count:>4.1f}x")
+                instructions = (f"  {mine:>20.0f} / {script_count:>6.0f} / {script_count / mine:>5.2f}x"
+                                f" / {best_count:>5.2f}x")
             else:
                 instructions = "  (valgrind failed)"
         met = ("FAILED" if ratio is None else "yes" if ratio >= TARGET_RATIO     # wall, as the other tables
