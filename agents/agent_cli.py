@@ -198,6 +198,16 @@ def _open_robot(choice, args: argparse.Namespace, transport):
         options.setdefault("mas", args.mas)
         if not options.get("connect"):
             options.setdefault("session", transport.session)
+        if transport.identity is not None:   # the secure profile: the robot's keys are signed too
+            from agents.transport.identity import ENVIRONMENT, IdentityError
+            if ENVIRONMENT not in transport.identity.public_keys:
+                raise IdentityError("the project lists no key for the environment, so the robot's percepts "
+                                    'cannot be checked: add one to its environment line, e.g. environment: '
+                                    'sim("key=keys/environment.pub")')
+            options["sealed"] = transport.sealed_channel()
+    elif transport.identity is not None:
+        log.warning("agent %s: bridge %s is not covered by the secure profile: its messages to and from the robot "
+                    "are not signed (docs/reliability.md, \"Identity\")", args.name, choice.name)
     elif choice.name == "sim":
         log.warning("agent %s: bridge sim in a process of its own is a world with one robot; for a shared world "
                     "run `faultmas sim serve` and give the agents --bridge zenoh", args.name)

@@ -60,9 +60,12 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
     except (AslSyntaxError, SourceError, ValueError) as exc:
         print(exc, file=err)
         return 2
-    from agents.transport.identity import IdentityError, project_identity
+    from agents.transport.identity import ENVIRONMENT, IdentityError, project_identity
     try:  # the secure profile: the hub checks signatures too (an outsider's stop must not end the run)
         identity = project_identity(project)
+        if identity is not None and bridge is not None and bridge.name == "sim":
+            # this process serves the simulator to the agents: it signs as the environment
+            identity = project_identity(project, [ENVIRONMENT])
     except IdentityError as exc:
         print(exc, file=err)
         return 2
@@ -72,8 +75,8 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
         from agents.environment import open_bridges
         from robot_bridge.sim.server import SimServer
         try:
-            served = SimServer(hub.session, project.name,
-                               open_bridges(bridge, project.agent_names(), bridge_timeout)).start()
+            served = SimServer(hub.session, project.name, open_bridges(bridge, project.agent_names(), bridge_timeout),
+                               sealed=hub.sealed_channel()).start()
         except Exception as exc:
             hub.close()
             print(f"faultmas mas run: {exc}", file=err)

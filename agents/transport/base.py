@@ -26,6 +26,7 @@ from agents.transport.status import AgentStatus
 
 if TYPE_CHECKING:
     from agents.transport.identity import Identity
+    from agents.transport.sealed import SealedChannel
 
 log = logging.getLogger("faultmas.transport")
 
@@ -369,6 +370,15 @@ class Transport(ABC):
         """For the agent layer: refuse a delivered envelope (e.g. ``unparsable_content``,
         ``untrusted_code``) with the same single log line and the same ``dropped`` counter."""
         self._drop(reason, f"agent {receiver}", envelope.sender, detail)
+
+    def sealed_channel(self) -> "SealedChannel | None":
+        """In the secure profile, what seals and checks this process's documents on keys that carry no envelope
+        (robots' percepts and actions, the inspector's answers), drops counted and logged as this transport's;
+        None in the default profile."""
+        if self.identity is None:
+            return None
+        from agents.transport.sealed import SealedChannel
+        return SealedChannel(self.identity, self._drop)
 
     def report_control_refused(self, message: dict, reason: str) -> None:
         """For the agent layer: a control message (e.g. ``stop``) refused, logged and counted as a drop."""

@@ -69,3 +69,75 @@ def forge_progress(transport: ZenohTransport, mas: str, agent: str, step: str, d
     transport.publish_control(**{**report, "by": agent})                                        # unsigned
     session.put(control_key(mas), posing_as(OUTSIDER, own_key).seal_control({**report, "by": OUTSIDER}))
     session.put(control_key(mas), posing_as(agent, own_key).seal_control({**report, "by": agent}))
+
+
+
+def capture_one(session, key: str, timeout: float = 30.0) -> bytes | None:
+    """The payload of the next sample put on ``key`` (None after ``timeout`` seconds)."""
+    import queue
+
+    got: queue.Queue = queue.Queue()
+    subscriber = session.declare_subscriber(key, lambda sample: got.put(sample.payload.to_bytes()))
+    try:
+        return got.get(timeout=timeout)
+    except queue.Empty:
+        return None
+    finally:
+        subscriber.undeclare()
+
+
+def forge_percepts(session, mas: str, robot: str, other: str, own_key) -> None:
+    """On ``robot``'s percept key, percepts its robot never had (both wheel motors overloaded, a bumper pressed,
+    kept for ever under a source of the outsider's own): unsigned, signed with the outsider's key as the
+    environment, and a snapshot the environment really signed for ``other`` put again on ``robot``'s key; on the
+    clock key, a time far ahead (unsigned: every deadline of the agents would pass at once)."""
+    from agents.transport.identity import ENVIRONMENT
+    from robot_bridge.zenoh_bridge import clock_key, robot_key
+
+    document = (b'{"agent_name":"%s","source":"mallory","literals":["over_current(left)","over_current(right)",'
+                b'"bumper(centre)"]}' % robot.encode())
+    key = robot_key(mas, robot, "percepts")
+    session.put(key, document)                                                         # unsigned
+    session.put(key, posing_as(ENVIRONMENT, own_key).seal(ENVIRONMENT, document))      # its own key
+    captured = capture_one(session, robot_key(mas, other, "percepts"))
+    assert captured is not None, f"no percepts of {other} to capture"
+    session.put(key, captured)                                                         # another robot's
+    session.put(clock_key(mas), b"100000.0")                                           # the clock, unsigned
+
+
+def forge_actions(session, mas: str, robots: list[str], own_key) -> None:
+    """On each robot's action key, a turn its agent never asked for: unsigned, and signed with the outsider's
+    key as the robot's agent."""
+    from robot_bridge.zenoh_bridge import robot_key
+
+    for robot in robots:
+        document = b'{"agent_name":"%s","action_name":"turn","parameters":["170"],"id":990001}' % robot.encode()
+        session.put(robot_key(mas, robot, "actions"), document)                        # unsigned
+        session.put(robot_key(mas, robot, "actions"), posing_as(robot, own_key).seal(robot, document))
+
+
+class StatusForger:
+    """Answers the first action ``robot``'s agent asks for with a failure, before the robot does: unsigned, and
+    signed with the outsider's key as the environment. Start it before the robot's agent starts."""
+
+    def __init__(self, session, mas: str, robot: str, own_key) -> None:
+        import re
+        import threading
+
+        from agents.transport.identity import ENVIRONMENT
+        from robot_bridge.zenoh_bridge import robot_key
+
+        self.done = threading.Event()
+        status_key = robot_key(mas, robot, "status")
+        forger = posing_as(ENVIRONMENT, own_key)
+
+        def on_request(sample) -> None:
+            found = re.search(rb'"id":(\d+)', sample.payload.to_bytes())
+            if self.done.is_set() or found is None or int(found.group(1)) >= 990000:
+                return
+            self.done.set()
+            document = b'{"agent_name":"%s","id":%s,"result":false,"reason":"blocked"}' % (robot.encode(),
+                                                                                           found.group(1))
+            session.put(status_key, document)                                          # unsigned
+            session.put(status_key, forger.seal(ENVIRONMENT, document))                # its own key
+        self.subscriber = session.declare_subscriber(robot_key(mas, robot, "actions"), on_request)

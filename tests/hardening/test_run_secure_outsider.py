@@ -5,7 +5,12 @@ The outsider (tests/hardening/run_outsider.py) reads the MAS name and the hub's 
 host could, has a key of its own, and tries tell, achieve, tellHow and askOne against both robots, stops,
 and ``.progress`` reports that claim a wrong diagnosis for the faulty robot. Every attempt is refused with a
 log line (the robots' in their stderr, the run's hub in its ``dropped`` counters), and the run still ends
-with its correct diagnosis. Before ``.progress`` was signed, the forged report ended the run ``wrong``."""
+with its correct diagnosis. Before ``.progress`` was signed, the forged report ended the run ``wrong``.
+
+The robots' keys too (the environment, here the run's hub, signs percepts, action results and the clock; an
+agent signs its robot's actions): the outsider's percepts (overloaded motors, a pressed bumper), its clock far
+ahead, its answer failing the faulty robot's first action and its turns for both robots are refused where they
+arrive. Before they were signed, the same run ended ``wrong``: see docs/reliability.md, "Identity"."""
 from __future__ import annotations
 
 import io
@@ -42,7 +47,7 @@ def test_an_outsider_cannot_tell_achieve_teach_ask_stop_or_forge_progress_in_a_s
     def serve(hub):
         """Start the simulator's server, then the outsider, connected before the robots start."""
         hubs.append(hub)
-        stop_sim = SimServer(hub.session, scenario.mas, bridges).start().stop
+        stop_sim = SimServer(hub.session, scenario.mas, bridges, sealed=hub.sealed_channel()).start().stop
         outsider = subprocess.Popen(
             [sys.executable, "-m", "tests.hardening.run_outsider", "--mas", scenario.mas, "--connect",
              hub.endpoints[0], "--key", str(tmp_path / "mallory.key"), "--robots", ",".join(robots),
@@ -58,7 +63,11 @@ def test_an_outsider_cannot_tell_achieve_teach_ask_stop_or_forge_progress_in_a_s
     try:
         log = run_agent_processes(scenario, ["--bridge", "zenoh"], 180.0, world=world, err=err, serve=serve,
                                   secure=True)
-        outsiders[0].wait(timeout=60)   # it has sent everything (or failed) by now
+        try:
+            outsiders[0].wait(timeout=60)   # it has sent everything (or failed) by now
+        except subprocess.TimeoutExpired:
+            outsiders[0].kill()
+            raise AssertionError(f"the outsider hung: {outsiders[0].stderr.read()[-3000:]}\n{err.getvalue()[-3000:]}") from None
     finally:
         for bridge in bridges.values():
             bridge.shutdown()
@@ -74,11 +83,17 @@ def test_an_outsider_cannot_tell_achieve_teach_ask_stop_or_forge_progress_in_a_s
     assert dict(hubs[0].dropped) == {
         "not_a_member": 2,      # an unsigned stop naming a member (a mere claim), the 'launcher' without its token
         "unknown_sender": 2,    # the outsider's own signed stop and progress report
-        "unsigned": 1,          # a progress report naming the faulty robot, unsigned
-        "bad_signature": 1,     # a progress report as the faulty robot, signed with the outsider's key
+        "unsigned": 1 + 2,      # a progress report naming the faulty robot; a turn for each robot (the simulator)
+        "bad_signature": 1 + 2,  # the same, signed with the outsider's key as the faulty robot, as each robot
     }, logged[-3000:]
-    # each robot's process: one log line per refused message, by reason (the drop log's format)
-    reasons = Counter(m.group(1) for m in re.finditer(r"dropped message on .+? from [^:\n]+: ([a-z_]+)", logged))
-    per_robot = {"unsigned": 2, "unknown_sender": 4 + 2, "bad_signature": 1 + 1, "not_a_member": 2}
-    assert reasons == Counter({reason: n * len(robots) for reason, n in per_robot.items()}), logged[-3000:]
+    # each robot's process: one log line per refused message, by key and reason (the drop log's format)
+    refused = Counter((m.group(1), m.group(2)) for m in re.finditer(
+        r"dropped message on (?:faultmas/coop/(robot/\w+/\w+|clock)|.+?) from [^:\n]+: ([a-z_]+)", logged))
+    inbox = {"unsigned": 2, "unknown_sender": 4 + 2, "bad_signature": 1 + 1, "not_a_member": 2}
+    expected = Counter({(None, reason): n * len(robots) for reason, n in inbox.items()})
+    expected.update({("robot/faulty/percepts", "unsigned"): 1, ("robot/faulty/percepts", "bad_signature"): 1,
+                     ("robot/faulty/percepts", "replayed"): 1,       # the helper's snapshot put on its key
+                     ("robot/faulty/status", "unsigned"): 1, ("robot/faulty/status", "bad_signature"): 1,
+                     ("clock", "unsigned"): len(robots)})
+    assert refused == expected, logged[-3000:]
     assert "evil" not in "".join(str(m) for m in result.marks)
