@@ -9,6 +9,13 @@ Per agent of the runtime, on the agent's transport session:
 * a queryable on ``inspect/<agent>/control`` for ``pause``/``step``/``resume``, refused unless the MAS was
   started with ``allow_control`` (``--allow-pause``).
 
+In the secure profile (the transport has an identity) every answer and every streamed mind is signed by its
+agent, so a viewer with the project's keys shows only what the agent said; a ``pause``/``step``/``resume`` is
+obeyed only when signed by a key the project lists (a member's or the environment's: whoever may already make
+the agent act or feed its percepts may also hold it; ``faultmas inspect --identity``, or the run's own
+inspector, which holds the environment's key) and fresh. Others are refused with a reason and one
+rate-limited log line; an outsider can neither hold an agent nor show a forged mind.
+
 Nothing of this runs in the agent's reasoning cycle: an agent nobody watches pays nothing per cycle
 (``python -m benchmarks inspect`` measures it); the only standing cost is the last ``history`` messages
 in and out of the process kept per agent (one deque append per message, formatted only when asked).
@@ -130,7 +137,7 @@ class MindPublisher:
                 state = snapshot.summary(watched.agent, watched.gate.paused)
             else:
                 state = self.mind(watched.agent.name, plans="plans" in parameters)
-            query.reply(keys.state_key(self.mas, watched.agent.name), _encode(state))
+            query.reply(keys.state_key(self.mas, watched.agent.name), self._sealed(watched.agent.name, _encode(state)))
         except Exception as exc:  # never kill Zenoh's thread; the viewer gets a reason
             log.exception("inspector: state of %s could not be read", watched.agent.name)
             query.reply_err(json.dumps({"error": str(exc)}))
@@ -174,7 +181,7 @@ class MindPublisher:
                 if mark == watched.last_put:
                     continue
                 try:
-                    watched.stream.put(_encode(self.mind(watched.agent.name)))
+                    watched.stream.put(self._sealed(watched.agent.name, _encode(self.mind(watched.agent.name))))
                     watched.last_put = mark
                 except Exception:  # a failed read or put must not end the stream
                     log.exception("inspector: could not stream the mind of %s", watched.agent.name)
@@ -188,11 +195,39 @@ class MindPublisher:
                 return
             name, query = item
             try:
-                query.reply(keys.control_key(self.mas, name), _encode(self._control(name, _payload(query))))
+                request = self._request(name, query)
+                answer = self._control(name, request) if request is not None else \
+                    {"ok": False, "error": "refused: not signed by a key of the project"}
+                query.reply(keys.control_key(self.mas, name), self._sealed(name, _encode(answer)))
             except Exception:  # a viewer gone meanwhile: nothing to answer
                 log.exception("inspector: a control request for %s failed", name)
             finally:
                 query.drop()
+
+    def _sealed(self, name: str, document: bytes) -> bytes:
+        """What agent ``name`` answers or streams: signed by it in the secure profile."""
+        identity = self.transport.identity
+        return identity.seal(name, document) if identity is not None and identity.can_sign(name) else document
+
+    def _request(self, name: str, query: Any) -> dict | None:
+        """A control request; in the secure profile only one signed by a key of the project (its ``by``), else
+        None (refused, the drop logged by the transport)."""
+        identity = self.transport.identity
+        if identity is None:
+            return _payload(query)
+        from agents.transport.envelope import BadMessage
+
+        payload = query.payload.to_bytes() if query.payload is not None else b""
+        where = keys.control_key(self.mas, name)
+        try:
+            request = identity.open_control(payload)
+        except BadMessage as bad:
+            self.transport.report_refused(bad.reason, where, bad.sender, bad.detail)
+            return None
+        except (ValueError, RecursionError) as exc:    # signed, but no JSON object
+            self.transport.report_refused("bad_control", where, None, str(exc)[:80])
+            return None
+        return request
 
     def _control(self, name: str, request: dict) -> dict:
         watched = self.agents.get(name)

@@ -380,6 +380,10 @@ class Transport(ABC):
         from agents.transport.sealed import SealedChannel
         return SealedChannel(self.identity, self._drop)
 
+    def report_refused(self, reason: str, where: str, sender: str | None = None, detail: str = "") -> None:
+        """For other layers: a message refused on ``where`` (a key), counted and logged like every drop."""
+        self._drop(reason, where, sender if isinstance(sender, str) else None, detail)
+
     def report_control_refused(self, message: dict, reason: str) -> None:
         """For the agent layer: a control message (e.g. ``stop``) refused, logged and counted as a drop."""
         by = message.get("by")

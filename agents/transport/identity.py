@@ -351,3 +351,19 @@ def project_identity(project: Any, own_agents: Iterable[str] = (), private_file:
             raise IdentityError(f"{project.file}: {name} is not an agent of the project, so it has no key")
         private[name] = Path(private_file) if private_file is not None else private_key_file(public[name])
     return Identity.from_files(public, private, max_skew)
+
+
+def project_identity_of_key(project: Any, private_file: str | Path,
+                            max_skew: float = DEFAULT_MAX_SKEW) -> Identity:
+    """The secure profile of ``project`` for a process that is no agent but holds ``private_file``, the private
+    key of one of the identities the project lists (a member's, or the environment's): ``faultmas inspect
+    --identity`` signs pause and step with it. ``IdentityError`` when the project lists no keys or not this one."""
+    public = project_key_files(project)
+    if not public:
+        raise IdentityError(f"{project.file}: an identity was given but the project lists no key= "
+                            "(not the secure profile)")
+    raw = _raw_public(load_private_key(private_file).public_key())
+    for name, path in public.items():
+        if _raw_public(load_public_key(path)) == raw:
+            return Identity.from_files(public, {name: private_file}, max_skew)
+    raise IdentityError(f"{private_file}: not the private key of any identity {project.file} lists")

@@ -10,7 +10,8 @@ facilitator's registrations of the local agents (``registrations``), and a livel
 history on ``faultmas/<mas>/subscribes/*/*``, the subscriptions of other processes' agents (a token per
 ``.df_subscribe``; see ``agents.directory``). In the secure profile a token alone proves nothing (anyone
 may declare one): an agent is present while its token is up and its signed heartbeats keep coming
-(``proved_presence``). Messages are put reliably with congestion control
+(``proved_presence``), and a subscription counts while its token is up and its agent's signed heartbeats list
+it; a directory query that says who subscribes is signed by that agent. Messages are put reliably with congestion control
 BLOCK on a cached publisher per receiver (a burst from the agents' thread in batches, see
 ``outbox``); agents of this process are served without the network.
 """
@@ -63,6 +64,10 @@ class ZenohTransport(Transport):
         self._subscription_lock = threading.Lock()
         self._subscription_queue: queue.SimpleQueue = queue.SimpleQueue()  # changes to report; None: stop
         self._subscription_thread: threading.Thread | None = None
+        # the secure profile: subscription tokens seen (claims; 1 once refused) and each agent's subscriptions its
+        # last signed heartbeat listed (with its time)
+        self._claims: dict[tuple[str, str], int] = {}
+        self._listed: dict[str, tuple[frozenset, float]] = {}
 
     def _open(self) -> None:
         import zenoh
@@ -195,7 +200,9 @@ class ZenohTransport(Transport):
     # -- heartbeats (the secure profile) ----------------------------------------------------------
     def _heartbeat(self, agent: str) -> None:
         if self.identity.can_sign(agent):
-            document = json.dumps({"agent": agent}, separators=(",", ":")).encode()
+            services = sorted(service for subscriber, service in list(self._subscribed) if subscriber == agent)
+            document = json.dumps({"agent": agent, "subscribes": services} if services else {"agent": agent},
+                                  separators=(",", ":")).encode()
             try:
                 self.session.put(keys.heartbeat_key(self.mas, agent), self.identity.seal(agent, document))
             except Exception:  # the session closing: the thread ends with it
@@ -207,6 +214,8 @@ class ZenohTransport(Transport):
             for agent in list(self._tokens):
                 self._heartbeat(agent)
             self._proof.expire()
+            for agent, service in list(self._claims):
+                self._settle_subscription(agent, service)
 
     def _on_heartbeat(self, sample: Any) -> None:
         key = str(sample.key_expr)
@@ -220,6 +229,9 @@ class ZenohTransport(Transport):
             self._drop(bad.reason, key, bad.sender, bad.detail)
             return
         self._proof.proved(agent)
+        listed = json.loads(document).get("subscribes")
+        self._subscriptions_listed(agent, frozenset(s for s in listed if isinstance(s, str))
+                                   if isinstance(listed, list) else frozenset())
 
     # -- network callbacks (Zenoh threads: never block, never raise) -----------------------------
     def _on_alive(self, sample: Any) -> None:
@@ -310,6 +322,16 @@ class ZenohTransport(Transport):
         except (ValueError, TypeError, KeyError, RecursionError) as exc:
             self._drop("bad_df_query", str(query.key_expr), None, str(exc)[:80])
             return
+        if subscribed is not None and self.identity is not None:
+            # the secure profile: a query says who subscribes only when signed by that agent (else the search is
+            # answered, the subscription refused: an outsider cannot subscribe a member to anything)
+            try:
+                _, seq = self.identity.open(query.payload.to_bytes(), lambda _document: subscribed[0])
+                self.identity.check_fresh(subscribed[0], "df", seq)
+            except BadMessage as bad:
+                self._drop(bad.reason, str(query.key_expr), None if bad.reason == "unsigned" else bad.sender,
+                           f"a directory subscription of {subscribed[0]}")
+                subscribed = None
         registrations = self.local_registrations(tuple(subscribed) if subscribed is not None else None)
         for agent, services in registrations.items():
             key = keys.df_key(self.mas, agent)
@@ -322,9 +344,12 @@ class ZenohTransport(Transport):
 
         nonce = new_nonce()
         request = {"nonce": nonce} if subscribe is None else {"nonce": nonce, "subscribe": list(subscribe)}
+        payload: str | bytes = json.dumps(request, separators=(",", ":"))
+        if subscribe is not None and self.identity is not None and self.identity.can_sign(subscribe[0]):
+            payload = self.identity.seal(subscribe[0], payload.encode())   # who subscribes, proved
         found: dict[str, list[str]] = {}
         # every reply, unconsolidated: an outsider's reply on an agent's key must not displace the agent's
-        for reply in self.session.get(keys.df_pattern(self.mas), payload=json.dumps(request), timeout=timeout,
+        for reply in self.session.get(keys.df_pattern(self.mas), payload=payload, timeout=timeout,
                                       consolidation=zenoh.ConsolidationMode.NONE):
             if reply.ok is None:
                 continue
@@ -345,6 +370,9 @@ class ZenohTransport(Transport):
 
     def announce_subscription(self, agent: str, service: str) -> None:
         if (agent, service) not in self._subscribed:
+            self._subscribed[(agent, service)] = None   # listed by every heartbeat from now on
+            if self._proof is not None:
+                self._heartbeat(agent)   # the proof before the token: a heartbeat after it that lacks it is no proof
             self._subscribed[(agent, service)] = self.session.liveliness().declare_token(
                 keys.subscribes_key(self.mas, agent, service))
 
@@ -372,6 +400,54 @@ class ZenohTransport(Transport):
         if agent in self._agents:
             return  # this process's own: its directory knows them
         present = sample.kind == zenoh.SampleKind.PUT
+        if self.identity is not None:   # the secure profile: a token is a claim, the agent's heartbeats prove it
+            if agent not in self.identity.members:
+                if present:
+                    self._drop("unknown_sender", where, agent, "a subscription token of no member")
+                return
+            with self._subscription_lock:
+                if present:
+                    self._claims.setdefault((agent, service), 0)
+                else:
+                    self._claims.pop((agent, service), None)
+            self._settle_subscription(agent, service)
+            return
+        self._subscription_changed(agent, service, present)
+
+    def _subscriptions_listed(self, agent: str, services: frozenset) -> None:
+        """A signed heartbeat of ``agent`` listed its subscriptions: the claims it lists count; a claim seen before a
+        heartbeat that does not list it is refused with a log line (an agent's process puts a heartbeat listing a
+        subscription before it declares its token), and counts if a later heartbeat lists it."""
+        import time
+
+        if agent in self._agents:
+            return  # this process's own: its directory knows them (a token seen before the agent registered)
+        unproved = []
+        with self._subscription_lock:
+            self._listed[agent] = (services, time.monotonic())
+            claims = [(a, s) for (a, s) in self._claims if a == agent]
+            for claim in claims:
+                if claim[1] not in services and not self._claims[claim]:
+                    self._claims[claim] = 1     # refused once: one log line per claim
+                    unproved.append(claim)
+        for subscriber, service in unproved:
+            self._drop("unsigned", keys.subscribes_key(self.mas, subscriber, service), subscriber,
+                       f"a subscription token that no signed heartbeat of {subscriber} lists")
+        for subscriber, service in claims:
+            self._settle_subscription(subscriber, service)
+
+    def _settle_subscription(self, agent: str, service: str) -> None:
+        """A subscription counts while its token is up and a signed heartbeat within the lease lists it."""
+        import time
+
+        from agents.transport.proved_presence import LEASE
+
+        with self._subscription_lock:
+            services, when = self._listed.get(agent, (frozenset(), -LEASE))
+            present = (agent, service) in self._claims and service in services and time.monotonic() - when <= LEASE
+        self._subscription_changed(agent, service, present)
+
+    def _subscription_changed(self, agent: str, service: str, present: bool) -> None:
         with self._subscription_lock:
             if ((agent, service) in self._subscriptions) == present:
                 return  # seen twice (history and live): one change

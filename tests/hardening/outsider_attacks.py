@@ -141,3 +141,60 @@ class StatusForger:
             session.put(status_key, document)                                          # unsigned
             session.put(status_key, forger.seal(ENVIRONMENT, document))                # its own key
         self.subscriber = session.declare_subscriber(robot_key(mas, robot, "actions"), on_request)
+
+
+def forge_minds(session, mas: str, agent: str, own_key):
+    """A queryable on ``agent``'s inspector state key that answers the first query it gets with a mind the agent
+    never had (an evil intention, 424,242 cycles): unsigned, and signed with the outsider's key as the agent.
+    Returns the queryable (it answers while the caller keeps it)."""
+    import json
+    import threading
+
+    from agents.inspector.keys import state_key
+
+    answered = threading.Event()
+    mind = {"agent": agent, "cycles": 424242, "paused": False, "top": "evil_intention", "intentions": 1}
+    document = json.dumps(mind, separators=(",", ":")).encode()
+
+    def answer(query) -> None:
+        if not answered.is_set():
+            answered.set()
+            query.reply(state_key(mas, agent), document)                                          # unsigned
+            query.reply(state_key(mas, agent), posing_as(agent, own_key).seal(agent, document))   # its own key
+    return session.declare_queryable(state_key(mas, agent), answer)
+
+
+def forge_pause(session, mas: str, agent: str, own_key) -> list[bytes]:
+    """On ``agent``'s inspector control key: a ``pause`` unsigned, and a ``step`` signed with the outsider's key
+    as the agent itself. Returns the answers."""
+    import json
+
+    from agents.inspector.keys import control_key as inspect_control_key
+
+    key = inspect_control_key(mas, agent)
+    answers = []
+    for payload in (json.dumps({"command": "pause"}).encode(),
+                    posing_as(agent, own_key).seal_control({"command": "step", "by": agent})):
+        answers += [reply.ok.payload.to_bytes() for reply in session.get(key, payload=payload, timeout=10.0)
+                    if reply.ok is not None]
+    return answers
+
+
+def claim_subscriptions(session, mas: str, member: str, service: str) -> list:
+    """``.df_subscribe`` tokens nobody proves: ``member``'s to a service it never subscribed to, and the outsider's
+    own. Returns the tokens: up while the caller keeps them."""
+    from agents.transport.keys import subscribes_key
+
+    return [session.liveliness().declare_token(subscribes_key(mas, name, service)) for name in (member, OUTSIDER)]
+
+
+def forge_subscription_queries(session, mas: str, member: str, service: str, own_key) -> None:
+    """Directory queries saying that ``member`` subscribes to ``service``: unsigned, and signed with the
+    outsider's key as ``member`` (each process that answers would remember it and tell ``member`` of providers)."""
+    import json
+
+    from agents.transport.keys import df_pattern
+
+    request = json.dumps({"nonce": "0123456789ab", "subscribe": [member, service]}, separators=(",", ":")).encode()
+    for payload in (request, posing_as(member, own_key).seal(member, request)):
+        list(session.get(df_pattern(mas), payload=payload, timeout=3.0))
