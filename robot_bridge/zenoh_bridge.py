@@ -20,8 +20,8 @@ ticks and runs at wall pace while it does not (``robot_bridge.clock``): a server
 
 Options: ``mas`` (namespace, default ``faultmas``), ``session`` (an open ``zenoh.Session`` to share,
 e.g. the agent's own transport session) or ``connect`` (endpoints; a private loopback peer session is
-opened), ``action_timeout`` (seconds; default: from the action's own time bound), ``sealed`` (the secure
-profile, given by the agent's process: ``agents.transport.sealed.SealedChannel``).
+opened), ``action_timeout`` (seconds; default: from the action's own time bound). The agent's process sets
+``sealed`` (no option: an ``agents.transport.sealed.SealedChannel``) before ``setup`` in the secure profile.
 
 In the secure profile (docs/reliability.md, "Identity") every message on these keys is signed: percepts,
 action results and the clock by the environment (the process that serves the robots, whose public key the
@@ -83,10 +83,11 @@ class ZenohBridge(RobotBridge):
     name: ClassVar[str] = "zenoh"
 
     def __init__(self, robot: str, mas: str = "faultmas", session: Any = None, connect: Any = (),
-                 action_timeout: float | None = None, sealed: Any = None, **options: object) -> None:
+                 action_timeout: float | None = None, **options: object) -> None:
         super().__init__(robot, **options)
         self.mas = mas
-        self.sealed = sealed
+        self.sealed: Any = None
+        """The secure profile (set by the agent's process before ``setup``): signs actions, checks the rest."""
         self._session, self._owns_session = session, session is None
         self.connect = (connect,) if isinstance(connect, str) else tuple(connect)
         self.action_timeout = action_timeout
