@@ -181,3 +181,47 @@ def test_the_commands_refuse_a_taken_port_or_a_public_address_before_anything_st
     public = Proc(["inspect", "--listen", "0.0.0.0:8470"])
     assert public.finish(60) == 2
     assert "not a loopback address; add --public" in "\n".join(public.err)
+
+
+def test_in_the_secure_profile_a_key_of_the_project_pauses_and_steps_and_the_minds_are_proved(tmp_path):
+    """The viewer holds the environment's key (as the run's own inspector does, or ``faultmas inspect --identity``):
+    its signed pause, step and resume are obeyed and the agent's signed answers and minds shown; a viewer
+    without a key of the project does not even send them. (An outsider's: tests/hardening/test_run_secure_outsider.py.)"""
+    from agents.transport.identity import ENVIRONMENT, Identity, generate_keys
+
+    generate_keys(tmp_path, ["counter", "environment"])
+    public = {"counter": tmp_path / "counter.pub", ENVIRONMENT: tmp_path / "environment.pub"}
+    mas = unique_mas("insps")
+    runtime = LocalRuntime()
+    runtime.add_agent("counter", COUNTER, "counter.asl")
+    transport = ZenohTransport(mas, ZenohOptions(listen=(loopback_endpoint(),)),
+                               identity=Identity.from_files(public, {"counter": tmp_path / "counter.key"})).open()
+    bridge = TransportBridge(runtime, transport, declared=["counter"]).attach()
+    publisher = MindPublisher(transport, runtime, bridge, allow_control=True).start()
+    thread = threading.Thread(target=bridge.run, kwargs={"timeout": 120}, daemon=True)
+    thread.start()
+    viewers = []
+    try:
+        for private in ({ENVIRONMENT: tmp_path / "environment.key"}, {}):
+            side = ZenohTransport(mas, ZenohOptions(connect=tuple(transport.endpoints)),
+                                  identity=Identity.from_files(public, private)).open()
+            viewers.append((side, TeamHub(side.session, mas, transport=side).start()))
+        (operator, team), (_, keyless) = viewers
+        assert poll(lambda: (team.refresh("counter") or {}).get("cycles", 0) > 20, 20)
+        refused = keyless.control("counter", "pause")
+        assert not refused["ok"] and "--identity" in refused["error"]
+        paused = team.control("counter", "pause")
+        assert paused["ok"] and paused["paused"], paused
+        stepped = team.control("counter", "step")
+        assert stepped["ok"] and stepped["cycles"] == paused["cycles"] + 1, stepped
+        assert team.refresh("counter")["cycles"] == stepped["cycles"]
+        assert team.control("counter", "resume")["ok"]
+        assert not operator.dropped and not transport.dropped, (operator.dropped, transport.dropped)
+    finally:
+        for side, hub in viewers:
+            hub.close()
+            side.close()
+        publisher.close()
+        runtime.stop()
+        thread.join(10)
+        transport.close()
