@@ -34,6 +34,9 @@ from agents.transport.status import AgentStatus
 
 INBOX_CAPACITY = 8192
 """Samples an inbox holds before Zenoh stops taking more for it (reliable puts then wait: no loss)."""
+MAX_CLAIMS = 4096
+"""Subscription tokens of other processes' agents a process keeps in the secure profile (each a claim until
+the agent's heartbeats list it); more are refused, so an outsider's tokens cannot grow its memory."""
 DRAIN_JOIN_TIMEOUT = 10.0
 """Seconds ``unregister``/``close`` wait for an inbox thread to hand over what it holds and end."""
 
@@ -406,10 +409,14 @@ class ZenohTransport(Transport):
                     self._drop("unknown_sender", where, agent, "a subscription token of no member")
                 return
             with self._subscription_lock:
-                if present:
+                full = present and (agent, service) not in self._claims and len(self._claims) >= MAX_CLAIMS
+                if present and not full:
                     self._claims.setdefault((agent, service), 0)
-                else:
+                elif not present:
                     self._claims.pop((agent, service), None)
+            if full:   # memory stays bounded whatever tokens an outsider declares
+                self._drop("bad_subscription", where, agent, f"more than {MAX_CLAIMS} subscription tokens")
+                return
             self._settle_subscription(agent, service)
             return
         self._subscription_changed(agent, service, present)
