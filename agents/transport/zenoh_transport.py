@@ -20,6 +20,7 @@ from __future__ import annotations
 import json
 import queue
 import threading
+import time
 from typing import Any, Callable
 
 from agents.transport import keys
@@ -27,7 +28,7 @@ from agents.transport.base import Transport, log
 from agents.transport.config import ZenohOptions, build_config, listen_endpoints
 from agents.transport.envelope import DEFAULT_MAX_SIZE, BadMessage, Envelope, is_valid_name
 from agents.transport.identity import claimed_agent
-from agents.transport.proved_presence import HEARTBEAT, ProvedPresence
+from agents.transport.proved_presence import HEARTBEAT, LEASE, ProvedPresence
 from agents.transport.registrations import QUERY_TIMEOUT, encode_services, new_nonce, open_services
 from agents.transport.status import AgentStatus
 
@@ -425,8 +426,6 @@ class ZenohTransport(Transport):
         """A signed heartbeat of ``agent`` listed its subscriptions: the claims it lists count; a claim seen before a
         heartbeat that does not list it is refused with a log line (an agent's process puts a heartbeat listing a
         subscription before it declares its token), and counts if a later heartbeat lists it."""
-        import time
-
         if agent in self._agents:
             return  # this process's own: its directory knows them (a token seen before the agent registered)
         unproved = []
@@ -445,10 +444,6 @@ class ZenohTransport(Transport):
 
     def _settle_subscription(self, agent: str, service: str) -> None:
         """A subscription counts while its token is up and a signed heartbeat within the lease lists it."""
-        import time
-
-        from agents.transport.proved_presence import LEASE
-
         with self._subscription_lock:
             services, when = self._listed.get(agent, (frozenset(), -LEASE))
             present = (agent, service) in self._claims and service in services and time.monotonic() - when <= LEASE
