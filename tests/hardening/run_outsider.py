@@ -15,6 +15,7 @@ queries saying so), and a token of its own. Prints ``READY`` once connected and 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 
@@ -48,11 +49,11 @@ def main() -> None:
         assert transport.wait_for_agents(robots, timeout=120), "the robots never appeared"
         print("robots up", file=sys.stderr, flush=True)
         forge_percepts(session, mas, args.faulty, helper, own_key)
-        for answer in forge_pause(session, mas, args.faulty, own_key):
-            print(f"pause answered: {answer[:120]!r}", file=sys.stderr, flush=True)
+        answers = forge_pause(session, mas, args.faulty, own_key)
+        assert answers and not any(json.loads(answer)["ok"] for answer in answers), answers   # not held
         forge_subscription_queries(session, mas, helper, "evil_service", own_key)
         forge_actions(session, mas, robots, own_key)
-        print("percepts and actions forged", file=sys.stderr, flush=True)
+        print("robots' keys, inspector and directory forged", file=sys.stderr, flush=True)
         assert status_forger.done.wait(60), "the faulty robot's agent never asked for an action"
         for robot in robots:
             other = next(r for r in robots if r != robot)

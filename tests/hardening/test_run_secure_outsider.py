@@ -34,7 +34,7 @@ def _lines(stream, into: queue.Queue) -> None:
         into.put(line)
 
 
-def test_an_outsider_cannot_tell_achieve_teach_ask_stop_or_forge_progress_in_a_secure_run(tmp_path):
+def test_an_outsider_can_neither_message_stop_nor_forge_progress_robots_minds_pauses_or_subscriptions(tmp_path):
     from robot_bridge.sim.server import SimServer
 
     generate_keys(tmp_path, ["mallory"])
