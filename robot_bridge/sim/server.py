@@ -119,12 +119,12 @@ class SimServer:
     def _on_request(self, name: str, sample) -> None:
         from robot_bridge.ros2 import wire
 
-        self.requests += 1
         payload = sample.payload.to_bytes()
         if self.sealed is not None:   # only the robot's own agent may move it
             payload = self.sealed.open(payload, name, str(sample.key_expr))
             if payload is None:
-                return
+                return   # refused (logged and counted by the sealed channel), not a request served
+        self.requests += 1
         try:
             request = wire.ActionRequest.from_json(payload.decode())
             action = Action(request.action_name, request.values(), id=request.id)
