@@ -122,6 +122,9 @@ class NetworkArch(LocalArch):
     def stop_mas(self, agent: Agent, delay: float = 0.0) -> None:
         self.bridge.stop_mas(agent.name, delay)
 
+    def kill_agent(self, agent: Agent, name: str) -> bool:
+        return self.runtime.kill_agent(name) or self.bridge.kill_elsewhere(agent.name, name)
+
     def accepts_plans_from(self, agent: Agent, sender: str) -> bool:
         return self.bridge.may_tell_how(sender)
 
@@ -261,6 +264,27 @@ class TransportBridge:
             self.on_message("out", message.sender, message)
         return not self.transport.send(envelope)
 
+    def kill_elsewhere(self, by: str, name: str) -> bool:
+        """``.kill_agent`` of an agent of another process (Jason's agents may kill any agent of the MAS): its
+        process kills it when told (a control message; signed by ``by`` in the secure profile). False when no
+        agent of that name is alive anywhere."""
+        if name not in self.transport.alive_agents():
+            return False
+        self.transport.publish_control("kill", agent=name, by=by)
+        return True
+
+    def _on_kill(self, message: dict) -> None:
+        """Another process's agent killed one of ours: it dies in its own next turn (the runtime is not
+        thread-safe), as it would by its own ``.kill_agent``."""
+        by, name = message.get("by"), message.get("agent")
+        agent = self.runtime.agents.get(name) if isinstance(name, str) else None
+        if agent is None:
+            return
+        if self.members is not None and not (isinstance(by, str) and self.is_member(by)):
+            self.transport.report_control_refused(message, "not_a_member")
+            return
+        agent.post_feedback(partial(self.runtime.kill_agent, name))
+
     def stop_mas(self, by: str, delay: float = 0.0) -> None:
         """``.stopMAS``: every process of the MAS (this one too) stops after ``delay`` seconds."""
         self.transport.publish_control("stop", by=by, delay=delay)
@@ -325,6 +349,9 @@ class TransportBridge:
     def _on_control(self, message: dict) -> None:
         if message.get("command") == "died" and self._from_launcher(message):
             self.dead.add(str(message.get("agent")))
+            return
+        if message.get("command") == "kill":
+            self._on_kill(message)
             return
         if message.get("command") == "stop":
             by = message.get("by")

@@ -12,8 +12,9 @@ from tests.agents.distributed_fixtures import mas_run, write_files
 
 # maker (one process) makes `asker` (taken by the asker of another process: `asker_1`), clones itself as twin
 # and makes worker, which registers and asks asker to achieve `ready`; asker asks worker and twin, lists the
-# names and searches the DF, has maker kill worker, waits until worker is gone from its names, searches again
-# and sends to worker: the send fails; asker_1 (made at run time) stops the MAS.
+# names and searches the DF, kills twin itself (an agent of another process), has maker kill worker, waits until
+# both are gone from its names, searches again and sends to worker: the send fails; asker_1 (made at run time)
+# stops the MAS.
 MADE = {
     "made.mas2j": "MAS made { agents: maker; asker; }\n",
     "maker.asl": r'''
@@ -31,18 +32,19 @@ role(maker).
     .send(twin, askOne, role(R), T, 10000); .print(twin(T));
     .all_names(L); .print(names(L));
     .df_search("echo", P); .print(providers(P));
+    .kill_agent(twin);
     .send(maker, achieve, kill(W)).
 +killed(W)[source(maker)] <- !gone(W).
 +!gone(W) <- .all_names(L);
-    if (.member(W, L)) { .wait(50); !gone(W) }
-    else { .df_search("echo", P); .print(after(P)); .send(W, tell, hi); .print(sent_anyway); .stopMAS }.
+    if (.member(W, L) | .member(twin, L)) { .wait(50); !gone(W) }
+    else { .print(left(L)); .df_search("echo", P); .print(after(P)); .send(W, tell, hi); .print(sent_anyway); .stopMAS }.
 -!gone(W)[error(E), agent_not_found(A)] <- .print(send_failed(E, A)); .send(asker_1, achieve, stop).
 ''',
 }
 
 EXPECTED = ['[maker] clash("asker_1")', "[asker] answer(ping(pong)[source(worker)])",
             "[asker] twin(role(maker)[source(twin)])", "[asker] names([asker,asker_1,maker,twin,worker])",
-            "[asker] providers([worker])", "[asker] after([])", "[asker] send_failed(receiver_not_found,worker)"]
+            "[asker] providers([worker])", "[asker] left([asker,asker_1,maker])", "[asker] after([])", "[asker] send_failed(receiver_not_found,worker)"]
 
 
 def test_made_agents_are_agents_of_every_process_until_killed(tmp_path):
