@@ -243,8 +243,9 @@ class Transport(ABC):
     def creator_of(self, agent: str) -> str | None:
         """Who made ``agent`` at run time, in any process of the MAS (None: not made so). Remembered after the
         agent is gone: what it sent last (a ``.stopMAS``, an ``achieve``) may arrive after its presence went, and
-        is still from a member. A claim in the default profile, as every name is (``trust.is_member``)."""
-        return self._creators.get(agent)
+        is still from a member. A claim in the default profile, as every name is (``trust.is_member``); in the
+        secure profile none (a token proves nothing there, and no agent is made at run time)."""
+        return self._creators.get(agent) if self.identity is None else None
 
     def _created(self, agent: str, creator: str) -> None:
         """For concrete transports: another process announced an agent made at run time by ``creator``."""
