@@ -170,6 +170,9 @@ class TransportBridge:
         self.on_message = None
         """``on_message(direction, agent, message)``: sees each message to ('out', a ``Message``) or
         from ('in', an ``Envelope``) another process (the inspector keeps the last few)."""
+        self.on_membership = None
+        """``on_membership(name, agent)``: an agent of this process made at run time (``agent``) or killed (None),
+        once it is on the network or off it (the inspector serves its mind)."""
         self._attached = False
 
     # -- set-up --------------------------------------------------------------------------------
@@ -225,6 +228,8 @@ class TransportBridge:
         """On the network like a launched agent: its inbox, its presence, announced as made by ``creator`` (a
         member for the other processes as long as its creator is one)."""
         self._join(agent, creator)
+        if self.on_membership is not None:
+            self.on_membership(agent.name, agent)
 
     def left(self, name: str) -> None:
         """Killed: its last counters published (a launcher's message count stays whole), then off the network
@@ -232,6 +237,8 @@ class TransportBridge:
         if name in self.transport.local_agents():
             self.transport.publish_status(name, busy=False)
             self.transport.unregister(name)
+            if self.on_membership is not None:
+                self.on_membership(name, None)
 
     # -- names and trust -----------------------------------------------------------------------
     def all_names(self) -> list[str]:
