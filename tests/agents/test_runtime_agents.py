@@ -6,9 +6,15 @@ refused, saying why. Real ``faultmas mas run`` processes over Zenoh on loopback,
 from __future__ import annotations
 
 from agents.mas_cli import build_local_mas
+from agents.transport import Envelope, LocalBus, LocalTransport
 from agents.transport.identity import generate_keys
+from agents.zenoh_arch import TransportBridge
+from agentspeak.communication import Message
 from agentspeak.mas2j import load_mas2j
+from agentspeak.runtime import LocalRuntime
+from agentspeak.terms import Literal
 from tests.agents.distributed_fixtures import mas_run, write_files
+from tests.agents.transport_fixtures import unique_mas
 
 # maker (one process) makes `asker` (taken by the asker of another process: `asker_1`), clones itself as twin
 # and makes worker, which registers and asks asker to achieve `ready`; asker asks worker and twin, lists the
@@ -72,3 +78,38 @@ def test_create_agent_is_refused_in_the_secure_profile_saying_why(tmp_path):
     assert run.finish(90) == 0, run.err[-20:]
     assert run.out[0] == "[maker] secure_profile", run.out
     assert "cannot create agent worker in the secure profile" in run.out[1] and "key=" in run.out[1], run.out
+
+
+def test_members_are_the_projects_agents_and_those_they_made(tmp_path, monkeypatch):
+    """The bridge's trust (two 'processes' on the in-memory bus): an agent made by a member may make others act
+    and stop the MAS, and stays a member after it is killed (its last messages may come after it is gone); one
+    made by a stranger, or a stranger, may not; a name taken in the other process gets Jason's suffix."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "kid.asl").write_text("!go.\n+!go <- .send(b, achieve, hello).\n")
+    mas, bus = unique_mas("made"), LocalBus()
+    out: list[str] = []
+    here, there = (LocalRuntime(printer=lambda n, t: out.append(f"[{n}] {t}")) for _ in range(2))
+    here.add_agent("a", '+!make <- .create_agent(kid, "kid.asl"); .create_agent(b, "kid.asl").\n')
+    there.add_agent("b", "+!hello[source(S)] <- .print(hello(S)).\n")
+    transports = [LocalTransport(mas, bus).open() for _ in range(2)]
+    bridges = [TransportBridge(runtime, transport, declared=["a", "b"], members=["a", "b"]).attach()
+               for runtime, transport in zip((here, there), transports)]
+    here.route(Message("a", "a", "achieve", Literal("make")))
+    here.run(timeout=2)
+    assert sorted(here.agents) == ["a", "b_1", "kid"] and transports[1].creator_of("b_1") == "a"
+    there_bridge = bridges[1]
+    assert there_bridge.is_member("kid") and there_bridge.may_tell_how("kid")
+    there.run(timeout=2)
+    assert sorted(out) == ["[b] hello(b_1)", "[b] hello(kid)"]  # achieve: only from members
+    here.kill_agent("kid")
+    assert "kid" not in transports[1].alive_agents() and there_bridge.is_member("kid")
+    transports[0].register("stranger", lambda envelope: None)
+    transports[0].register("minion", lambda envelope: None, creator="stranger")
+    assert transports[1].creator_of("minion") == "stranger"
+    assert not any(there_bridge.is_member(name) for name in ("stranger", "minion", "nobody"))
+    transports[0].send(Envelope(mas, "stranger", ("b",), "achieve", "hello"))
+    assert transports[1].dropped["not_a_member"] == 1
+    for bridge in bridges:
+        bridge.detach()
+    for transport in transports:
+        transport.close()
