@@ -27,7 +27,6 @@ MADE = {
 role(maker).
 !start.
 +!start <- .create_agent(Asker, "clash.asl"); .print(clash(Asker)); .clone(twin); .create_agent(worker, "worker.asl").
-+?role(R) <- ?role(R).
 +!kill(W)[source(S)] <- .kill_agent(W); .send(S, tell, killed(W)).
 ''',
     "clash.asl": "+!stop <- .stopMAS.\n",
@@ -50,7 +49,8 @@ role(maker).
 
 EXPECTED = ['[maker] clash("asker_1")', "[asker] answer(ping(pong)[source(worker)])",
             "[asker] twin(role(maker)[source(twin)])", "[asker] names([asker,asker_1,maker,twin,worker])",
-            "[asker] providers([worker])", "[asker] left([asker,asker_1,maker])", "[asker] after([])", "[asker] send_failed(receiver_not_found,worker)"]
+            "[asker] providers([worker])", "[asker] left([asker,asker_1,maker])", "[asker] after([])",
+            "[asker] send_failed(receiver_not_found,worker)"]
 
 
 def test_made_agents_are_agents_of_every_process_until_killed(tmp_path):
