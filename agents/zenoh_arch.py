@@ -221,8 +221,8 @@ class TransportBridge:
             raise IAError("secure_profile", (
                 f"cannot create agent {name} in the secure profile: every agent signs what it sends with its own "
                 f"key, listed in the project (key=), and {name} has none; signed with its creator's key under its "
-                f"own name its messages would be refused by every receiver as forged. Declare {name} in the "
-                f"project with its key, or run a project without key= options"))
+                f"own name its messages would be refused by every receiver as forged. Make it an agent of the "
+                f"project (declared with its key=, started with the MAS), or run a project without key= options"))
 
     def joined(self, agent: Agent, creator: str) -> None:
         """On the network like a launched agent: its inbox, its presence, announced as made by ``creator`` (a
