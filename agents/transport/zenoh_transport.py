@@ -53,6 +53,7 @@ class ZenohTransport(Transport):
         self._drains: dict[str, threading.Thread] = {}
         self._tokens: dict[str, Any] = {}
         self._created_tokens: dict[str, Any] = {}   # agent made at run time -> its 'created' token
+        self._departed: set[str] = set()   # agents whose liveliness token went (and has not come back)
         self._statuses: dict[str, AgentStatus] = {}
         self._declared: list[Any] = []
         # the secure profile: presence needs a signed proof besides the token
@@ -175,8 +176,11 @@ class ZenohTransport(Transport):
         if publisher is None:
             publisher = self._publisher(receiver)
         # A client learns of remote subscribers lazily (through its router's interest replies), so a
-        # receiver whose liveliness token is seen counts as reachable even before matching says so.
-        if not (self._presence.is_alive(receiver) or publisher.matching_status.matching):
+        # receiver whose liveliness token is seen counts as reachable even before matching says so; one whose
+        # token was seen to go is not, even while the end of its inbox is still on its way (a killed agent:
+        # a send to it fails at once, not into an inbox about to close).
+        if not self._presence.is_alive(receiver) and (
+                receiver in self._departed or not publisher.matching_status.matching):
             return False
         self._send_payload(receiver, envelope, encoded(), publisher.put)
         return True
@@ -232,6 +236,7 @@ class ZenohTransport(Transport):
         import zenoh
 
         agent = keys.last_chunk(str(sample.key_expr))
+        (self._departed.discard if sample.kind == zenoh.SampleKind.PUT else self._departed.add)(agent)
         if self._proof is not None:   # the secure profile: a token is a claim until a signed heartbeat proves it
             self._proof.token(agent, sample.kind == zenoh.SampleKind.PUT)
             return
