@@ -75,6 +75,7 @@ class MotionDecomposer(Node):
         self._last_stamp: int | None = None
         self._last_sensor = -1.0
         self._base_time = 0.0
+        self._wall_started = self._wall_deadline = 0.0
         """Seconds of the base's own clock (its ``time_stamp``s) since the first sample: a motion's time
         bounds and stall window count in it, as a ROS node with ``use_sim_time`` follows a simulator (a real
         base's clock is real time; a simulated one slowed by a busy computer is not)."""
@@ -129,7 +130,13 @@ class MotionDecomposer(Node):
         if self._last_sensor < 0:
             self._motion, self._before_base = None, (kind, args, current)
         else:
-            self._motion, self._before_base = motion.start(kind, args, self.odom, self._base_time, current), None
+            self._begin(kind, args, current, now)
+
+    def _begin(self, kind: str, args: tuple, current: tuple[float, float], now: float) -> None:
+        """Start the motion; its time bound counts on the base's clock, and also on the wall clock (the
+        agent's bridge gives up then: a slow simulated base must not go on driving after that)."""
+        self._motion, self._before_base = motion.start(kind, args, self.odom, self._base_time, current), None
+        self._wall_started, self._wall_deadline = now, now + (self._motion.deadline - self._motion.started)
 
     def _request_fault(self, request: ActionRequest, args: tuple) -> None:
         kind, fraction = args
@@ -185,7 +192,8 @@ class MotionDecomposer(Node):
 
     def _control(self) -> None:
         """The wall-clock watchdog: starts a motion that waited for the base's first report, and fails the
-        running one when the base has gone silent (the steps themselves follow the samples: ``_step``)."""
+        running one when the base has gone silent or the motion's time bound has passed on the wall clock
+        too (the steps themselves follow the samples: ``_step``)."""
         now = time.monotonic()
         if self._before_base is not None and not self._await_base(now):
             return
@@ -194,13 +202,17 @@ class MotionDecomposer(Node):
         if now - self._last_sensor > SENSOR_STALE_S:
             self._complete(Completion.failure("timeout", "no encoder data from the base"))
             self._motion = None
+        elif now > self._wall_deadline and self._motion_request is not None:  # (a rotate, once answered, goes on)
+            self._cmd.publish(twist(0.0, 0.0))
+            self._complete(Completion.failure(
+                "timeout", f"not done after {now - self._wall_started:.1f} s (wall clock)"))
+            self._motion = None
 
     def _await_base(self, now: float) -> bool:
         """True once the base has reported and the waiting motion has started (its progress and time
         bounds count from then); a base silent for ``FIRST_SENSOR_WAIT_S`` fails it with ``timeout``."""
         if self._last_sensor >= 0:
-            kind, args, current = self._before_base
-            self._motion, self._before_base = motion.start(kind, args, self.odom, self._base_time, current), None
+            self._begin(*self._before_base, now)
             return True
         if now - self._motion_since > FIRST_SENSOR_WAIT_S:
             self._before_base = None
