@@ -75,10 +75,10 @@ class MotionDecomposer(Node):
         self._last_stamp: int | None = None
         self._last_sensor = -1.0
         self._base_time = 0.0
-        self._wall_started = self._wall_deadline = 0.0
         """Seconds of the base's own clock (its ``time_stamp``s) since the first sample: a motion's time
         bounds and stall window count in it, as a ROS node with ``use_sim_time`` follows a simulator (a real
         base's clock is real time; a simulated one slowed by a busy computer is not)."""
+        self._wall_started = self._wall_deadline = 0.0
         self._motion_since = 0.0
         self._before_base: tuple[str, tuple, tuple[float, float]] | None = None
         """A motion asked for before the base's first report: started when that report comes."""
@@ -173,7 +173,9 @@ class MotionDecomposer(Node):
         self.over_current = int(core.get("over_current", 0))
         self._last_sensor = time.monotonic()
         self._base_time += dt
-        if self._motion is not None:
+        if self._before_base is not None:       # a motion that waited for the base's first report
+            self._begin(*self._before_base, self._last_sensor)
+        elif self._motion is not None:
             self._step(dt)
 
     def _step(self, dt: float) -> None:
@@ -181,8 +183,8 @@ class MotionDecomposer(Node):
 
         Driven by the samples, not by a wall-clock timer: a timer step on a busy computer acts on odometry
         that is one or more samples old and sends its stop a period late, while the base drives on at the
-        approach speed (at 20 Hz the ROS robot turned 91-91.7 deg for 90 under load, the embedded simulator
-        89.7). Here the stop goes out with the first sample past the goal, and the velocity ramp counts the
+        approach speed (at 20 Hz the ROS robot turned up to 91.7 deg for 90 under load, the embedded
+        simulator 89.7). Here the stop goes out with the first sample past the goal, and the velocity ramp counts the
         base's own time between samples, so it decelerates as planned however late the samples are read."""
         nxt, command, completion = motion.control(self._motion, self.odom, self._base_time, dt)
         if command is not None:
