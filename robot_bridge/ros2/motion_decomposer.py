@@ -39,6 +39,10 @@ from robot_bridge.sim.kobuki import wheels_to_twist  # noqa: E402
 RELIABLE = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 SENSOR_STALE_S = 0.5
 """Without encoder data for this long, a running motion fails with ``timeout``."""
+COMMAND_REPEAT_S = 0.1
+"""A command equal to the last one is sent again only after this long (the base stops 0.6 s after the
+last): steps follow the base's 50 Hz samples, and a cruise need not cost 50 messages a second, twice over
+(decomposer -> fault injector -> base), on a busy computer."""
 FIRST_SENSOR_WAIT_S = 5.0
 """How long a motion waits for the base's very first report: a node just started may not yet have
 discovered the base's topic (seconds on a busy machine), which is not a dead base."""
@@ -79,6 +83,8 @@ class MotionDecomposer(Node):
         bounds and stall window count in it, as a ROS node with ``use_sim_time`` follows a simulator (a real
         base's clock is real time; a simulated one slowed by a busy computer is not)."""
         self._wall_started = self._wall_deadline = 0.0
+        self._sent: object = None          # the last wheel command published, and when (wall clock)
+        self._sent_at = 0.0
         self._motion_since = 0.0
         self._before_base: tuple[str, tuple, tuple[float, float]] | None = None
         """A motion asked for before the base's first report: started when that report comes."""
@@ -137,6 +143,7 @@ class MotionDecomposer(Node):
         agent's bridge gives up then: a slow simulated base must not go on driving after that)."""
         self._motion, self._before_base = motion.start(kind, args, self.odom, self._base_time, current), None
         self._wall_started, self._wall_deadline = now, now + (self._motion.deadline - self._motion.started)
+        self._sent = None                   # its first command goes out whatever the last one was
 
     def _request_fault(self, request: ActionRequest, args: tuple) -> None:
         kind, fraction = args
@@ -187,8 +194,9 @@ class MotionDecomposer(Node):
         simulator 89.7). Here the stop goes out with the first sample past the goal, and the velocity ramp counts the
         base's own time between samples, so it decelerates as planned however late the samples are read."""
         nxt, command, completion = motion.control(self._motion, self.odom, self._base_time, dt)
-        if command is not None:
+        if command is not None and (command != self._sent or self._last_sensor - self._sent_at >= COMMAND_REPEAT_S):
             self._cmd.publish(twist(*wheels_to_twist(command)))
+            self._sent, self._sent_at = command, self._last_sensor
         self._complete(completion)
         self._motion = nxt
 
@@ -206,6 +214,7 @@ class MotionDecomposer(Node):
             self._motion = None
         elif now > self._wall_deadline and self._motion_request is not None:  # (a rotate, once answered, goes on)
             self._cmd.publish(twist(0.0, 0.0))
+            self._sent = None
             self._complete(Completion.failure(
                 "timeout", f"not done after {now - self._wall_started:.1f} s (wall clock)"))
             self._motion = None

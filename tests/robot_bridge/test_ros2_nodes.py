@@ -191,8 +191,8 @@ def test_a_decomposer_whose_computer_is_busy_still_stops_a_turn_on_time(graph):
     from robot_bridge.ros2.motion_decomposer import MotionDecomposer
     ros, _ = graph
     base = ros.add(KobukiSim("/busy", context=ros.context, x=3.0, y=3.0, yaw=0.0, seed=3))
-    ros.add(FaultInjector("/busy", context=ros.context))
-    ros.add(MotionDecomposer("/busy", context=ros.context, control_rate=2.0))
+    nodes = (base, ros.add(FaultInjector("/busy", context=ros.context)),
+             ros.add(MotionDecomposer("/busy", context=ros.context, control_rate=2.0)))
     bridge = Ros2Bridge("busy", domain_id=DOMAIN)
     bridge.setup(timeout=15.0)
     try:
@@ -202,6 +202,9 @@ def test_a_decomposer_whose_computer_is_busy_still_stops_a_turn_on_time(graph):
         assert math.degrees(base.odom.yaw) == pytest.approx(90.0, abs=TURN_STOP_TOLERANCE_DEG)
     finally:
         bridge.shutdown()
+        for node in nodes:          # a third robot at 50 Hz would slow the module's later tests
+            getattr(node, "stop", lambda: None)()
+            ros.executor.remove_node(node)
 
 
 def kobuki_moving(base) -> bool:
