@@ -22,6 +22,7 @@ import time
 from pathlib import Path
 from typing import IO, Callable
 
+from agents.transport.trust import is_member
 from agents.zenoh_arch import LAUNCHER_TOKEN_ENV
 from robot_bridge.processes import ESCALATION, spawn, stop_processes
 
@@ -132,7 +133,8 @@ class Launcher:
         refused as the agents refuse it (in the secure profile ``by`` is proved by its signature)."""
         if message.get("command") != "stop":
             return
-        if message.get("by") in self.names or hmac.compare_digest(str(message.get("token", "")), self.token):
+        by = message.get("by")
+        if isinstance(by, str) and self.is_member(by) or hmac.compare_digest(str(message.get("token", "")), self.token):
             code = message.get("code", 0)
             if isinstance(code, int) and not isinstance(code, bool) and code and not self.exit_code:
                 self.exit_code = code   # .stopMAS(_, Code): the run exits with Code (the first one wins)
@@ -140,8 +142,15 @@ class Launcher:
         else:
             self.hub.report_control_refused(message, "not_a_member")
 
+    def is_member(self, name: str) -> bool:
+        """An agent of the project, or made at run time by one (``.create_agent``: announced by its process)."""
+        return is_member(name, self.names, self.hub.creator_of)
+
     def _on_status(self, status) -> None:
-        self.statuses[status.agent] = status
+        """The agents' statuses, those made at run time included (what they send and receive counts too); a
+        made agent's last status, published when it is killed, may come after its membership went."""
+        if status.agent in self.statuses or self.is_member(status.agent):
+            self.statuses[status.agent] = status
 
     def start(self) -> None:
         # each agent starts in the user's working directory (relative sources, aslSourcePath and
@@ -191,9 +200,9 @@ class Launcher:
                 return "failed"
             if others is not None and self._record_others(others()):
                 return "failed"
-            statuses = [self.statuses.get(name) for name in self.names]
+            statuses = list(self.statuses.values())
             snapshot = None
-            if stop_when_idle and all(statuses) and quiescent(statuses):
+            if stop_when_idle and all(name in self.statuses for name in self.names) and quiescent(statuses):
                 snapshot = (totals(statuses), tuple(statuses))
                 if snapshot == previous:
                     return "idle"

@@ -52,6 +52,8 @@ class ZenohTransport(Transport):
         self._inboxes: dict[str, Any] = {}
         self._drains: dict[str, threading.Thread] = {}
         self._tokens: dict[str, Any] = {}
+        self._created_tokens: dict[str, Any] = {}   # agent made at run time -> its 'created' token
+        self._departed: set[str] = set()   # agents whose liveliness token went (and has not come back)
         self._statuses: dict[str, AgentStatus] = {}
         self._declared: list[Any] = []
         # the secure profile: presence needs a signed proof besides the token
@@ -79,6 +81,7 @@ class ZenohTransport(Transport):
             self.session.declare_queryable(keys.status_pattern(self.mas), self._on_status_query),
             self.session.declare_queryable(keys.df_pattern(self.mas), self._on_df_query),
             liveliness.declare_subscriber(keys.subscribes_pattern(self.mas), self._on_subscribes, history=True),
+            liveliness.declare_subscriber(keys.created_pattern(self.mas), self._on_created, history=True),
         ]
         self._subscription_thread = threading.Thread(target=self._report_subscriptions, daemon=True,
                                                      name="faultmas-df-subscriptions")
@@ -95,7 +98,7 @@ class ZenohTransport(Transport):
         self._heartbeats_done.set()
         self._subscription_queue.put(None)
         for entity in [*self._publishers.values(), self._control_publisher, *self._subscribed.values(),
-                       *self._declared]:
+                       *self._created_tokens.values(), *self._declared]:
             try:
                 entity.undeclare()
             except Exception:  # already gone with the session
@@ -118,6 +121,10 @@ class ZenohTransport(Transport):
                                  name=f"faultmas-inbox-{agent}")
         self._drains[agent] = drain
         drain.start()
+        creator = self._creators.get(agent)
+        if creator is not None:  # before its presence: whoever sees it alive can tell it is a member
+            self._created_tokens[agent] = self.session.liveliness().declare_token(
+                keys.created_key(self.mas, agent, creator))
         self._tokens[agent] = self.session.liveliness().declare_token(keys.alive_key(self.mas, agent))
         if self._proof is not None:
             self._heartbeat(agent)   # proved at once, not a heartbeat later (peers may be waiting for it)
@@ -145,7 +152,7 @@ class ZenohTransport(Transport):
     def _detach(self, agent: str) -> None:
         for (subscriber, service) in [k for k in self._subscribed if k[0] == agent]:
             self.withdraw_subscription(subscriber, service)
-        for table in (self._tokens, self._inboxes):  # presence first: nobody should send any more
+        for table in (self._tokens, self._inboxes, self._created_tokens):  # presence first: nobody should send any more
             entity = table.pop(agent, None)
             if entity is not None:
                 entity.undeclare()
@@ -169,8 +176,11 @@ class ZenohTransport(Transport):
         if publisher is None:
             publisher = self._publisher(receiver)
         # A client learns of remote subscribers lazily (through its router's interest replies), so a
-        # receiver whose liveliness token is seen counts as reachable even before matching says so.
-        if not (self._presence.is_alive(receiver) or publisher.matching_status.matching):
+        # receiver whose liveliness token is seen counts as reachable even before matching says so; one whose
+        # token was seen to go is not, even while the end of its inbox is still on its way (a killed agent:
+        # a send to it fails at once, not into an inbox about to close).
+        if not self._presence.is_alive(receiver) and (
+                receiver in self._departed or not publisher.matching_status.matching):
             return False
         self._send_payload(receiver, envelope, encoded(), publisher.put)
         return True
@@ -226,10 +236,23 @@ class ZenohTransport(Transport):
         import zenoh
 
         agent = keys.last_chunk(str(sample.key_expr))
+        (self._departed.discard if sample.kind == zenoh.SampleKind.PUT else self._departed.add)(agent)
         if self._proof is not None:   # the secure profile: a token is a claim until a signed heartbeat proves it
             self._proof.token(agent, sample.kind == zenoh.SampleKind.PUT)
             return
         self._presence.update(agent, sample.kind == zenoh.SampleKind.PUT)
+
+    def _on_created(self, sample: Any) -> None:
+        """A ``created/<agent>/<creator>`` token appeared (``creator_of``; its end changes nothing)."""
+        import zenoh
+
+        where = str(sample.key_expr)
+        agent, creator = where.rsplit("/", 2)[-2:]
+        if not (is_valid_name(agent) and is_valid_name(creator)):
+            self._drop("bad_created", where, None, "expected created/<agent>/<creator>")
+            return
+        if sample.kind == zenoh.SampleKind.PUT:
+            self._created(agent, creator)
 
     def _on_control(self, sample: Any) -> None:
         payload = sample.payload.to_bytes()
