@@ -8,7 +8,8 @@ to the base), ``commands/reset_odometry``, ``jason/actions_status`` when the mot
 
 Checking (:mod:`robot_bridge.actions`), control and completion (:mod:`robot_bridge.sim.motion`) and
 odometry (:mod:`robot_bridge.sim.odometry`) are the embedded simulator's own functions, so an
-action ends the same way on both bridges. ``set_fault`` sets the fault injector's ``fault``
+action ends the same way on both bridges: a control step runs on each encoder sample, in the base's time,
+as the simulator steps them (a wall-clock loop on a busy computer overshot turns). ``set_fault`` sets the fault injector's ``fault``
 parameter through its ``set_parameters`` service.
 """
 from __future__ import annotations
