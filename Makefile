@@ -84,8 +84,8 @@ soak: speedups
 		--agent-log soak-agents.log
 
 # Jason 3.3.2's own AgentSpeak unit tests, run unchanged from ../shared (see tests/jason_suite), in one
-# process and with --processes (both run; fails unless every executed test passed in both); prints
-# executed/passed for each
+# process and with --processes (both run; fails unless each run is complete and passed: exit 0, the manager's
+# PASSED, >= 468 executed, every tester heard from; else it names what is missing); prints executed/passed
 JASON_TESTS ?= ../shared/jason-unit-tests
 jason-tests: speedups
 	@$(PY) -m tests.jason_suite $(abspath $(JASON_TESTS)); in_process=$$?; \

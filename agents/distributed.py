@@ -39,7 +39,8 @@ REPO = Path(__file__).resolve().parents[1]
 def run_processes(project, timeout: float | None = None, *, out: IO[str] | None = None,
                   err: IO[str] | None = None, bridge=None, bridge_timeout: float = 30.0) -> int:
     """Run every agent of ``project`` (a ``MasProject``) in its own process; return the exit code
-    (0: ``.stopMAS`` or all idle, 124: ``--timeout``, 1: an agent process failed, 130: interrupted).
+    (0: ``.stopMAS`` or all idle, 124: ``--timeout``, 1: an agent process failed, 130: interrupted; Code after
+    ``.stopMAS(Delay, Code)``).
 
     ``bridge`` (an ``agents.environment.BridgeChoice``): each agent drives its robot through it. The
     simulator's world lives in this process, served on the hub (``robot_bridge.sim.server``), so that
@@ -102,6 +103,8 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
         for name, code in launcher.failures:
             print(f"faultmas mas run: agent {name} exited with code {code}", file=err)
         return EXIT_CODES["failed"] if reason != "timeout" else EXIT_CODES["timeout"]
+    if reason == "stopped" and launcher.exit_code:
+        return launcher.exit_code
     return EXIT_CODES[reason]
 
 
@@ -121,6 +124,7 @@ class Launcher:
         self.relays: list[threading.Thread] = []
         self.statuses: dict = {}
         self.stop_requested = threading.Event()
+        self.exit_code = 0
         self.failures: list[tuple[str, int]] = []
         self._print_lock = threading.Lock()
         self._stopping = False
@@ -134,6 +138,9 @@ class Launcher:
             return
         by = message.get("by")
         if isinstance(by, str) and self.is_member(by) or hmac.compare_digest(str(message.get("token", "")), self.token):
+            code = message.get("code", 0)
+            if isinstance(code, int) and not isinstance(code, bool) and code and not self.exit_code:
+                self.exit_code = code   # .stopMAS(_, Code): the run exits with Code (the first one wins)
             self.stop_requested.set()
         else:
             self.hub.report_control_refused(message, "not_a_member")

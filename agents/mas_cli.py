@@ -119,8 +119,8 @@ def cmd_mas_run(args) -> int:
         for bridge in bridges.values():
             bridge.shutdown()
     # The same exit codes as --processes (agents.distributed.EXIT_CODES): a run cut by --timeout
-    # did not finish, and scripts must be able to tell.
-    return 124 if why == "timeout" else 0
+    # did not finish, and scripts must be able to tell; .stopMAS(_, Code) exits with Code, as Jason does.
+    return 124 if why == "timeout" else runtime.exit_code
 
 
 def _run_networked(runtime, project, args) -> int:
@@ -145,4 +145,4 @@ def _run_networked(runtime, project, args) -> int:
         why = bridge.run(timeout=args.timeout)
         inspected.close()
         bridge.detach()
-    return 124 if why == "timeout" else 0
+    return 124 if why == "timeout" else runtime.exit_code

@@ -119,8 +119,8 @@ class NetworkArch(LocalArch):
     def all_names(self, agent: Agent) -> list[str]:
         return self.bridge.all_names()
 
-    def stop_mas(self, agent: Agent, delay: float = 0.0) -> None:
-        self.bridge.stop_mas(agent.name, delay)
+    def stop_mas(self, agent: Agent, delay: float = 0.0, exit_code: int = 0) -> None:
+        self.bridge.stop_mas(agent.name, delay, exit_code)
 
     def kill_agent(self, agent: Agent, name: str) -> bool:
         return self.runtime.kill_agent(name) or self.bridge.kill_elsewhere(agent.name, name)
@@ -292,10 +292,11 @@ class TransportBridge:
             return
         agent.post_feedback(partial(self.runtime.kill_agent, name))
 
-    def stop_mas(self, by: str, delay: float = 0.0) -> None:
-        """``.stopMAS``: every process of the MAS (this one too) stops after ``delay`` seconds."""
-        self.transport.publish_control("stop", by=by, delay=delay)
-        self.runtime.stop(delay)
+    def stop_mas(self, by: str, delay: float = 0.0, exit_code: int = 0) -> None:
+        """``.stopMAS``: every process of the MAS (this one too) stops after ``delay`` seconds; the
+        launcher exits with ``exit_code`` (``agents.distributed``)."""
+        self.transport.publish_control("stop", by=by, delay=delay, code=exit_code)
+        self.runtime.stop(delay, exit_code)
 
     # -- incoming (network threads: never block, never raise) ---------------------------------
     def _on_envelope(self, agent: Agent, envelope: Envelope) -> None:

@@ -42,7 +42,7 @@ class AgentArch:
         out.write(f"[{agent.name}] {text}\n")
         out.flush()
 
-    def stop_mas(self, agent: Any, delay: float = 0.0) -> None:
+    def stop_mas(self, agent: Any, delay: float = 0.0, exit_code: int = 0) -> None:
         agent.stopped = True
 
     def environment_clock(self) -> Callable[[], float] | None:

@@ -93,4 +93,4 @@ def cmd_run(args) -> int:
         print(exc, file=sys.stderr)
         return 2
     runtime.run(timeout=args.timeout)
-    return 0
+    return runtime.exit_code  # 0, or Code after .stopMAS(D, Code), as Jason

@@ -6,7 +6,7 @@ from agentspeak.communication cimport Message
 
 cdef class LocalRuntime:
     cdef dict __dict__
-    cdef public object agents, ready, _timed, _ready_set, _cond, _sleepers, _stop_at, _loop_thread, stopped
+    cdef public object agents, ready, _timed, _ready_set, _cond, _sleepers, _stop_at, _loop_thread, stopped, exit_code
     cdef public object printer, environment, trusted_senders, remote, undeliverable, source_dirs, _yield_turn, _yield_to
     cdef public object busy, directory, _urgent_in_row, _urgent
 

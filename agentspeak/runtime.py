@@ -55,8 +55,8 @@ class LocalArch(AgentArch):
     def all_names(self, agent: Agent) -> list[str]:
         return self.runtime.names()
 
-    def stop_mas(self, agent: Agent, delay: float = 0.0) -> None:
-        self.runtime.stop(delay)
+    def stop_mas(self, agent: Agent, delay: float = 0.0, exit_code: int = 0) -> None:
+        self.runtime.stop(delay, exit_code)
 
     def wake(self, agent: Agent) -> None:
         self.runtime.wake(agent)
@@ -122,6 +122,7 @@ class LocalRuntime:
         self._stop_at: float | None = None
         self._loop_thread: int | None = None   # ident of the thread inside run(), if any
         self.stopped = False
+        self.exit_code = 0                   # what .stopMAS(_, Code) asked the MAS's process to exit with
         self.printer = printer
         self.environment = environment
         self.trusted_senders: set[str] | None = None
@@ -313,9 +314,12 @@ class LocalRuntime:
         log.warning("message %s to unknown agent '%s' dropped", message.msg_id, message.receiver)
         return False
 
-    def stop(self, delay: float = 0.0) -> None:
+    def stop(self, delay: float = 0.0, exit_code: int = 0) -> None:
         """Stop the MAS ``delay`` seconds from now; with a delay, every agent first gets the event
-        ``+jag_shutting_down(MS)`` to prepare itself (Jason's ``RunLocalMAS.stopAgs``)."""
+        ``+jag_shutting_down(MS)`` to prepare itself (Jason's ``RunLocalMAS.stopAgs``). A non-zero
+        ``exit_code`` (``.stopMAS(D, Code)``) is kept for the process's exit status; the first one wins."""
+        if exit_code and not self.exit_code:
+            self.exit_code = exit_code
         if delay > 0 and get_ident() == self._loop_thread:
             from agentspeak.program import ADD, BEL, Trigger
             ms = round(delay * 1000)

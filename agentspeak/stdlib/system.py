@@ -156,8 +156,11 @@ def wait(ctx, what, timeout=None, elapsed=None):
 @internal_action(".stopMAS", args=(0, 2))
 def stop_mas(ctx, delay=0, code=0):
     """Stop every agent of the MAS; with a delay (ms), each agent gets ``+jag_shutting_down(Delay)``
-    and runs until then, the caller too (as Jason)."""
-    ctx.agent.arch.stop_mas(ctx.agent, (delay or 0) / 1000.0)
+    and runs until then, the caller too (as Jason). ``.stopMAS(D, Code)``: the MAS's process exits with
+    ``Code``, as Jason's JVM does (Jason's own test manager stops with code 1 when tests failed or were
+    not launched; a run that dropped that code reported a partial count as success)."""
+    exit_code = int(code) if isinstance(code, (int, float)) and not isinstance(code, bool) else 0
+    ctx.agent.arch.stop_mas(ctx.agent, (delay or 0) / 1000.0, exit_code)
     return True if delay else Suspend(reason="stopping")
 
 

@@ -91,6 +91,18 @@ def test_stop_mas_in_one_process_stops_all(tmp_path):
     assert run.out == ["[boss] stopping"]
 
 
+@pytest.mark.parametrize("how", [(), ("--processes",)], ids=["one process", "processes"])
+def test_stop_mas_with_an_exit_code_is_the_runs_exit_code(tmp_path, how):
+    """Jason's ``.stopMAS(Delay, Code)`` exits with Code: its unit-test manager stops with 1 when tests failed
+    or never ran, and a run that exited 0 instead passed a partial count off as success."""
+    write_files(tmp_path, {"boss.asl": '!go.\n+!go <- .print("failing"); .stopMAS(0, 3).\n',
+                           "busy.asl": "!go.\n+!go <- .wait(100); !go.\n",
+                           "x.mas2j": "MAS x { agents: boss; busy; }\n"})
+    run = mas_run(tmp_path / "x.mas2j", *how, "--timeout", "60")
+    assert run.finish(60) == 3, run.err[-20:]
+    assert run.out == ["[boss] failing"]
+
+
 @pytest.fixture
 def team(tmp_path):
     """A hub in this process, and watcher, friend, pinger (declared in team.mas2j) and intruder (not)."""
