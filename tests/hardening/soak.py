@@ -12,8 +12,9 @@ time (the simulator runs in real time while the robots stand, faster while they 
 
 What it watches, after every task: this process (hub, simulator server, world) for RSS, what the RSS is made
 of (``soak_memory``: malloc's heap and arenas, other anonymous and file-backed mappings, huge pages, and glibc's
-in-use versus freed-but-kept bytes; tests/hardening/memory.py), threads and open descriptors; every agent (the inspector's summary query) for intentions, events and beliefs once it should
-be idle (an agent still busy then has a stuck intention); every agent process for RSS and threads; the
+in-use versus freed-but-kept bytes; tests/hardening/memory.py), threads and open descriptors; every agent
+(the inspector's summary query) for intentions, events and beliefs once it should be idle (an agent still busy
+then has a stuck intention); every agent process for RSS (and its parts) and threads; the
 Zenoh declarations of this process's hub; what the simulator keeps that may grow (the camera renderer's
 static layers, the trajectory rows kept: both bounded) and the gc-tracked objects. The summary gives the
 least-squares slope of each RSS per hour of simulated time, over the run and over its second half (after
@@ -38,7 +39,7 @@ from typing import Callable
 
 import psutil
 
-from tests.hardening.memory import memory_breakdown
+from tests.hardening.memory import memory_breakdown, smaps_breakdown
 
 PROGRAM = "team_robot_tasks.asl"
 FINAL = ("arrived", "diagnosed", "undiagnosed")
@@ -60,8 +61,9 @@ def _team_state(hub, mas: str) -> dict:
 
 
 def _agent_processes(launched: dict) -> tuple[dict, dict]:
-    """RSS (MiB) and threads of the agent processes still running, by agent name; and the names of those
-    that ended (``launched``: name -> pid, as first seen; not reaped here: the launcher reports the status)."""
+    """RSS (MiB, and what it is made of) and threads of the agent processes still running, by agent name; and
+    the names of those that ended (``launched``: name -> pid, as first seen; not reaped here: the launcher
+    reports the status)."""
     found = {}
     for child in psutil.Process().children():
         try:
@@ -69,8 +71,9 @@ def _agent_processes(launched: dict) -> tuple[dict, dict]:
             if "--name" in argv and child.status() != psutil.STATUS_ZOMBIE:
                 name = argv[argv.index("--name") + 1]
                 launched.setdefault(name, child.pid)
-                found[name] = {"rss_mib": round(child.memory_info().rss / 2 ** 20, 1), "threads": child.num_threads()}
-        except psutil.Error:
+                found[name] = {"rss_mib": round(child.memory_info().rss / 2 ** 20, 1), "threads": child.num_threads(),
+                               "memory": smaps_breakdown(child.pid)}
+        except (psutil.Error, OSError):      # ended meanwhile (its smaps gone)
             pass
     return found, {name: pid for name, pid in launched.items() if name not in found}
 
