@@ -77,10 +77,10 @@ class _Mallinfo2(ctypes.Structure):
 def malloc_stats() -> dict[str, float] | None:
     """glibc's own account of its heaps, in MiB (``mallinfo2``, glibc 2.33+), or None elsewhere: what a step of
     resident memory with no Python object behind it is made of. ``heap``: taken from the system by sbrk and
-    the threads' arenas; ``mmapped``: large blocks mapped on their own; ``in_use``: allocated and not freed;
-    ``free``: freed but kept by malloc (what fragmentation holds); ``top``: of that, what ``malloc_trim``
-    could give back from the top of the main heap alone. Walks every free list under the arenas' locks: a
-    few milliseconds, once a task, not once a frame."""
+    the threads' arenas; ``mmapped``: large blocks mapped on their own; ``in_use``: allocated from the heaps
+    and not freed; ``free``: freed but kept by malloc (what fragmentation holds); ``top``: of that, what lies
+    at the top of the main heap. Walks every free list under the arenas' locks: a few milliseconds, once a
+    task, not once a frame."""
     libc = _glibc()
     if libc is None or not hasattr(libc, "mallinfo2"):
         return None
