@@ -190,17 +190,31 @@ def _report_drops(name: str, dropped: dict) -> None:
 
 def _open_robot(choice, args: argparse.Namespace, transport):
     """Create and set up the agent's robot bridge; a ``zenoh`` bridge shares the agent's session unless it
-    is told to ``connect`` elsewhere (e.g. to a ``faultmas sim serve`` of another MAS name)."""
+    is told to ``connect`` elsewhere (e.g. to a ``faultmas sim serve`` of another MAS name). In the secure profile
+    a ``zenoh`` bridge signs the robot's actions and checks that the environment signed the rest."""
     from robot_bridge.registry import create
 
     options = dict(choice.options)
+    sealed = None
     if choice.name == "zenoh":
         options.setdefault("mas", args.mas)
         if not options.get("connect"):
             options.setdefault("session", transport.session)
+        if transport.identity is not None:
+            from agents.transport.identity import ENVIRONMENT, IdentityError
+            if ENVIRONMENT not in transport.identity.public_keys:
+                raise IdentityError("the project lists no key for the environment, so the robot's percepts "
+                                    'cannot be checked: add one to its environment line, e.g. environment: '
+                                    'sim("key=keys/environment.pub")')
+            sealed = transport.sealed_channel()
     elif choice.name == "sim":
         log.warning("agent %s: bridge sim in a process of its own is a world with one robot; for a shared world "
                     "run `faultmas sim serve` and give the agents --bridge zenoh", args.name)
+    elif transport.identity is not None:   # ros2, a plug-in: its own middleware, not signed by faultmas
+        log.warning("agent %s: bridge %s is not covered by the secure profile: what goes between the agent and its "
+                    "robot is not signed (docs/reliability.md, \"Identity\")", args.name, choice.name)
     bridge = create(choice.name, args.name, **options)
+    if sealed is not None:
+        bridge.sealed = sealed
     bridge.setup(timeout=args.bridge_timeout)
     return bridge

@@ -381,7 +381,8 @@ def _run_processes(scenario, world, bridges, timeout, out, err, echo, on_mark=No
     from robot_bridge.sim.server import SimServer
 
     def serve(hub) -> Callable[[], None]:
-        stop_sim = SimServer(hub.session, scenario.mas, bridges).start().stop
+        # the secure profile: the hub holds the environment's key, the server signs what the robots send
+        stop_sim = SimServer(hub.session, scenario.mas, bridges, sealed=hub.sealed_channel()).start().stop
         if inspector is None:
             return stop_sim
         stop_inspector = inspector.serve(hub, world)
@@ -400,14 +401,18 @@ def write_project(scenario: Scenario, directory, secure: bool = False) -> "Path"
     from pathlib import Path
 
     project_file = Path(directory) / f"{scenario.mas}.mas2j"
-    key = ""
+    key = environment = ""
     if secure:
         from agents.transport.identity import generate_keys
-        generate_keys(Path(directory) / "keys", [r.name for r in scenario.robots])
-        key = f', key="{Path(directory) / "keys"}"'
+        keys = Path(directory) / "keys"
+        generate_keys(keys, [r.name for r in scenario.robots] + ["environment"])
+        key = f', key="{keys}"'
+        # the run's own process serves the robots (the simulator): it holds the environment's key and signs
+        # percepts, action results and the clock; the agents reach it through the zenoh bridge
+        environment = f'  environment: zenoh("key={keys / "environment.pub"}")\n'
     lines = [f'    {r.name} {plans_dir().joinpath(r.program)} [beliefs="{", ".join(_beliefs(scenario, r))}"{key}];'
              for r in scenario.robots]
-    project_file.write_text(f"MAS {scenario.mas} {{\n  agents:\n" + "\n".join(lines) + "\n}\n")
+    project_file.write_text(f"MAS {scenario.mas} {{\n{environment}  agents:\n" + "\n".join(lines) + "\n}\n")
     return project_file
 
 
@@ -443,9 +448,10 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
     with tempfile.TemporaryDirectory(prefix="faultmas-run-") as tmp, discard or contextlib.nullcontext():
         project_file = write_project(scenario, Path(tmp), secure=secure)
         project = load_mas2j(str(project_file))
-        from agents.transport.identity import project_identity
+        from agents.transport.identity import ENVIRONMENT, project_identity
+        # None: the default profile; secure: the hub serves the robots, so it holds the environment's key
         hub = ZenohTransport(scenario.mas, ZenohOptions(listen=(loopback_endpoint(),)),
-                             identity=project_identity(project)).open()   # None: the default profile
+                             identity=project_identity(project, [ENVIRONMENT] if secure else [])).open()
         stop_serving = serve(hub) if serve is not None else None
         launcher = Launcher(project, hub, out, err, extra_args=extra_args)
 

@@ -22,6 +22,7 @@ import time
 from pathlib import Path
 from typing import IO, Callable
 
+from agents.transport.trust import is_member
 from agents.zenoh_arch import LAUNCHER_TOKEN_ENV
 from robot_bridge.processes import ESCALATION, spawn, stop_processes
 
@@ -60,9 +61,12 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
     except (AslSyntaxError, SourceError, ValueError) as exc:
         print(exc, file=err)
         return 2
-    from agents.transport.identity import IdentityError, project_identity
+    from agents.transport.identity import ENVIRONMENT, IdentityError, project_identity
     try:  # the secure profile: the hub checks signatures too (an outsider's stop must not end the run)
         identity = project_identity(project)
+        if identity is not None and bridge is not None and bridge.name == "sim":
+            # this process serves the simulator to the agents: it signs as the environment
+            identity = project_identity(project, [ENVIRONMENT])
     except IdentityError as exc:
         print(exc, file=err)
         return 2
@@ -72,8 +76,8 @@ def run_processes(project, timeout: float | None = None, *, out: IO[str] | None 
         from agents.environment import open_bridges
         from robot_bridge.sim.server import SimServer
         try:
-            served = SimServer(hub.session, project.name,
-                               open_bridges(bridge, project.agent_names(), bridge_timeout)).start()
+            served = SimServer(hub.session, project.name, open_bridges(bridge, project.agent_names(), bridge_timeout),
+                               sealed=hub.sealed_channel()).start()
         except Exception as exc:
             hub.close()
             print(f"faultmas mas run: {exc}", file=err)
@@ -128,13 +132,21 @@ class Launcher:
         refused as the agents refuse it (in the secure profile ``by`` is proved by its signature)."""
         if message.get("command") != "stop":
             return
-        if message.get("by") in self.names or hmac.compare_digest(str(message.get("token", "")), self.token):
+        by = message.get("by")
+        if isinstance(by, str) and self.is_member(by) or hmac.compare_digest(str(message.get("token", "")), self.token):
             self.stop_requested.set()
         else:
             self.hub.report_control_refused(message, "not_a_member")
 
+    def is_member(self, name: str) -> bool:
+        """An agent of the project, or made at run time by one (``.create_agent``: announced by its process)."""
+        return is_member(name, self.names, self.hub.creator_of)
+
     def _on_status(self, status) -> None:
-        self.statuses[status.agent] = status
+        """The agents' statuses, those made at run time included (what they send and receive counts too); a
+        made agent's last status, published when it is killed, may come after its membership went."""
+        if status.agent in self.statuses or self.is_member(status.agent):
+            self.statuses[status.agent] = status
 
     def start(self) -> None:
         # each agent starts in the user's working directory (relative sources, aslSourcePath and
@@ -184,9 +196,9 @@ class Launcher:
                 return "failed"
             if others is not None and self._record_others(others()):
                 return "failed"
-            statuses = [self.statuses.get(name) for name in self.names]
+            statuses = list(self.statuses.values())
             snapshot = None
-            if stop_when_idle and all(statuses) and quiescent(statuses):
+            if stop_when_idle and all(name in self.statuses for name in self.names) and quiescent(statuses):
                 snapshot = (totals(statuses), tuple(statuses))
                 if snapshot == previous:
                     return "idle"

@@ -63,7 +63,8 @@ def choose_bridge(project=None, name: str | None = None, option_texts: list[str]
                         ", ".join(available()))
             return None
         where = f"{project.file}:{project.environment_line or 1}: environment {project.environment}: "
-        name, texts = bridge, list(project.environment_args)
+        # key=: the environment's public key (the secure profile, agents.transport.identity), no bridge option
+        name, texts = bridge, [text for text in project.environment_args if not text.startswith("key=")]
     if name is None:
         return None
     texts += list(option_texts)

@@ -29,7 +29,8 @@ from typing import Iterable
 from agents.directory import PROVIDER_NOTICE, NetworkDirectory, notice_service
 from agents.transport.base import Transport
 from agents.transport.envelope import BadMessage, Envelope, make_envelope
-from agents.transport.trust import CODE_PERFORMATIVES, TrustPolicy
+from agents.transport.keys import check_name
+from agents.transport.trust import CODE_PERFORMATIVES, TrustPolicy, is_member
 from agentspeak.agent import Agent
 from agentspeak.beliefs import SOURCE_PERCEPT
 from agentspeak.communication import Message
@@ -39,6 +40,7 @@ from agentspeak.ground_terms import read_ground_term
 from agentspeak.parser import parse_term
 from agentspeak.program import ADD, BEL, DEL, PlanTerm, Trigger
 from agentspeak.runtime import LocalArch, LocalRuntime
+from agentspeak.stdlib.registry import IAError
 from agentspeak.terms import Literal, Term, is_ground, to_str
 
 log = logging.getLogger("faultmas.agents")
@@ -120,6 +122,9 @@ class NetworkArch(LocalArch):
     def stop_mas(self, agent: Agent, delay: float = 0.0) -> None:
         self.bridge.stop_mas(agent.name, delay)
 
+    def kill_agent(self, agent: Agent, name: str) -> bool:
+        return self.runtime.kill_agent(name) or self.bridge.kill_elsewhere(agent.name, name)
+
     def accepts_plans_from(self, agent: Agent, sender: str) -> bool:
         return self.bridge.may_tell_how(sender)
 
@@ -165,6 +170,9 @@ class TransportBridge:
         self.on_message = None
         """``on_message(direction, agent, message)``: sees each message to ('out', a ``Message``) or
         from ('in', an ``Envelope``) another process (the inspector keeps the last few)."""
+        self.on_membership = None
+        """``on_membership(name, agent)``: an agent of this process made at run time (``agent``) or killed (None),
+        once it is on the network or off it (the inspector serves its mind)."""
         self._attached = False
 
     # -- set-up --------------------------------------------------------------------------------
@@ -177,19 +185,60 @@ class TransportBridge:
                                                   self.runtime.route)
         self.transport.on_control(self._on_control)
         for agent in self.runtime.agents.values():
-            body = agent.arch if type(agent.arch) is not LocalArch else None
-            agent.arch = NetworkArch.for_agent(self.runtime, self, body)
-            self.transport.register(agent.name, partial(self._on_envelope, agent), agent.wake)
+            self._join(agent)
+        self.runtime.membership = self  # agents made or killed at run time come and go on the network too
         self.transport.on_presence(self._on_presence)
         self._attached = True
         return self
 
+    def _join(self, agent: Agent, creator: str | None = None) -> None:
+        body = agent.arch if type(agent.arch) is not LocalArch else None
+        agent.arch = NetworkArch.for_agent(self.runtime, self, body)
+        self.transport.register(agent.name, partial(self._on_envelope, agent), agent.wake, creator=creator)
+
     def detach(self) -> None:
         """Withdraw the agents from the network (others see ``-agent_alive``)."""
+        self.runtime.membership = None
         for name in self.runtime.agents:
             self.transport.unregister(name)
         self.runtime.remote = None
         self._attached = False
+
+    # -- agents made and killed at run time (``LocalRuntime.membership``) ----------------------
+    def taken(self, name: str) -> bool:
+        """A name of the project, or of an agent alive anywhere in the MAS: a new agent gets another."""
+        return name in self.policy.declared_agents or name in self.transport.alive_agents()
+
+    def admit(self, name: str) -> None:
+        """A made agent is on the network under its name, so the name must be one a key expression can hold;
+        in the secure profile it must sign as itself (see ``docs/language.md``, agents made at run time)."""
+        try:
+            check_name(name)
+        except ValueError as exc:
+            raise IAError("ia_failed", f"cannot create an agent of the MAS: {exc}") from None
+        identity = getattr(self.transport, "identity", None)
+        if identity is not None and not identity.can_sign(name):
+            raise IAError("secure_profile", (
+                f"cannot create agent {name} in the secure profile: every agent signs what it sends with its own "
+                f"key, listed in the project (key=), and {name} has none; signed with its creator's key under its "
+                f"own name its messages would be refused by every receiver as forged. Make it an agent of the "
+                f"project (declared with its key=, started with the MAS), or run a project without key= options"))
+
+    def joined(self, agent: Agent, creator: str) -> None:
+        """On the network like a launched agent: its inbox, its presence, announced as made by ``creator`` (a
+        member for the other processes as long as its creator is one)."""
+        self._join(agent, creator)
+        if self.on_membership is not None:
+            self.on_membership(agent.name, agent)
+
+    def left(self, name: str) -> None:
+        """Killed: its last counters published (a launcher's message count stays whole), then off the network
+        (its presence and inbox go; its registrations went with ``Directory.forget``)."""
+        if name in self.transport.local_agents():
+            self.transport.publish_status(name, busy=False)
+            self.transport.unregister(name)
+            if self.on_membership is not None:
+                self.on_membership(name, None)
 
     # -- names and trust -----------------------------------------------------------------------
     def all_names(self) -> list[str]:
@@ -198,7 +247,15 @@ class TransportBridge:
         return sorted(names)
 
     def may_tell_how(self, sender: str) -> bool:
-        return sender in self.runtime.agents or self.policy.may_tell_how(sender)
+        """As in Jason, every agent of the project may send plans, and so may those they made at run time."""
+        return sender in self.runtime.agents or self.policy.may_tell_how(sender) or is_member(
+            sender, self.policy.declared_agents | self.policy.allowed_code_senders, self.transport.creator_of)
+
+    def is_member(self, name: str) -> bool:
+        """An agent of the MAS (always, when no project says who is): of the project, of this process, or made
+        at run time by one (in the secure profile: whose key the project lists)."""
+        return self.members is None or name in self.runtime.agents or is_member(
+            name, self.members, self.transport.creator_of)
 
     # -- outgoing ------------------------------------------------------------------------------
     def send_remote(self, message: Message) -> bool:
@@ -214,6 +271,27 @@ class TransportBridge:
             self.on_message("out", message.sender, message)
         return not self.transport.send(envelope)
 
+    def kill_elsewhere(self, by: str, name: str) -> bool:
+        """``.kill_agent`` of an agent of another process (Jason's agents may kill any agent of the MAS): its
+        process kills it when told (a control message; signed by ``by`` in the secure profile). False when no
+        agent of that name is alive anywhere."""
+        if name not in self.transport.alive_agents():
+            return False
+        self.transport.publish_control("kill", agent=name, by=by)
+        return True
+
+    def _on_kill(self, message: dict) -> None:
+        """Another process's agent killed one of ours: it dies in its own next turn (the runtime is not
+        thread-safe), as it would by its own ``.kill_agent``."""
+        by, name = message.get("by"), message.get("agent")
+        agent = self.runtime.agents.get(name) if isinstance(name, str) else None
+        if agent is None:
+            return
+        if self.members is not None and not (isinstance(by, str) and self.is_member(by)):
+            self.transport.report_control_refused(message, "not_a_member")
+            return
+        agent.post_feedback(partial(self.runtime.kill_agent, name))
+
     def stop_mas(self, by: str, delay: float = 0.0) -> None:
         """``.stopMAS``: every process of the MAS (this one too) stops after ``delay`` seconds."""
         self.transport.publish_control("stop", by=by, delay=delay)
@@ -225,7 +303,7 @@ class TransportBridge:
         if sender in self.runtime.agents:  # this process's agents are delivered to locally, never from afar
             self._refuse(agent, envelope, "forged_sender", f"{sender} is an agent of this process")
             return
-        if (self.members is not None and sender not in self.members and envelope.performative in MEMBERS_ONLY
+        if (envelope.performative in MEMBERS_ONLY and not self.is_member(sender)
                 and envelope.performative not in CODE_PERFORMATIVES  # plans: 'untrusted_code' below
                 and envelope.in_reply_to not in agent.pending_asks):
             self._refuse(agent, envelope, "not_a_member", f"{envelope.performative} only from agents of the MAS")
@@ -279,9 +357,12 @@ class TransportBridge:
         if message.get("command") == "died" and self._from_launcher(message):
             self.dead.add(str(message.get("agent")))
             return
+        if message.get("command") == "kill":
+            self._on_kill(message)
+            return
         if message.get("command") == "stop":
             by = message.get("by")
-            if self.members is not None and by not in self.members and by not in self.runtime.agents \
+            if self.members is not None and not (isinstance(by, str) and self.is_member(by)) \
                     and not self._from_launcher(message):
                 self.transport.report_control_refused(message, "not_a_member")
                 return

@@ -13,7 +13,7 @@ import threading
 import time
 from collections import deque
 from threading import get_ident
-from typing import Callable, Iterable
+from typing import Callable, Iterable, Protocol
 
 from agentspeak.agent import Agent
 from agentspeak.arch import AgentArch
@@ -49,8 +49,8 @@ class LocalArch(AgentArch):
         if type(self).send is LocalArch.send:  # one call per message instead of two (unless overridden)
             self.send = runtime._route_from  # type: ignore[method-assign]
 
-    def send(self, agent: Agent, message: Message) -> None:
-        self.runtime.route(message)
+    def send(self, agent: Agent, message: Message) -> bool:
+        return self.runtime.route(message)
 
     def all_names(self, agent: Agent) -> list[str]:
         return self.runtime.names()
@@ -68,7 +68,7 @@ class LocalArch(AgentArch):
         return self.runtime.accepts_plans_from(sender)
 
     def create_agent(self, agent: Agent, name: str, source: str) -> str:
-        return self.runtime.create_agent(name, source)
+        return self.runtime.create_agent(name, source, creator=agent.name)
 
     def kill_agent(self, agent: Agent, name: str) -> bool:
         return self.runtime.kill_agent(name)
@@ -83,6 +83,23 @@ class LocalArch(AgentArch):
     def act(self, agent: Agent, action: Literal):
         env = self.runtime.environment
         return env(agent, action) if env is not None else None
+
+
+class Membership(Protocol):
+    """What a runtime whose MAS extends beyond this process (``agents.zenoh_arch``) is told of agents that come
+    and go at run time (``.create_agent``, ``.clone``, ``.kill_agent``), so that they come and go everywhere."""
+
+    def taken(self, name: str) -> bool:
+        """Is ``name`` an agent of the MAS elsewhere (a new agent gets another name, as in Jason)?"""
+
+    def admit(self, name: str) -> None:
+        """Raise ``IAError`` (the creating formula fails, saying why) if no agent may be created as ``name``."""
+
+    def joined(self, agent: Agent, creator: str) -> None:
+        """``agent``, made by ``creator`` of this process, is now an agent of this runtime."""
+
+    def left(self, name: str) -> None:
+        """Agent ``name`` of this runtime was killed."""
 
 
 class LocalRuntime:
@@ -117,6 +134,7 @@ class LocalRuntime:
                                                  # processes puts its own back-end here (agents.directory)
         self._urgent_in_row = 0              # agents put first by a message with a deadline, in a row
         self._urgent: set[str] = set()       # ... their names, until their turn
+        self.membership: Membership | None = None  # the MAS beyond this process, told of agents made and killed
 
     # -- set-up
     def add_agent(self, name: str, source: str | None = None, source_file: str = "<string>",
@@ -149,10 +167,11 @@ class LocalRuntime:
         """The DF's ``tell provider(Provider, "Service")`` to ``subscriber`` (any thread)."""
         self.route(Message(DF_SENDER, subscriber, "tell", Literal("provider", (Literal(provider), service))))
 
-    def create_agent(self, name: str, source: str) -> str:
+    def create_agent(self, name: str, source: str, creator: str | None = None) -> str:
         """A new agent from an ``.asl`` file, at run time (Jason's ``.create_agent``): the file is looked
-        up as given, then along ``source_dirs``; a name in use gets a number appended, as in Jason.
-        Raises ``IAError`` (the calling formula fails) for a missing file or a syntax error."""
+        up as given, then along ``source_dirs``; a name in use (here or, with a ``membership``, anywhere in
+        the MAS) gets a number appended, as in Jason. Raises ``IAError`` (the calling formula fails) for a
+        missing file, a syntax error or a name the MAS refuses (``Membership.admit``)."""
         from agentspeak.errors import AslSyntaxError
         from agentspeak.sources import find_source
         from agentspeak.stdlib.registry import IAError
@@ -160,10 +179,7 @@ class LocalRuntime:
         if path is None:
             raise IAError("ia_failed", f".create_agent: cannot find {source!r} (looked in ., "
                                        f"{', '.join(self.source_dirs)})")
-        unique, n = name, 1
-        while unique in self.agents:
-            n += 1
-            unique = f"{name}_{n}"
+        unique = self._new_name(name)
         try:
             with open(path, encoding="utf-8") as f:
                 text = f.read()
@@ -175,7 +191,7 @@ class LocalRuntime:
             raise IAError("ia_failed", f".create_agent({unique}): {exc}") from None
         if self.trusted_senders is not None:
             self.trusted_senders.add(unique)
-        self.add_agent(unique, source_file=path, program=program)
+        self._joined(self.add_agent(unique, source_file=path, program=program), creator)
         # the creator's turn ends after this cycle, so the new agent starts before the creator goes on
         # (Jason starts it on a thread of its own at once; a creator that loops must not starve it)
         self._yield_turn = True
@@ -186,10 +202,7 @@ class LocalRuntime:
         """A new agent with a copy of ``original``'s beliefs, rules and plans (Jason's ``.clone``): no
         events, goals or intentions, so it waits for messages. A name in use gets a number appended."""
         import copy
-        unique, n = name, 1
-        while unique in self.agents:
-            n += 1
-            unique = f"{name}_{n}"
+        unique = self._new_name(name)
         clone = Agent(unique, arch=LocalArch(self), source_file=original.source_file)
         for plan in original.plans.plans:
             clone.plans.add(copy.copy(plan))  # a plan is not changed once in a library: a shallow copy
@@ -201,7 +214,23 @@ class LocalRuntime:
             self.trusted_senders.add(unique)
         self.agents[unique] = clone
         self.wake(clone)
+        self._joined(clone, original.name)
         return unique
+
+    def _new_name(self, name: str) -> str:
+        """``name``, or ``name_1``, ``name_2``... if it is taken (Jason's ``getNewAgentName``), admitted by the
+        ``membership`` (``IAError`` otherwise)."""
+        unique, n = name, 0
+        while unique in self.agents or (self.membership is not None and self.membership.taken(unique)):
+            n += 1
+            unique = f"{name}_{n}"
+        if self.membership is not None:
+            self.membership.admit(unique)
+        return unique
+
+    def _joined(self, agent: Agent, creator: str | None) -> None:
+        if self.membership is not None:
+            self.membership.joined(agent, creator or agent.name)
 
     def _run_first(self, agent: Agent) -> None:
         """Put ``agent`` at the head of the ready queue (moved there if it is already queued)."""
@@ -229,6 +258,8 @@ class LocalRuntime:
         self._timed.discard(agent)
         if self.directory is not None:
             self.directory.forget(name)
+        if self.membership is not None:
+            self.membership.left(name)
         return True
 
     def accepts_plans_from(self, sender: str) -> bool:
@@ -250,11 +281,12 @@ class LocalRuntime:
             if self._sleepers:  # nobody waits while the loop is busy: no notify to pay for
                 self._cond.notify()
 
-    def route(self, message: Message) -> None:
-        self._route_from(None, message)
+    def route(self, message: Message) -> bool:
+        return self._route_from(None, message)
 
-    def _route_from(self, sender: Agent | None, message: Message) -> None:
-        """``route``, with the signature of ``LocalArch.send`` (which it is, unless overridden)."""
+    def _route_from(self, sender: Agent | None, message: Message) -> bool:
+        """``route``, with the signature of ``LocalArch.send`` (which it is, unless overridden): False when no
+        agent of that name exists, here or (``remote``) elsewhere (``.send`` then fails, as Jason's)."""
         target = self.agents.get(message.receiver)
         if target is not None:
             if get_ident() == self._loop_thread and not self._sleepers \
@@ -272,13 +304,14 @@ class LocalRuntime:
                 elif message.receiver not in self._ready_set:
                     self._ready_set.add(message.receiver)
                     self.ready.append(target)
-                return
+                return True
             target.deliver(message)
-            return
+            return True
         if self.remote is not None and self.remote(message):
-            return
+            return True
         self.undeliverable += 1
         log.warning("message %s to unknown agent '%s' dropped", message.msg_id, message.receiver)
+        return False
 
     def stop(self, delay: float = 0.0) -> None:
         """Stop the MAS ``delay`` seconds from now; with a delay, every agent first gets the event

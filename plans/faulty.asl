@@ -159,12 +159,17 @@ where_i_am(unknown) :- not team_pose(_, _, _).    // no start_pose: the helper l
 -!awaitHelper(Ds, Round) : help_rounds(N) & Round < N <- !askForHelp(Ds, Round + 1).
 -!awaitHelper(Ds, _) <- !undiagnosed(Ds, no_helper).
 
-+canHelp[source(H)] : helper(Other) & Other \== H <- .send(H, tell, noThanks).
++canHelp[source(H)] : helper(Other) & Other \== H <- !courtesy(H, noThanks).
+
+// a word to a helper that may be gone meanwhile (its process died or was killed): .send to an agent
+// that does not exist fails, as in Jason (receiver_not_found), and there is nothing to say to it then
++!courtesy(H, Word) <- .send(H, tell, Word).
+-!courtesy(_, _)[error(receiver_not_found)].
 
 +!withHelper(H, Ds)
    <- +tried(H); -+helper(H);
       .findall(O, canHelp[source(O)] & O \== H, Others);
-      for (.member(O, Others)) { .send(O, tell, noThanks) };
+      for (.member(O, Others)) { !courtesy(O, noThanks) };
       .print(H, " will help me");
       .progress(helper_found, H);
       -+finds(H, 0);
@@ -190,7 +195,7 @@ where_i_am(unknown) :- not team_pose(_, _, _).    // no start_pose: the helper l
 +!afterFind(H, findRobot(_, not_found), Ds) <- .print(H, " could not find me"); !findMe(H, Ds).
 +!afterFind(H, Answer, Ds) <- .print(H, " could not find me (", Answer, ")"); !nextHelper(H, Ds).
 
-+!nextHelper(H, Ds) <- -helper(H); .send(H, tell, thanks); !broadcastHelp(Ds).
++!nextHelper(H, Ds) <- -helper(H); !courtesy(H, thanks); !broadcastHelp(Ds).
 
 // ---- the test motion, watched by the helper -----------------------------------------------------
 +!tryMove(H, Ds, Trial) : answer_timeout(T)
@@ -250,10 +255,10 @@ where_i_am(unknown) :- not team_pose(_, _, _).    // no start_pose: the helper l
       .print("with ", H, "'s help, the diagnoser explains ", Obs, " by ", Ds2);
       !conclude(H, Ds2, Trial).
 
-+!conclude(H, [D], _) <- .send(H, tell, thanks); -helper(H); !decide(D).
++!conclude(H, [D], _) <- !courtesy(H, thanks); -helper(H); !decide(D).
 +!conclude(H, Ds, Trial) : max_trials(N) & Trial < N
    <- .print("still ambiguous: ", Ds, "; one more test motion"); !tryMove(H, Ds, Trial + 1).
-+!conclude(H, Ds, _) <- .send(H, tell, thanks); -helper(H); !undiagnosed(Ds, ambiguous).
++!conclude(H, Ds, _) <- !courtesy(H, thanks); -helper(H); !undiagnosed(Ds, ambiguous).
 
 -!tryMove(H, Ds, _) <- .print("lost ", H, "'s help"); !nextHelper(H, Ds).
 -!afterTrack(H, Ds, _, _) <- .print("lost ", H, "'s help"); !nextHelper(H, Ds).

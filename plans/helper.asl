@@ -31,6 +31,7 @@ available :- not helping(_) & not on_mission & not diagnosing & not self_suspect
       .print(F, " needs help: I offer mine");
       .send(F, tell, canHelp).
 +!helpMe(F, _)[source(F)] <- .print(F, " needs help, but I am busy").
+-!helpMe(F, _)[error(receiver_not_found)] : helping(F) <- .print(F, " is gone"); !release(F).
 
 +noThanks[source(F)] : helping(F) <- .print(F, " found another helper"); !release(F).
 +thanks[source(F)] : helping(F) <- .print("glad I could help ", F); !release(F).

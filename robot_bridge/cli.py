@@ -101,6 +101,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                             "(default %(default)s)")
     serve.add_argument("--timeout", type=float, default=None, metavar="S",
                        help="stop after S seconds (default: run until interrupted)")
+    serve.add_argument("--project", default=None, metavar="PROJECT.mas2j",
+                       help="a project in the secure profile (key= options): sign what the robots send as its "
+                            "environment and take only actions signed by each robot's agent")
+    serve.add_argument("--identity", default=None, metavar="KEY.pem",
+                       help="with --project: the environment's private key (default: the .key beside the public "
+                            "key its environment line names)")
     serve.set_defaults(func=serve_world)
 
 
@@ -127,7 +133,11 @@ def serve_world(args: argparse.Namespace) -> int:
             faults[robot.strip()] = kind.strip()
         if args.speed < 0:
             raise ValueError(f"--speed must be >= 0, got {args.speed:g}")
-    except ValueError as exc:
+        sealed = _environment_seal(args)
+    except OSError as exc:
+        print(f"faultmas sim serve: cannot read {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except ValueError as exc:   # IdentityError, a project's located error too
         print(f"faultmas sim serve: {exc}", file=sys.stderr)
         return 2
     import zenoh
@@ -149,7 +159,7 @@ def serve_world(args: argparse.Namespace) -> int:
     for name, bridge in bridges.items():
         bridge.setup()
         world.set_fault(name, faults.get(name, "none"))
-    server = SimServer(session, args.mas, bridges).start()
+    server = SimServer(session, args.mas, bridges, sealed=sealed).start()
     stop = threading.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stop.set())
@@ -170,6 +180,29 @@ def serve_world(args: argparse.Namespace) -> int:
         print(f"{name}: truth ({x:.3f}, {y:.3f}, {yaw:.1f} deg)  odometry ({odom.x:.3f}, {odom.y:.3f})")
     print(f"faultmas sim serve: {server.requests} action requests served")
     return 0
+
+
+def _environment_seal(args: argparse.Namespace):
+    """The secure profile of ``--project`` for the process that serves its robots (None: the default profile):
+    the environment's key signs, the drops go to a rate-limited log (``agents.transport.drop_log``)."""
+    if args.project is None:
+        if args.identity is not None:
+            raise ValueError("--identity needs --project (the project lists the keys)")
+        return None
+    import logging
+
+    from agents.transport.drop_log import DropLog
+    from agents.transport.identity import ENVIRONMENT, project_identity
+    from agents.transport.sealed import SealedChannel
+    from agentspeak.mas2j import load_mas2j
+
+    project = load_mas2j(args.project)
+    if args.mas != project.name:
+        raise ValueError(f"--mas {args.mas} but {args.project} is MAS {project.name}")
+    identity = project_identity(project, [ENVIRONMENT], args.identity)
+    if identity is None:
+        raise ValueError(f"{args.project} lists no keys (key= options): it is not in the secure profile")
+    return SealedChannel(identity, DropLog(logging.getLogger("faultmas.sim")).drop)
 
 
 def list_bridges(args: argparse.Namespace) -> int:

@@ -20,7 +20,15 @@ ticks and runs at wall pace while it does not (``robot_bridge.clock``): a server
 
 Options: ``mas`` (namespace, default ``faultmas``), ``session`` (an open ``zenoh.Session`` to share,
 e.g. the agent's own transport session) or ``connect`` (endpoints; a private loopback peer session is
-opened), ``action_timeout`` (seconds; default: from the action's own time bound).
+opened), ``action_timeout`` (seconds; default: from the action's own time bound). The agent's process sets
+``sealed`` (no option: an ``agents.transport.sealed.SealedChannel``) before ``setup`` in the secure profile.
+
+In the secure profile (docs/reliability.md, "Identity") every message on these keys is signed: percepts,
+action results and the clock by the environment (the process that serves the robots, whose public key the
+project lists), an action request by the agent that drives the robot (its namesake). An outsider on the network
+could otherwise put percepts that steer the agent's beliefs, answer its actions, or move its robot. What is
+unsigned, signed by another key or replayed is dropped with the transport's rate-limited log line; the clock is
+then the JSON object ``{"time": SECONDS}`` (a seal needs an object).
 """
 from __future__ import annotations
 
@@ -53,6 +61,22 @@ def clock_key(mas: str) -> str:
     return f"faultmas/{mas}/clock"
 
 
+def clock_document(seconds: float) -> bytes:
+    """The clock's payload in the secure profile, before its seal: ``{"time":SECONDS}``."""
+    return b'{"time":%s}' % repr(float(seconds)).encode()
+
+
+def clock_seconds(text: str) -> float:
+    """The seconds in a secure-profile clock document (``ValueError`` when it is not one)."""
+    import json
+
+    data = json.loads(text)
+    seconds = data.get("time") if isinstance(data, dict) else None
+    if isinstance(seconds, bool) or not isinstance(seconds, (int, float)):
+        raise ValueError('expected {"time": SECONDS}')
+    return float(seconds)
+
+
 class ZenohBridge(RobotBridge):
     """Drives one robot whose server (simulator or driver) listens on Zenoh."""
 
@@ -62,6 +86,8 @@ class ZenohBridge(RobotBridge):
                  action_timeout: float | None = None, **options: object) -> None:
         super().__init__(robot, **options)
         self.mas = mas
+        self.sealed: Any = None
+        """The secure profile (set by the agent's process before ``setup``): signs actions, checks the rest."""
         self._session, self._owns_session = session, session is None
         self.connect = (connect,) if isinstance(connect, str) else tuple(connect)
         self.action_timeout = action_timeout
@@ -96,7 +122,8 @@ class ZenohBridge(RobotBridge):
         if not self._store.received.wait(timeout):
             where = robot_key(self.mas, self.robot, "percepts")
             self.shutdown()
-            raise TimeoutError(f"no robot server publishes on {where} after {timeout:g} s "
+            signed = " percepts signed by the environment's key" if self.sealed is not None else ""
+            raise TimeoutError(f"no robot server publishes{signed} on {where} after {timeout:g} s "
                                f"(is the simulator running for MAS {self.mas!r}?)")
 
     def act(self, action: Action) -> "Future[Completion]":
@@ -111,7 +138,10 @@ class ZenohBridge(RobotBridge):
         future = self._pending.add(action, limit)
         request = wire.ActionRequest(self.robot, action.name, tuple(wire.format_value(a) for a in action.args),
                                      action.id)
-        self._publisher.put(request.to_json())
+        payload = request.to_json().encode()
+        if self.sealed is not None:
+            payload = self.sealed.seal(self.robot, payload)
+        self._publisher.put(payload)
         return future
 
     def percepts(self) -> list[Percept]:
@@ -136,10 +166,21 @@ class ZenohBridge(RobotBridge):
             self._session = None
 
     # -- network threads: never raise -----------------------------------------------------------
+    def _opened(self, sample) -> bytes | None:
+        """The payload of ``sample``; in the secure profile only if the environment signed it (else None: the
+        drop is logged and counted by the agent's transport)."""
+        payload = sample.payload.to_bytes()
+        if self.sealed is None:
+            return payload
+        return self.sealed.open(payload, self.sealed.environment, str(sample.key_expr))
+
     def _on_status(self, sample) -> None:
         from robot_bridge.ros2 import wire
+        payload = self._opened(sample)
+        if payload is None:
+            return
         try:
-            status = wire.ActionStatus.from_json(sample.payload.to_string())
+            status = wire.ActionStatus.from_json(payload.decode())
         except (wire.WireError, UnicodeDecodeError) as exc:
             log.warning("%s: dropped a bad status message: %s", self.robot, exc)
             return
@@ -149,16 +190,28 @@ class ZenohBridge(RobotBridge):
 
     def _on_percepts(self, sample) -> None:
         from robot_bridge.ros2 import wire
+        payload = self._opened(sample)
+        if payload is None:
+            return
         try:
-            self._store.receive(sample.payload.to_string())
+            text = payload.decode()
+            if self.sealed is not None and wire.decode_percepts(text).agent_name != self.robot:
+                # the environment's signature, but another robot's percepts (put on this robot's key)
+                self.sealed.refuse("replayed", str(sample.key_expr), self.sealed.environment,
+                                   "percepts of another robot")
+                return
+            self._store.receive(text)
         except (wire.WireError, UnicodeDecodeError) as exc:
             log.warning("%s: dropped a bad percept message: %s", self.robot, exc)
 
     def _on_clock(self, sample) -> None:
+        payload = self._opened(sample)
+        if payload is None:
+            return
         text = ""
         try:
-            text = sample.payload.to_string()
-            seconds = float(text)
+            text = payload.decode()
+            seconds = float(clock_seconds(text) if self.sealed is not None else text)
             if seconds != seconds or seconds in (float("inf"), float("-inf")):
                 raise ValueError("not a finite number")
         except (UnicodeDecodeError, ValueError) as exc:

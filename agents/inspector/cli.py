@@ -5,7 +5,10 @@ It joins the MAS's Zenoh network (``--connect``: a router or any agent's endpoin
 --inspect`` needs none, it serves the page itself) and serves the page on loopback. A non-loopback
 ``--listen`` is refused unless ``--public`` says so, and then a warning says who can see the page.
 ``--project`` of a MAS in the secure profile (its agents' public keys listed) makes the page trust only what
-is signed: agents proved alive by their signed heartbeats, ``.progress`` reports signed by their agent.
+is signed: agents proved alive by their signed heartbeats, ``.progress`` reports, minds and summaries signed by
+their agent; ``--identity`` (a private key the project lists) signs pause/step/resume, which the agents of a
+secure MAS refuse otherwise. Without ``--project`` the page cannot check anything: it shows every token, report
+and mind that anyone on the network puts (a secure MAS's agents still refuse its pause/step).
 """
 from __future__ import annotations
 
@@ -32,6 +35,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="the MAS's project file; in the secure profile (key= options) only agents proved by "
                         "their signed heartbeats are shown alive and only signed .progress reports join the "
                         "timeline (without it, the page believes every liveliness token and report)")
+    p.add_argument("--identity", default=None, metavar="KEY.pem",
+                   help="with --project in the secure profile: a private key the project lists (a member's or "
+                        "the environment's), to sign pause/step/resume (the agents refuse them unsigned)")
     add_listen_arguments(p)
     p.set_defaults(func=cmd_inspect)
 
@@ -76,13 +82,17 @@ def cmd_inspect(args: argparse.Namespace) -> int:
         print(f"faultmas inspect: {exc}", file=sys.stderr)
         return 2
     identity = None
+    if args.identity is not None and args.project is None:
+        print("faultmas inspect: --identity needs --project (the project lists the keys)", file=sys.stderr)
+        return 2
     if args.project is not None:
-        from agents.transport.identity import IdentityError, project_identity
+        from agents.transport.identity import IdentityError, project_identity, project_identity_of_key
         from agentspeak.errors import SourceError
         from agentspeak.mas2j import load_mas2j
         try:
             project = load_mas2j(args.project)
-            identity = project_identity(project)
+            identity = project_identity(project) if args.identity is None else \
+                project_identity_of_key(project, args.identity)
         except OSError as exc:
             print(f"faultmas inspect: cannot read {args.project}: {exc.strerror or exc}", file=sys.stderr)
             return 2

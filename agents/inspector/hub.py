@@ -12,7 +12,10 @@ In the secure profile (``transport`` given, with an identity: ``faultmas run --s
 and the timeline come from the transport, which checks signatures: an agent is listed alive only while its
 token is up and its signed heartbeats come (``agents.transport.proved_presence``: an outsider's token makes
 nobody alive), and the timeline shows only ``.progress`` reports signed by the agent they name (an outsider
-cannot write into it; the refused ones are counted in ``refused_marks`` and logged by the transport).
+cannot write into it; the refused ones are counted in ``refused_marks`` and logged by the transport). The
+minds and summaries shown are only those signed by their agent (an outsider's answer on an agent's key is
+dropped by the transport's drop log), and pause/step/resume go out signed by this process's key of the project
+(the run's own hub: the environment's; ``faultmas inspect --identity``): without one they are not sent.
 
 A message that does not decode is dropped with one warning line naming its key; the hub goes on.
 Readers (the web app) wait on ``changed`` and read ``view()``; everything else happens on Zenoh's
@@ -37,6 +40,14 @@ SUMMARY_EVERY = 0.5   # seconds between two summary queries of the team
 QUERY_TIMEOUT = 2.0
 TRAIL_POINTS = 600    # points kept per trail (older ones thinned)
 TRAIL_STEP = 0.01     # metres a robot moves before its trail gets a point
+
+
+def _every_reply():
+    """Every reply of a query, unconsolidated: an outsider's reply on an agent's key must not displace the agent's
+    (Zenoh keeps one reply per key by default; the secure profile then drops the outsider's and keeps the agent's)."""
+    import zenoh
+
+    return zenoh.ConsolidationMode.NONE
 
 
 class _Trail:
@@ -64,6 +75,7 @@ class TeamHub:
                  transport: Any = None) -> None:
         self.session = session
         self.transport = transport if transport is not None and transport.identity is not None else None
+        self._sealed = self.transport.sealed_channel() if self.transport is not None else None
         self.mas = mas_keys.check_name(mas, "MAS name")
         self.started = time.monotonic()
         self.clock = clock or (lambda: time.monotonic() - self.started)
@@ -151,7 +163,8 @@ class TeamHub:
 
     def _query_summaries(self) -> None:
         try:
-            replies = list(self.session.get(keys.state_pattern(self.mas) + "?summary", timeout=QUERY_TIMEOUT))
+            replies = list(self.session.get(keys.state_pattern(self.mas) + "?summary", timeout=QUERY_TIMEOUT,
+                                            consolidation=_every_reply()))
         except Exception as exc:  # session closing
             log.debug("summary query failed: %s", exc)
             return
@@ -171,7 +184,12 @@ class TeamHub:
             self._bump()
 
     def _decode(self, key: str, payload: bytes) -> dict | None:
-        """A state message, or None (dropped with a log line) when it is not one."""
+        """A state message, or None (dropped with a log line) when it is not one; in the secure profile only
+        one its agent signed."""
+        if self.transport is not None:
+            payload = self._sealed.open(payload, keys.agent_of(key), key)
+            if payload is None:
+                return None
         try:
             state = json.loads(payload)
             if not isinstance(state, dict) or not isinstance(state.get("agent"), str) \
@@ -209,7 +227,7 @@ class TeamHub:
     def refresh(self, agent: str) -> dict | None:
         """Query ``agent``'s whole mind (with its plan library) now."""
         key = keys.state_key(self.mas, agent)
-        for reply in self.session.get(key + "?plans", timeout=QUERY_TIMEOUT):
+        for reply in self.session.get(key + "?plans", timeout=QUERY_TIMEOUT, consolidation=_every_reply()):
             if reply.ok is not None:
                 state = self._decode(key, reply.ok.payload.to_bytes())
                 if state is not None:
@@ -253,11 +271,24 @@ class TeamHub:
     def control(self, agent: str, command: str) -> dict:
         """Ask ``agent`` to pause, step or resume; its answer (it refuses unless the MAS allows it)."""
         key = keys.control_key(self.mas, agent)
-        payload = json.dumps({"command": command})
-        for reply in self.session.get(key, payload=payload, timeout=QUERY_TIMEOUT + 6.0):
+        payload: str | bytes = json.dumps({"command": command})
+        if self.transport is not None:   # the secure profile: signed by a key of the project, or not sent
+            identity = self.transport.identity
+            signer = next(iter(sorted(identity.private_keys)), None)
+            if signer is None:
+                return {"ok": False, "error": "this inspector holds no key of the project, so the agents would "
+                                              "refuse it (faultmas inspect --identity KEY.pem)"}
+            payload = identity.seal_control({"command": command, "by": signer})
+        for reply in self.session.get(key, payload=payload, timeout=QUERY_TIMEOUT + 6.0,
+                                      consolidation=_every_reply()):
             if reply.ok is not None:
+                opened = reply.ok.payload.to_bytes()
+                if self.transport is not None:
+                    opened = self._sealed.open(opened, agent, key)
+                    if opened is None:
+                        continue
                 try:
-                    answer = json.loads(reply.ok.payload.to_bytes())
+                    answer = json.loads(opened)
                 except ValueError as exc:
                     self._drop(key, str(exc))
                     continue

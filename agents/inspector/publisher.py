@@ -1,6 +1,7 @@
 """The agent side of the inspector: state on demand, a change stream only while someone watches.
 
-Per agent of the runtime, on the agent's transport session:
+Per agent of the runtime (those made at run time too, from when they are made until they are killed: the
+bridge's ``on_membership``), on the agent's transport session:
 
 * a queryable on ``inspect/<agent>/state`` that answers with its mind (``snapshot.mind``; parameter
   ``summary`` for the team list, ``plans`` to add the plan library);
@@ -8,6 +9,13 @@ Per agent of the runtime, on the agent's transport session:
   while a subscriber exists: it puts the mind whenever the agent has cycled, at most every ``period``;
 * a queryable on ``inspect/<agent>/control`` for ``pause``/``step``/``resume``, refused unless the MAS was
   started with ``allow_control`` (``--allow-pause``).
+
+In the secure profile (the transport has an identity) every answer and every streamed mind is signed by its
+agent, so a viewer with the project's keys shows only what the agent said; a ``pause``/``step``/``resume`` is
+obeyed only when signed by a key the project lists (a member's or the environment's: whoever may already make
+the agent act or feed its percepts may also hold it; ``faultmas inspect --identity``, or the run's own
+inspector, which holds the environment's key) and fresh. Others are refused with a reason and one
+rate-limited log line; an outsider can neither hold an agent nor show a forged mind.
 
 Nothing of this runs in the agent's reasoning cycle: an agent nobody watches pays nothing per cycle
 (``python -m benchmarks inspect`` measures it); the only standing cost is the last ``history`` messages
@@ -46,6 +54,7 @@ class _Watched:
         self.watchers = False
         self.last_put: tuple | None = None
         self.stream: Any = None
+        self.declared: list[Any] = []   # its Zenoh entities, undeclared when it goes
 
 
 class MindPublisher:
@@ -60,7 +69,6 @@ class MindPublisher:
         self.period = period
         self.history = history
         self.agents: dict[str, _Watched] = {}
-        self._declared: list[Any] = []
         self._wake = threading.Event()
         self._closed = threading.Event()
         self._thread: threading.Thread | None = None
@@ -69,44 +77,61 @@ class MindPublisher:
 
     # -- life cycle ------------------------------------------------------------------------------
     def start(self) -> "MindPublisher":
-        session = self.transport.session
-        for name, agent in self.runtime.agents.items():
-            watched = _Watched(agent, PauseGate(agent, self._stopping), self.history)
-            self.agents[name] = watched
-            watched.stream = session.declare_publisher(keys.stream_key(self.mas, name))
-            listener = watched.stream.declare_matching_listener(
-                lambda status, w=watched: self._on_matching(w, status.matching))
-            queryable = session.declare_queryable(keys.state_key(self.mas, name),
-                                                  lambda query, w=watched: self._on_state_query(w, query))
-            # each agent's own key: every process of the MAS has a publisher, only the agent's answers
-            control = session.declare_queryable(keys.control_key(self.mas, name),
-                                                lambda query, n=name: self._controls.put((n, query)))
-            self._declared += [listener, queryable, control, watched.stream]
+        for agent in list(self.runtime.agents.values()):
+            self.watch(agent)
         # pause and step wait for the agent's thread: not on Zenoh's threads, on one of ours
         self._control_thread = threading.Thread(target=self._serve_controls, name="faultmas-inspect-control",
                                                 daemon=True)
         self._control_thread.start()
         if self.bridge is not None:
             self.bridge.on_message = self._on_message
+            self.bridge.on_membership = self._on_membership  # agents made and killed at run time
         self._thread = threading.Thread(target=self._stream, name="faultmas-inspect-stream", daemon=True)
         self._thread.start()
         return self
+
+    def watch(self, agent: Any) -> None:
+        """Serve ``agent``'s mind (a launched agent at ``start``, a made one when it is made)."""
+        session, name = self.transport.session, agent.name
+        watched = _Watched(agent, PauseGate(agent, self._stopping), self.history)
+        watched.stream = session.declare_publisher(keys.stream_key(self.mas, name))
+        listener = watched.stream.declare_matching_listener(
+            lambda status, w=watched: self._on_matching(w, status.matching))
+        queryable = session.declare_queryable(keys.state_key(self.mas, name),
+                                              lambda query, w=watched: self._on_state_query(w, query))
+        # each agent's own key: every process of the MAS has a publisher, only the agent's answers
+        control = session.declare_queryable(keys.control_key(self.mas, name),
+                                            lambda query, n=name: self._controls.put((n, query)))
+        watched.declared = [listener, queryable, control, watched.stream]
+        self.agents[name] = watched
+
+    def unwatch(self, name: str) -> None:
+        """``name`` was killed: its mind is no longer served (a paused one is let go)."""
+        watched = self.agents.pop(name, None)
+        if watched is not None:
+            watched.gate.resume()
+            _undeclare(watched.declared)
+
+    def _on_membership(self, name: str, agent: Any) -> None:
+        if agent is not None:
+            self.watch(agent)
+        else:
+            self.unwatch(name)
 
     def close(self) -> None:
         """Undeclare everything and let paused agents go (the process is stopping)."""
         self._closed.set()
         self._wake.set()
         self._controls.put(None)
-        for watched in self.agents.values():
+        for watched in list(self.agents.values()):
             watched.gate.resume()
         if self.bridge is not None and getattr(self.bridge, "on_message", None) == self._on_message:
             self.bridge.on_message = None
-        for entity in reversed(self._declared):
-            try:
-                entity.undeclare()
-            except Exception:  # the session may be gone already
-                pass
-        self._declared = []
+        if self.bridge is not None and getattr(self.bridge, "on_membership", None) == self._on_membership:
+            self.bridge.on_membership = None
+        for watched in list(self.agents.values()):
+            _undeclare(watched.declared)
+            watched.declared = []
         if self._thread is not None:
             self._thread.join(2.0)
 
@@ -130,7 +155,7 @@ class MindPublisher:
                 state = snapshot.summary(watched.agent, watched.gate.paused)
             else:
                 state = self.mind(watched.agent.name, plans="plans" in parameters)
-            query.reply(keys.state_key(self.mas, watched.agent.name), _encode(state))
+            query.reply(keys.state_key(self.mas, watched.agent.name), self._sealed(watched.agent.name, _encode(state)))
         except Exception as exc:  # never kill Zenoh's thread; the viewer gets a reason
             log.exception("inspector: state of %s could not be read", watched.agent.name)
             query.reply_err(json.dumps({"error": str(exc)}))
@@ -164,7 +189,7 @@ class MindPublisher:
         """Put the mind of every watched agent that has cycled since its last put; sleep while
         nobody watches (woken by a matching listener)."""
         while not self._closed.is_set():
-            watched_now = [w for w in self.agents.values() if w.watchers]
+            watched_now = [w for w in list(self.agents.values()) if w.watchers]  # (agents come and go)
             if not watched_now:
                 self._wake.wait()
                 self._wake.clear()
@@ -174,7 +199,7 @@ class MindPublisher:
                 if mark == watched.last_put:
                     continue
                 try:
-                    watched.stream.put(_encode(self.mind(watched.agent.name)))
+                    watched.stream.put(self._sealed(watched.agent.name, _encode(self.mind(watched.agent.name))))
                     watched.last_put = mark
                 except Exception:  # a failed read or put must not end the stream
                     log.exception("inspector: could not stream the mind of %s", watched.agent.name)
@@ -188,11 +213,39 @@ class MindPublisher:
                 return
             name, query = item
             try:
-                query.reply(keys.control_key(self.mas, name), _encode(self._control(name, _payload(query))))
+                request = self._request(name, query)
+                answer = self._control(name, request) if request is not None else \
+                    {"ok": False, "error": "refused: not signed by a key of the project"}
+                query.reply(keys.control_key(self.mas, name), self._sealed(name, _encode(answer)))
             except Exception:  # a viewer gone meanwhile: nothing to answer
                 log.exception("inspector: a control request for %s failed", name)
             finally:
                 query.drop()
+
+    def _sealed(self, name: str, document: bytes) -> bytes:
+        """What agent ``name`` answers or streams: signed by it in the secure profile."""
+        identity = self.transport.identity
+        return identity.seal(name, document) if identity is not None and identity.can_sign(name) else document
+
+    def _request(self, name: str, query: Any) -> dict | None:
+        """A control request; in the secure profile only one signed by a key of the project (its ``by``), else
+        None (refused, the drop logged by the transport)."""
+        identity = self.transport.identity
+        if identity is None:
+            return _payload(query)
+        from agents.transport.envelope import BadMessage
+
+        payload = query.payload.to_bytes() if query.payload is not None else b""
+        where = keys.control_key(self.mas, name)
+        try:
+            request = identity.open_control(payload)
+        except BadMessage as bad:
+            self.transport.report_refused(bad.reason, where, bad.sender, bad.detail)
+            return None
+        except (ValueError, RecursionError) as exc:    # signed, but no JSON object
+            self.transport.report_refused("bad_control", where, None, str(exc)[:80])
+            return None
+        return request
 
     def _control(self, name: str, request: dict) -> dict:
         watched = self.agents.get(name)
@@ -227,6 +280,14 @@ def _payload(query: Any) -> dict:
     except ValueError:
         return {}
     return data if isinstance(data, dict) else {}
+
+
+def _undeclare(entities: list[Any]) -> None:
+    for entity in reversed(entities):
+        try:
+            entity.undeclare()
+        except Exception:  # the session may be gone already
+            pass
 
 
 def _encode(state: dict) -> bytes:

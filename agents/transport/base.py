@@ -26,6 +26,7 @@ from agents.transport.status import AgentStatus
 
 if TYPE_CHECKING:
     from agents.transport.identity import Identity
+    from agents.transport.sealed import SealedChannel
 
 log = logging.getLogger("faultmas.transport")
 
@@ -173,6 +174,7 @@ class Transport(ABC):
         self._counters = threading.Lock()
         self._agents: dict[str, OnEnvelope] = {}
         self._delivered: dict[str, OnDelivered] = {}
+        self._creators: dict[str, str] = {}  # agent made at run time (here or elsewhere) -> who made it
         self._outbox = Outbox()
         self._batching: int | None = None  # the thread whose sends to other processes are batched
         self._presence = Presence()
@@ -207,15 +209,23 @@ class Transport(ABC):
         self.close()
 
     # -- agents ----------------------------------------------------------------------------------
-    def register(self, agent: str, on_envelope: OnEnvelope, on_delivered: OnDelivered | None = None) -> None:
+    def register(self, agent: str, on_envelope: OnEnvelope, on_delivered: OnDelivered | None = None, *,
+                 creator: str | None = None) -> None:
         """Receive ``agent``'s messages through ``on_envelope`` (must not block) and announce it alive.
         ``on_delivered``: called after each group of messages handed over together (one network
-        message, which may be a batch), e.g. to wake the agent once per group, not per message."""
+        message, which may be a batch), e.g. to wake the agent once per group, not per message.
+        ``creator``: the agent that made it at run time (``.create_agent``), announced with it (``creator_of``)."""
         check_name(agent)
+        if creator is not None:
+            check_name(creator)
         if not self._opened:
             raise RuntimeError("open the transport before registering agents")
         if agent in self._agents:
             raise ValueError(f"agent {agent!r} is already registered in this process")
+        if creator is not None:
+            self._creators[agent] = creator
+        else:  # a name another process's made agent once had: this agent is not made
+            self._creators.pop(agent, None)
         self._agents[agent] = on_envelope
         if on_delivered is not None:
             self._delivered[agent] = on_delivered
@@ -230,6 +240,17 @@ class Transport(ABC):
 
     def local_agents(self) -> tuple[str, ...]:
         return tuple(self._agents)
+
+    def creator_of(self, agent: str) -> str | None:
+        """Who made ``agent`` at run time, in any process of the MAS (None: not made so). Remembered after the
+        agent is gone: what it sent last (a ``.stopMAS``, an ``achieve``) may arrive after its presence went, and
+        is still from a member. A claim in the default profile, as every name is (``trust.is_member``); in the
+        secure profile none (a token proves nothing there, and no agent is made at run time)."""
+        return self._creators.get(agent) if self.identity is None else None
+
+    def _created(self, agent: str, creator: str) -> None:
+        """For concrete transports: another process announced an agent made at run time by ``creator``."""
+        self._creators[agent] = creator
 
     # -- messages --------------------------------------------------------------------------------
     def send(self, envelope: Envelope) -> tuple[str, ...]:
@@ -369,6 +390,19 @@ class Transport(ABC):
         """For the agent layer: refuse a delivered envelope (e.g. ``unparsable_content``,
         ``untrusted_code``) with the same single log line and the same ``dropped`` counter."""
         self._drop(reason, f"agent {receiver}", envelope.sender, detail)
+
+    def sealed_channel(self) -> "SealedChannel | None":
+        """In the secure profile, what seals and checks this process's documents on keys that carry no envelope
+        (robots' percepts and actions, the inspector's answers), drops counted and logged as this transport's;
+        None in the default profile."""
+        if self.identity is None:
+            return None
+        from agents.transport.sealed import SealedChannel
+        return SealedChannel(self.identity, self._drop)
+
+    def report_refused(self, reason: str, where: str, sender: str | None = None, detail: str = "") -> None:
+        """For other layers: a message refused on ``where`` (a key), counted and logged like every drop."""
+        self._drop(reason, where, sender if isinstance(sender, str) else None, detail)
 
     def report_control_refused(self, message: dict, reason: str) -> None:
         """For the agent layer: a control message (e.g. ``stop``) refused, logged and counted as a drop."""

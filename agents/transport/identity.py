@@ -44,6 +44,15 @@ DEFAULT_MAX_SKEW = 30.0
 #: Sequence numbers remembered per (sender, receiver); older ones are refused outright (see ReplayGuard).
 REPLAY_MEMORY = 4096
 
+ENVIRONMENT = "$environment"
+"""The identity of the environment: the process that serves the robots (the simulator's server, a robot driver).
+It signs the robots' percepts, action results and clock, which steer the agents' beliefs; the agent that drives a
+robot (the robot's namesake) signs the robot's actions with its own key. The project lists its public key as an
+argument of its ``environment`` line (``environment: sim("key=keys/environment.pub")``), its private key stays
+with the process that serves the robots. Why not the agents' keys: percepts come from the robots' process, not
+from an agent, and a robot's own agent must not be able to forge what its robot perceives. ``$`` is no character
+of an agent's name, so no envelope and no ``stop`` can claim to be the environment as a member."""
+
 _SIG = b',"sig":"'
 _SEQ = b',"seq":'
 _SIG_LENGTH = 88  # base64 of 64 bytes
@@ -195,7 +204,8 @@ class Identity:
 
     @property
     def members(self) -> frozenset[str]:
-        return frozenset(self.public_keys)
+        """The agents of the project (not the environment: it signs robots' messages, it is no member)."""
+        return frozenset(name for name in self.public_keys if name != ENVIRONMENT)
 
     def can_sign(self, name: str) -> bool:
         return name in self.private_keys
@@ -279,12 +289,26 @@ def _raw_public(key: Any) -> bytes:
     return key.public_bytes(serialization.Encoding.Raw, serialization.PublicFormat.Raw)
 
 
+def environment_key_option(project: Any) -> str | None:
+    """The ``key=`` argument of the project's ``environment`` line (the environment's public key), or None."""
+    for text in getattr(project, "environment_args", None) or ():
+        if text.startswith("key="):
+            return text[len("key="):]
+    return None
+
+
 def project_key_files(project: Any) -> dict[str, Path]:
-    """{agent: public key file} from the ``key=`` options of a ``MasProject`` (empty when none has one).
-    Every agent then needs one: a project half in the secure profile is refused (``IdentityError``)."""
+    """{agent: public key file} from the ``key=`` options of a ``MasProject`` (empty when none has one), and
+    ``ENVIRONMENT``'s from its ``environment`` line's ``key=`` argument (a directory means
+    ``<dir>/environment.pub``). Every agent then needs one: a project half in the secure profile is refused
+    (``IdentityError``)."""
     base = Path(project.file).resolve().parent if project.file else Path.cwd()
     files: dict[str, Path] = {}
     missing = []
+    environment = environment_key_option(project)
+    if environment is not None:
+        path = base / environment
+        files[ENVIRONMENT] = path / "environment.pub" if path.is_dir() else path
     for decl in project.agents:
         option = decl.options.get("key")
         for name in decl.instance_names():
@@ -294,7 +318,7 @@ def project_key_files(project: Any) -> dict[str, Path]:
             path = base / str(option)
             files[name] = path / f"{name}.pub" if path.is_dir() else path
     if files and missing:
-        raise IdentityError(f"{project.file}: agents {', '.join(missing)} have no key= option, but others do: "
+        raise IdentityError(f"{project.file}: agents {', '.join(missing)} have no key= option, but others (or the environment) do: "
                             "in the secure profile every agent of the project needs its public key")
     return files
 
@@ -320,7 +344,26 @@ def project_identity(project: Any, own_agents: Iterable[str] = (), private_file:
         raise IdentityError("one private key file was given for several agents")
     private = {}
     for name in own:
+        if name == ENVIRONMENT and name not in public:
+            raise IdentityError(f"{project.file}: the secure profile serves robots only with the environment's "
+                                'key: add it to the environment line, e.g. environment: sim("key=keys/environment.pub")')
         if name not in public:
             raise IdentityError(f"{project.file}: {name} is not an agent of the project, so it has no key")
         private[name] = Path(private_file) if private_file is not None else private_key_file(public[name])
     return Identity.from_files(public, private, max_skew)
+
+
+def project_identity_of_key(project: Any, private_file: str | Path,
+                            max_skew: float = DEFAULT_MAX_SKEW) -> Identity:
+    """The secure profile of ``project`` for a process that is no agent but holds ``private_file``, the private
+    key of one of the identities the project lists (a member's, or the environment's): ``faultmas inspect
+    --identity`` signs pause and step with it. ``IdentityError`` when the project lists no keys or not this one."""
+    public = project_key_files(project)
+    if not public:
+        raise IdentityError(f"{project.file}: an identity was given but the project lists no key= "
+                            "(not the secure profile)")
+    raw = _raw_public(load_private_key(private_file).public_key())
+    for name, path in public.items():
+        if _raw_public(load_public_key(path)) == raw:
+            return Identity.from_files(public, {name: private_file}, max_skew)
+    raise IdentityError(f"{private_file}: not the private key of any identity {project.file} lists")

@@ -35,6 +35,16 @@ def alive_pattern(mas: str) -> str:
     return f"{mas_prefix(mas)}/alive/*"
 
 
+def created_key(mas: str, agent: str, creator: str) -> str:
+    """The liveliness token that says ``agent`` was made at run time by ``creator`` (``.create_agent``,
+    ``.clone``): a member of the MAS for the other processes while its creator is (``trust.is_member``)."""
+    return f"{mas_prefix(mas)}/created/{check_name(agent)}/{check_name(creator)}"
+
+
+def created_pattern(mas: str) -> str:
+    return f"{mas_prefix(mas)}/created/*/*"
+
+
 def control_key(mas: str) -> str:
     """MAS-wide commands (``stop``), seen by every process of the MAS."""
     return f"{mas_prefix(mas)}/control"

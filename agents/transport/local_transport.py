@@ -53,13 +53,17 @@ class LocalTransport(Transport):
             for peer in self.bus.peers(self.mas):
                 for agent in peer._agents:
                     self._presence.update(agent, True)
+                self._creators.update(peer._creators)
 
     def _close(self) -> None:
         with self.bus.lock:
             self.bus.transports.remove(self)
 
     def _attach(self, agent: str) -> None:
+        creator = self._creators.get(agent)
         for peer in self.bus.peers(self.mas):
+            if creator is not None:
+                peer._created(agent, creator)
             peer._presence.update(agent, True)
 
     def _detach(self, agent: str) -> None:

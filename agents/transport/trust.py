@@ -11,7 +11,7 @@ they are only as trustworthy as the links, so real deployments add TLS and acces
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Iterable
+from typing import Callable, Collection, Iterable
 
 from agents.transport.envelope import Envelope
 
@@ -52,3 +52,17 @@ class TrustPolicy:
     def allow(self, senders: Iterable[str]) -> None:
         """Allow more senders to send plans (e.g. from the project's configuration)."""
         self.allowed_code_senders = self.allowed_code_senders | frozenset(senders)
+
+
+def is_member(name: str, members: Collection[str], creator_of: Callable[[str], "str | None"]) -> bool:
+    """Is ``name`` an agent of the MAS: one of ``members`` (the project's), or made at run time by one
+    (``creator_of``: who made it, as its process announces; a made agent may make more)? Names are claims in
+    the default profile, so this keeps out only strangers that do not know a member's name."""
+    seen = set()
+    while name not in members:
+        creator = creator_of(name)
+        if creator is None or creator in seen:
+            return False
+        seen.add(name)
+        name = creator
+    return True

@@ -10,7 +10,8 @@ facilitator's registrations of the local agents (``registrations``), and a livel
 history on ``faultmas/<mas>/subscribes/*/*``, the subscriptions of other processes' agents (a token per
 ``.df_subscribe``; see ``agents.directory``). In the secure profile a token alone proves nothing (anyone
 may declare one): an agent is present while its token is up and its signed heartbeats keep coming
-(``proved_presence``). Messages are put reliably with congestion control
+(``proved_presence``), and a subscription counts while its token is up and its agent's signed heartbeats list
+it; a directory query that says who subscribes is signed by that agent. Messages are put reliably with congestion control
 BLOCK on a cached publisher per receiver (a burst from the agents' thread in batches, see
 ``outbox``); agents of this process are served without the network.
 """
@@ -19,6 +20,7 @@ from __future__ import annotations
 import json
 import queue
 import threading
+import time
 from typing import Any, Callable
 
 from agents.transport import keys
@@ -26,13 +28,16 @@ from agents.transport.base import Transport, log
 from agents.transport.config import ZenohOptions, build_config, listen_endpoints
 from agents.transport.envelope import DEFAULT_MAX_SIZE, BadMessage, Envelope, is_valid_name
 from agents.transport.identity import claimed_agent
-from agents.transport.proved_presence import HEARTBEAT, ProvedPresence
+from agents.transport.proved_presence import HEARTBEAT, LEASE, ProvedPresence
 from agents.transport.registrations import QUERY_TIMEOUT, encode_services, new_nonce, open_services
 from agents.transport.status import AgentStatus
 
 
 INBOX_CAPACITY = 8192
 """Samples an inbox holds before Zenoh stops taking more for it (reliable puts then wait: no loss)."""
+MAX_CLAIMS = 4096
+"""Subscription tokens of other processes' agents a process keeps in the secure profile (each a claim until
+the agent's heartbeats list it); more are refused, so an outsider's tokens cannot grow its memory."""
 DRAIN_JOIN_TIMEOUT = 10.0
 """Seconds ``unregister``/``close`` wait for an inbox thread to hand over what it holds and end."""
 
@@ -52,6 +57,8 @@ class ZenohTransport(Transport):
         self._inboxes: dict[str, Any] = {}
         self._drains: dict[str, threading.Thread] = {}
         self._tokens: dict[str, Any] = {}
+        self._created_tokens: dict[str, Any] = {}   # agent made at run time -> its 'created' token
+        self._departed: set[str] = set()   # agents whose liveliness token went (and has not come back)
         self._statuses: dict[str, AgentStatus] = {}
         self._declared: list[Any] = []
         # the secure profile: presence needs a signed proof besides the token
@@ -63,6 +70,10 @@ class ZenohTransport(Transport):
         self._subscription_lock = threading.Lock()
         self._subscription_queue: queue.SimpleQueue = queue.SimpleQueue()  # changes to report; None: stop
         self._subscription_thread: threading.Thread | None = None
+        # the secure profile: subscription tokens seen (claims; 1 once refused) and each agent's subscriptions its
+        # last signed heartbeat listed (with its time)
+        self._claims: dict[tuple[str, str], int] = {}
+        self._listed: dict[str, tuple[frozenset, float]] = {}
 
     def _open(self) -> None:
         import zenoh
@@ -79,6 +90,7 @@ class ZenohTransport(Transport):
             self.session.declare_queryable(keys.status_pattern(self.mas), self._on_status_query),
             self.session.declare_queryable(keys.df_pattern(self.mas), self._on_df_query),
             liveliness.declare_subscriber(keys.subscribes_pattern(self.mas), self._on_subscribes, history=True),
+            liveliness.declare_subscriber(keys.created_pattern(self.mas), self._on_created, history=True),
         ]
         self._subscription_thread = threading.Thread(target=self._report_subscriptions, daemon=True,
                                                      name="faultmas-df-subscriptions")
@@ -95,7 +107,7 @@ class ZenohTransport(Transport):
         self._heartbeats_done.set()
         self._subscription_queue.put(None)
         for entity in [*self._publishers.values(), self._control_publisher, *self._subscribed.values(),
-                       *self._declared]:
+                       *self._created_tokens.values(), *self._declared]:
             try:
                 entity.undeclare()
             except Exception:  # already gone with the session
@@ -118,6 +130,10 @@ class ZenohTransport(Transport):
                                  name=f"faultmas-inbox-{agent}")
         self._drains[agent] = drain
         drain.start()
+        creator = self._creators.get(agent)
+        if creator is not None:  # before its presence: whoever sees it alive can tell it is a member
+            self._created_tokens[agent] = self.session.liveliness().declare_token(
+                keys.created_key(self.mas, agent, creator))
         self._tokens[agent] = self.session.liveliness().declare_token(keys.alive_key(self.mas, agent))
         if self._proof is not None:
             self._heartbeat(agent)   # proved at once, not a heartbeat later (peers may be waiting for it)
@@ -145,7 +161,7 @@ class ZenohTransport(Transport):
     def _detach(self, agent: str) -> None:
         for (subscriber, service) in [k for k in self._subscribed if k[0] == agent]:
             self.withdraw_subscription(subscriber, service)
-        for table in (self._tokens, self._inboxes):  # presence first: nobody should send any more
+        for table in (self._tokens, self._inboxes, self._created_tokens):  # presence first: nobody should send any more
             entity = table.pop(agent, None)
             if entity is not None:
                 entity.undeclare()
@@ -169,8 +185,11 @@ class ZenohTransport(Transport):
         if publisher is None:
             publisher = self._publisher(receiver)
         # A client learns of remote subscribers lazily (through its router's interest replies), so a
-        # receiver whose liveliness token is seen counts as reachable even before matching says so.
-        if not (self._presence.is_alive(receiver) or publisher.matching_status.matching):
+        # receiver whose liveliness token is seen counts as reachable even before matching says so; one whose
+        # token was seen to go is not, even while the end of its inbox is still on its way (a killed agent:
+        # a send to it fails at once, not into an inbox about to close).
+        if not self._presence.is_alive(receiver) and (
+                receiver in self._departed or not publisher.matching_status.matching):
             return False
         self._send_payload(receiver, envelope, encoded(), publisher.put)
         return True
@@ -195,7 +214,9 @@ class ZenohTransport(Transport):
     # -- heartbeats (the secure profile) ----------------------------------------------------------
     def _heartbeat(self, agent: str) -> None:
         if self.identity.can_sign(agent):
-            document = json.dumps({"agent": agent}, separators=(",", ":")).encode()
+            services = sorted(service for subscriber, service in list(self._subscribed) if subscriber == agent)
+            document = json.dumps({"agent": agent, "subscribes": services} if services else {"agent": agent},
+                                  separators=(",", ":")).encode()
             try:
                 self.session.put(keys.heartbeat_key(self.mas, agent), self.identity.seal(agent, document))
             except Exception:  # the session closing: the thread ends with it
@@ -207,6 +228,8 @@ class ZenohTransport(Transport):
             for agent in list(self._tokens):
                 self._heartbeat(agent)
             self._proof.expire()
+            for agent, service in list(self._claims):
+                self._settle_subscription(agent, service)
 
     def _on_heartbeat(self, sample: Any) -> None:
         key = str(sample.key_expr)
@@ -220,16 +243,32 @@ class ZenohTransport(Transport):
             self._drop(bad.reason, key, bad.sender, bad.detail)
             return
         self._proof.proved(agent)
+        listed = json.loads(document).get("subscribes")
+        self._subscriptions_listed(agent, frozenset(s for s in listed if isinstance(s, str))
+                                   if isinstance(listed, list) else frozenset())
 
     # -- network callbacks (Zenoh threads: never block, never raise) -----------------------------
     def _on_alive(self, sample: Any) -> None:
         import zenoh
 
         agent = keys.last_chunk(str(sample.key_expr))
+        (self._departed.discard if sample.kind == zenoh.SampleKind.PUT else self._departed.add)(agent)
         if self._proof is not None:   # the secure profile: a token is a claim until a signed heartbeat proves it
             self._proof.token(agent, sample.kind == zenoh.SampleKind.PUT)
             return
         self._presence.update(agent, sample.kind == zenoh.SampleKind.PUT)
+
+    def _on_created(self, sample: Any) -> None:
+        """A ``created/<agent>/<creator>`` token appeared (``creator_of``; its end changes nothing)."""
+        import zenoh
+
+        where = str(sample.key_expr)
+        agent, creator = where.rsplit("/", 2)[-2:]
+        if not (is_valid_name(agent) and is_valid_name(creator)):
+            self._drop("bad_created", where, None, "expected created/<agent>/<creator>")
+            return
+        if sample.kind == zenoh.SampleKind.PUT:
+            self._created(agent, creator)
 
     def _on_control(self, sample: Any) -> None:
         payload = sample.payload.to_bytes()
@@ -310,6 +349,16 @@ class ZenohTransport(Transport):
         except (ValueError, TypeError, KeyError, RecursionError) as exc:
             self._drop("bad_df_query", str(query.key_expr), None, str(exc)[:80])
             return
+        if subscribed is not None and self.identity is not None:
+            # the secure profile: a query says who subscribes only when signed by that agent (else the search is
+            # answered, the subscription refused: an outsider cannot subscribe a member to anything)
+            try:
+                _, seq = self.identity.open(query.payload.to_bytes(), lambda _document: subscribed[0])
+                self.identity.check_fresh(subscribed[0], "df", seq)
+            except BadMessage as bad:
+                self._drop(bad.reason, str(query.key_expr), None if bad.reason == "unsigned" else bad.sender,
+                           f"a directory subscription of {subscribed[0]}")
+                subscribed = None
         registrations = self.local_registrations(tuple(subscribed) if subscribed is not None else None)
         for agent, services in registrations.items():
             key = keys.df_key(self.mas, agent)
@@ -322,9 +371,12 @@ class ZenohTransport(Transport):
 
         nonce = new_nonce()
         request = {"nonce": nonce} if subscribe is None else {"nonce": nonce, "subscribe": list(subscribe)}
+        payload: str | bytes = json.dumps(request, separators=(",", ":"))
+        if subscribe is not None and self.identity is not None and self.identity.can_sign(subscribe[0]):
+            payload = self.identity.seal(subscribe[0], payload.encode())   # who subscribes, proved
         found: dict[str, list[str]] = {}
         # every reply, unconsolidated: an outsider's reply on an agent's key must not displace the agent's
-        for reply in self.session.get(keys.df_pattern(self.mas), payload=json.dumps(request), timeout=timeout,
+        for reply in self.session.get(keys.df_pattern(self.mas), payload=payload, timeout=timeout,
                                       consolidation=zenoh.ConsolidationMode.NONE):
             if reply.ok is None:
                 continue
@@ -345,6 +397,9 @@ class ZenohTransport(Transport):
 
     def announce_subscription(self, agent: str, service: str) -> None:
         if (agent, service) not in self._subscribed:
+            self._subscribed[(agent, service)] = None   # listed by every heartbeat from now on
+            if self._proof is not None:
+                self._heartbeat(agent)   # the proof before the token: a heartbeat after it that lacks it is no proof
             self._subscribed[(agent, service)] = self.session.liveliness().declare_token(
                 keys.subscribes_key(self.mas, agent, service))
 
@@ -372,6 +427,52 @@ class ZenohTransport(Transport):
         if agent in self._agents:
             return  # this process's own: its directory knows them
         present = sample.kind == zenoh.SampleKind.PUT
+        if self.identity is not None:   # the secure profile: a token is a claim, the agent's heartbeats prove it
+            if agent not in self.identity.members:
+                if present:
+                    self._drop("unknown_sender", where, agent, "a subscription token of no member")
+                return
+            with self._subscription_lock:
+                full = present and (agent, service) not in self._claims and len(self._claims) >= MAX_CLAIMS
+                if present and not full:
+                    self._claims.setdefault((agent, service), 0)
+                elif not present:
+                    self._claims.pop((agent, service), None)
+            if full:   # memory stays bounded whatever tokens an outsider declares
+                self._drop("bad_subscription", where, agent, f"more than {MAX_CLAIMS} subscription tokens")
+                return
+            self._settle_subscription(agent, service)
+            return
+        self._subscription_changed(agent, service, present)
+
+    def _subscriptions_listed(self, agent: str, services: frozenset) -> None:
+        """A signed heartbeat of ``agent`` listed its subscriptions: the claims it lists count; a claim seen before a
+        heartbeat that does not list it is refused with a log line (an agent's process puts a heartbeat listing a
+        subscription before it declares its token), and counts if a later heartbeat lists it."""
+        if agent in self._agents:
+            return  # this process's own: its directory knows them (a token seen before the agent registered)
+        unproved = []
+        with self._subscription_lock:
+            self._listed[agent] = (services, time.monotonic())
+            claims = [(a, s) for (a, s) in self._claims if a == agent]
+            for claim in claims:
+                if claim[1] not in services and not self._claims[claim]:
+                    self._claims[claim] = 1     # refused once: one log line per claim
+                    unproved.append(claim)
+        for subscriber, service in unproved:
+            self._drop("unsigned", keys.subscribes_key(self.mas, subscriber, service), subscriber,
+                       f"a subscription token that no signed heartbeat of {subscriber} lists")
+        for subscriber, service in claims:
+            self._settle_subscription(subscriber, service)
+
+    def _settle_subscription(self, agent: str, service: str) -> None:
+        """A subscription counts while its token is up and a signed heartbeat within the lease lists it."""
+        with self._subscription_lock:
+            services, when = self._listed.get(agent, (frozenset(), -LEASE))
+            present = (agent, service) in self._claims and service in services and time.monotonic() - when <= LEASE
+        self._subscription_changed(agent, service, present)
+
+    def _subscription_changed(self, agent: str, service: str, present: bool) -> None:
         with self._subscription_lock:
             if ((agent, service) in self._subscriptions) == present:
                 return  # seen twice (history and live): one change

@@ -40,7 +40,8 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
         msg = Message.__new__(Message)  # Message(agent.name, receiver.functor, performative.functor, content)
         msg.sender, msg.receiver, msg.performative = agent.name, receiver.functor, performative.functor
         msg.content, msg._msg_id, msg.in_reply_to, msg.sent_at, msg.read_at = content, None, None, None, None
-        agent.arch.send(agent, msg)
+        if agent.arch.send(agent, msg) is False:
+            raise receiver_not_found(msg)
         return True
     if not isinstance(performative, Literal) or performative.args:
         raise wrong_arguments(".send: the performative must be an atom")
@@ -55,7 +56,8 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
             if answer is not None and not isinstance(answer, Var):
                 # .send(S, tell, C, MsgId): the reply to the ask MsgId (Jason's 4th argument of a tell)
                 msg.in_reply_to = answer if isinstance(answer, str) else to_str(answer)
-            agent.arch.send(agent, msg)
+            if agent.arch.send(agent, msg) is False:
+                raise receiver_not_found(msg)
         return True
     # a synchronous ask: wait for the replies
     if timeout is not None and not isinstance(timeout, (int, float)):
@@ -74,7 +76,10 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
             if not fut.done():
                 fut.set_result(reply)
         agent.pending_asks[msg.msg_id] = on_reply
-        agent.arch.send(agent, msg)
+        if agent.arch.send(agent, msg) is False:
+            for asked in asks:
+                agent.pending_asks.pop(asked, None)
+            raise receiver_not_found(msg)
     waiting = _all_of(futures)
 
     def on_result(c, replies) -> bool:
@@ -103,6 +108,14 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
     return Suspend(future=waiting, on_result=on_result, timeout=seconds,
                    on_timeout=on_timeout if seconds is not None else None, reason="ask",
                    answer_waiting=answer_waiting if seconds is not None else None)
+
+
+def receiver_not_found(message: Message) -> IAError:
+    """Jason's ``ReceiverNotFoundException`` (``LocalAgArch.sendMsg``): no agent of that name in the MAS (never
+    was, or killed, or its process gone), so ``.send`` fails with ``error(receiver_not_found)`` and
+    ``agent_not_found(Name)`` rather than the message being lost unnoticed."""
+    return IAError("receiver_not_found", f"Receiver '{message.receiver}' does not exist! Could not send {message}",
+                   (Literal("agent_not_found", (Literal(message.receiver),)),))
 
 
 def _is_list(t) -> bool:

@@ -7,6 +7,11 @@ action's status, so an agent that sees ``move`` completed also perceives where t
 world's simulated time goes out every ``interval`` (the clock key: the agents' waits follow it, see
 ``robot_bridge.clock``).
 A malformed request is answered with ``bad_args`` when it has an id, else dropped with a log line.
+
+In the secure profile (``sealed``: an ``agents.transport.sealed.SealedChannel`` holding the environment's
+private key) the server signs what it sends as the environment and takes a robot's action requests only when
+signed by the agent that drives it (its namesake); others are dropped with the transport's rate-limited log
+line and never reach the robot.
 """
 from __future__ import annotations
 
@@ -17,7 +22,7 @@ from typing import Any
 
 from robot_bridge.protocol import Action, Completion
 from robot_bridge.sim.bridge import SimBridge
-from robot_bridge.zenoh_bridge import clock_key, robot_key
+from robot_bridge.zenoh_bridge import clock_document, clock_key, robot_key
 
 log = logging.getLogger(__name__)
 
@@ -29,8 +34,11 @@ class SimServer:
     """Serves ``bridges`` (robot name -> set-up ``SimBridge``) on ``session`` under MAS ``mas``."""
 
     def __init__(self, session: Any, mas: str, bridges: dict[str, SimBridge], interval: float = 0.02,
-                 refresh: float = 0.25) -> None:
+                 refresh: float = 0.25, sealed: Any = None) -> None:
         self.session, self.mas, self.bridges = session, mas, dict(bridges)
+        self.sealed = sealed
+        if sealed is not None and not sealed.can_sign(sealed.environment):
+            raise ValueError("the secure profile's simulator server needs the environment's private key")
         self.interval, self.refresh = interval, refresh
         self._declared: list = []
         self._publishers: dict[str, tuple[Any, Any]] = {}
@@ -72,20 +80,27 @@ class SimServer:
         """Send robot ``name``'s percepts if they changed (or ``force``, or the refresh is due)."""
         from robot_bridge.ros2 import wire
 
-        text = wire.PerceptSnapshot("", "sim", tuple(self.bridges[name].percepts()), SNAPSHOT_TTL_S).to_json()
+        # signed, a snapshot names its robot: put on another robot's key, it is refused there (not one of its own)
+        text = wire.PerceptSnapshot(name if self.sealed is not None else "", "sim", tuple(self.bridges[name].percepts()),
+                                    SNAPSHOT_TTL_S).to_json()
         now = time.monotonic()
         with self._locks[name]:
             last_text, last_time = self._last.get(name, ("", 0.0))
             if not force and text == last_text and now - last_time < self.refresh:
                 return
             self._last[name] = (text, now)
-            self._publishers[name][1].put(text)
+            self._publishers[name][1].put(self._sealed(text.encode()))
 
     def publish_clock(self) -> None:
         """Send the world's simulated time (every ``interval``, changed or not: the ticks also say the server
         is there, so a paused world's time stands while a dead server's runs on, see ``robot_bridge.clock``)."""
         if self.bridges:
-            self._clock_publisher.put(repr(next(iter(self.bridges.values())).world.time))
+            seconds = next(iter(self.bridges.values())).world.time
+            self._clock_publisher.put(repr(seconds) if self.sealed is None else self._sealed(clock_document(seconds)))
+
+    def _sealed(self, document: bytes) -> bytes:
+        """``document`` as sent: signed by the environment in the secure profile."""
+        return document if self.sealed is None else self.sealed.seal(self.sealed.environment, document)
 
     def _loop(self) -> None:
         while not self._stop.wait(self.interval):
@@ -104,9 +119,14 @@ class SimServer:
     def _on_request(self, name: str, sample) -> None:
         from robot_bridge.ros2 import wire
 
+        payload = sample.payload.to_bytes()
+        if self.sealed is not None:   # only the robot's own agent may move it
+            payload = self.sealed.open(payload, name, str(sample.key_expr))
+            if payload is None:
+                return   # refused (logged and counted by the sealed channel), not a request served
         self.requests += 1
         try:
-            request = wire.ActionRequest.from_json(sample.payload.to_string())
+            request = wire.ActionRequest.from_json(payload.decode())
             action = Action(request.action_name, request.values(), id=request.id)
         except (wire.WireError, UnicodeDecodeError, ValueError) as exc:
             log.warning("sim server: dropped a bad action request for %s: %s", name, exc)
@@ -122,8 +142,8 @@ class SimServer:
             completion = Completion.failure("bridge_error", str(exc))
         try:
             self.publish_percepts(name, force=True)
-            self._publishers[name][0].put(wire.ActionStatus(
-                name, action.id, completion.ok, completion.reason, completion.detail).to_json())
+            self._publishers[name][0].put(self._sealed(wire.ActionStatus(
+                name, action.id, completion.ok, completion.reason, completion.detail).to_json().encode()))
         except Exception as exc:  # the server is closing: the agents are gone too
             if not self._stop.is_set():
                 log.warning("sim server: cannot answer %s of %s: %s", action, name, exc)

@@ -173,3 +173,37 @@ def test_an_outsider_cannot_answer_for_an_agent_in_the_secure_profile(tmp_path):
         outsider.close()
         bob_side.close()
         alice_side.close()
+
+
+def test_in_the_secure_profile_a_subscription_token_counts_only_while_its_agents_heartbeats_list_it(tmp_path):
+    """A process that starts after a subscription hears of it from its token, proved by the subscriber's signed
+    heartbeats; an outsider's token on the same member's name for another service is refused with a log line
+    and never reported (before: every token was a subscription). (A run against an outsider process:
+    tests/hardening/test_run_secure_outsider.py.)"""
+    mas = unique_mas("sdt")
+    generate_keys(tmp_path / "keys", ["alice", "bob"])
+    (tmp_path / "p.mas2j").write_text(f'MAS {mas} {{ agents: alice [key="keys"]; bob [key="keys"]; }}\n')
+    project = load_mas2j(str(tmp_path / "p.mas2j"))
+    endpoint = loopback_endpoint()
+    alice_side = ZenohTransport(mas, ZenohOptions(listen=(endpoint,)), identity=project_identity(project, ["alice"]))
+    bob_side = ZenohTransport(mas, ZenohOptions(connect=(endpoint,)), identity=project_identity(project, ["bob"]))
+    outsider = zenoh.open(build_config(ZenohOptions(connect=(endpoint,))))
+    seen: list = []
+    try:
+        alice_side.open()
+        alice_side.register("alice", lambda envelope: None)
+        alice_side.announce_subscription("alice", "sell(book)")
+        forged = outsider.liveliness().declare_token(keys.subscribes_key(mas, "alice", "buy(car)"))
+        bob_side.open()   # later: it learns of alice's subscription from her token and her heartbeats
+        bob_side.register("bob", lambda envelope: None)
+        bob_side.on_subscription(lambda agent, service, present: seen.append((agent, service, present)))
+        assert poll(lambda: ("alice", "sell(book)", True) in seen and bob_side.dropped["unsigned"] == 1, 15), \
+            (seen, dict(bob_side.dropped))
+        alice_side.withdraw_subscription("alice", "sell(book)")
+        assert poll(lambda: ("alice", "sell(book)", False) in seen, 15), seen
+        assert all(service != "buy(car)" for _, service, _ in seen)
+        forged.undeclare()
+    finally:
+        outsider.close()
+        bob_side.close()
+        alice_side.close()

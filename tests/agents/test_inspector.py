@@ -17,7 +17,9 @@ from agents.inspector.publisher import MindPublisher
 from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
 from agents.transport.config import build_config
 from agents.zenoh_arch import TransportBridge
+from agentspeak.communication import Message
 from agentspeak.runtime import LocalRuntime
+from agentspeak.terms import Literal
 from tests.agents.transport_fixtures import poll, unique_mas
 
 # .wait(1): a busy loop that never leaves the compiled interpreter keeps Python's interpreter lock, so
@@ -181,3 +183,81 @@ def test_the_commands_refuse_a_taken_port_or_a_public_address_before_anything_st
     public = Proc(["inspect", "--listen", "0.0.0.0:8470"])
     assert public.finish(60) == 2
     assert "not a loopback address; add --public" in "\n".join(public.err)
+
+
+def test_in_the_secure_profile_a_key_of_the_project_pauses_and_steps_and_the_minds_are_proved(tmp_path):
+    """The viewer holds the environment's key (as the run's own inspector does, or ``faultmas inspect --identity``):
+    its signed pause, step and resume are obeyed and the agent's signed answers and minds shown; a viewer
+    without a key of the project does not even send them. (An outsider's: tests/hardening/test_run_secure_outsider.py.)"""
+    from agents.transport.identity import ENVIRONMENT, Identity, generate_keys
+
+    generate_keys(tmp_path, ["counter", "environment"])
+    public = {"counter": tmp_path / "counter.pub", ENVIRONMENT: tmp_path / "environment.pub"}
+    mas = unique_mas("insps")
+    runtime = LocalRuntime()
+    runtime.add_agent("counter", COUNTER, "counter.asl")
+    transport = ZenohTransport(mas, ZenohOptions(listen=(loopback_endpoint(),)),
+                               identity=Identity.from_files(public, {"counter": tmp_path / "counter.key"})).open()
+    bridge = TransportBridge(runtime, transport, declared=["counter"]).attach()
+    publisher = MindPublisher(transport, runtime, bridge, allow_control=True).start()
+    thread = threading.Thread(target=bridge.run, kwargs={"timeout": 120}, daemon=True)
+    thread.start()
+    viewers = []
+    try:
+        for private in ({ENVIRONMENT: tmp_path / "environment.key"}, {}):
+            side = ZenohTransport(mas, ZenohOptions(connect=tuple(transport.endpoints)),
+                                  identity=Identity.from_files(public, private)).open()
+            viewers.append((side, TeamHub(side.session, mas, transport=side).start()))
+        (operator, team), (_, keyless) = viewers
+        assert poll(lambda: (team.refresh("counter") or {}).get("cycles", 0) > 20, 20)
+        refused = keyless.control("counter", "pause")
+        assert not refused["ok"] and "--identity" in refused["error"]
+        paused = team.control("counter", "pause")
+        assert paused["ok"] and paused["paused"], paused
+        stepped = team.control("counter", "step")
+        assert stepped["ok"] and stepped["cycles"] == paused["cycles"] + 1, stepped
+        assert team.refresh("counter")["cycles"] == stepped["cycles"]
+        assert team.control("counter", "resume")["ok"]
+        assert not operator.dropped and not transport.dropped, (operator.dropped, transport.dropped)
+    finally:
+        for side, hub in viewers:
+            hub.close()
+            side.close()
+        publisher.close()
+        runtime.stop()
+        thread.join(10)
+        transport.close()
+
+
+def test_an_agent_made_at_run_time_is_inspected_until_it_is_killed(tmp_path, monkeypatch):
+    """``.create_agent``: the made agent's mind is served like a launched one's; once killed, nobody answers."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "kid.asl").write_text("toy(ball).\n")
+    mas = unique_mas("insp")
+    runtime = LocalRuntime()
+    runtime.add_agent("maker", '!make.\n+!make <- .create_agent(kid, "kid.asl").\n+!kill <- .kill_agent(kid).\n')
+    transport = ZenohTransport(mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
+    bridge = TransportBridge(runtime, transport, declared=["maker"]).attach()
+    publisher = MindPublisher(transport, runtime, bridge).start()
+    thread = threading.Thread(target=bridge.run, kwargs={"timeout": 60}, daemon=True)
+    thread.start()
+    viewer = zenoh.open(build_config(ZenohOptions(connect=tuple(transport.endpoints))))
+
+    def kid_state() -> dict | None:
+        for reply in viewer.get(keys.state_key(mas, "kid"), timeout=2):
+            if reply.ok is not None:
+                return json.loads(reply.ok.payload.to_bytes())
+        return None
+    try:
+        assert poll(lambda: kid_state() is not None, 20)
+        assert "toy(ball)" in json.dumps(kid_state())
+        runtime.agents["maker"].deliver(Message("maker", "maker", "achieve", Literal("kill")))
+        assert poll(lambda: "kid" not in runtime.agents and "kid" not in publisher.agents, 20)
+        assert kid_state() is None
+    finally:
+        publisher.close()
+        runtime.stop()
+        thread.join(10)
+        viewer.close()
+        bridge.detach()
+        transport.close()

@@ -293,6 +293,25 @@ def test_create_and_kill_agent(tmp_path):
     assert "[parent] [parent]" in out
 
 
+def test_a_name_in_use_gets_jasons_suffix_and_a_send_to_nobody_fails(tmp_path):
+    """Jason's ``getNewAgentName`` (``kid``, then ``kid_1``, ``kid_2``) and ``ReceiverNotFoundException``: a
+    ``.send`` to an agent that does not exist (killed) fails with ``receiver_not_found``."""
+    (tmp_path / "child.asl").write_text("")
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        out = run_mas({"parent": asl("""
+            !g.
+            +!g <- .create_agent(kid, "child.asl"); .create_agent(kid, "child.asl"); .create_agent(Kid, "child.asl");
+                   .all_names(L); .print(L, " ", Kid); .kill_agent(kid_1); .send(kid_1, tell, hi); .print(sent).
+            -!g[error(E), agent_not_found(A), error_msg(M)] <- .print(E, " ", A); .print(M).
+        """)}, timeout=3)
+    finally:
+        os.chdir(cwd)
+    assert out[:2] == ["[parent] [kid,kid_1,kid_2,parent] kid_2", "[parent] receiver_not_found kid_1"], out
+    assert out[2].startswith("[parent] Receiver 'kid_1' does not exist! Could not send <"), out
+
+
 def test_list_files_lists_matching_files_recursively(tmp_path):
     (tmp_path / "sub").mkdir()
     (tmp_path / "a.asl").write_text("")

@@ -22,21 +22,33 @@ PLAN = textwrap.dedent("""\
 
 
 @pytest.mark.timeout(120)
-def test_an_agent_in_another_process_drives_a_served_robot(tmp_path) -> None:
+@pytest.mark.parametrize("secure", [False, True], ids=["default", "secure"])
+def test_an_agent_in_another_process_drives_a_served_robot(tmp_path, secure: bool) -> None:
+    """``secure``: the project lists the agents' keys and the environment's (its environment line): the server
+    signs as the environment (``--project``), the agent signs its actions and checks the rest."""
     (tmp_path / "drive.asl").write_text(PLAN)
     endpoint = loopback_endpoint()
+    project: list[str] = []
+    if secure:
+        from agents.transport.identity import generate_keys
+        generate_keys(tmp_path / "keys", ["rover", "other", "environment"])
+        (tmp_path / "lab.mas2j").write_text(
+            'MAS lab {\n  environment: sim("key=keys/environment.pub")\n'
+            '  agents: rover drive.asl [key="keys"]; other drive.asl [key="keys"];\n}\n')
+        project = ["--project", str(tmp_path / "lab.mas2j")]
     server = subprocess.Popen([sys.executable, "-m", "agents", "sim", "serve", "--mas", "lab", "--robots",
-                               "rover,other", "--fault", "other=encoders", "--listen", endpoint, "--timeout", "100"],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                               "rover,other", "--fault", "other=encoders", "--listen", endpoint, "--timeout", "100",
+                               *project], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         banner = server.stdout.readline()
         assert f"robots rover (fault none), other (fault encoders) of MAS lab on {endpoint}" in banner, \
             banner + server.stderr.read() if not banner else banner
         agent = subprocess.run([sys.executable, "-m", "agents", "agent", "run", str(tmp_path / "drive.asl"),
                                 "--name", "rover", "--mas", "lab", "--connect", endpoint, "--bridge", "zenoh",
-                                "--timeout", "60"], capture_output=True, text=True, timeout=90)
+                                "--timeout", "60", *project], capture_output=True, text=True, timeout=90)
         assert agent.returncode == 0, agent.stderr
         assert "[rover] believes x=0.5" in agent.stdout
+        assert "dropped" not in agent.stderr, agent.stderr      # every percept, result and tick was signed
     finally:
         server.send_signal(signal.SIGINT)
         out, err = server.communicate(timeout=30)

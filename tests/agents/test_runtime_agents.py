@@ -1,0 +1,115 @@
+"""Agents made at run time (``.create_agent``, ``.clone``) are agents of the whole MAS with ``--processes``, as a
+launched agent is: reachable by name from every process, in every ``.all_names``, found by every ``.df_search``,
+allowed what members are (``achieve``, ``.stopMAS``); ``.kill_agent`` removes them everywhere, after which a
+``.send`` to them fails as Jason's does (``receiver_not_found``). In the secure profile ``.create_agent`` is
+refused, saying why. Real ``faultmas mas run`` processes over Zenoh on loopback, against the in-process run."""
+from __future__ import annotations
+
+from agents.mas_cli import build_local_mas
+from agents.transport import Envelope, LocalBus, LocalTransport
+from agents.transport.identity import generate_keys
+from agents.zenoh_arch import TransportBridge
+from agentspeak.communication import Message
+from agentspeak.mas2j import load_mas2j
+from agentspeak.runtime import LocalRuntime
+from agentspeak.terms import Literal
+from tests.agents.distributed_fixtures import mas_run, write_files
+from tests.agents.transport_fixtures import unique_mas
+
+# maker (one process) makes `asker` (taken by the asker of another process: `asker_1`), clones itself as twin
+# and makes worker, which registers and asks asker to achieve `ready`; asker asks worker and twin, lists the
+# names and searches the DF, kills twin itself (an agent of another process), has maker kill worker, waits until
+# both are gone from its names, searches again and sends to worker: the send fails; asker_1 (made at run time)
+# stops the MAS.
+MADE = {
+    "made.mas2j": "MAS made { agents: maker; asker; }\n",
+    "maker.asl": r'''
+role(maker).
+!start.
++!start <- .create_agent(Asker, "clash.asl"); .print(clash(Asker)); .clone(twin); .create_agent(worker, "worker.asl").
++!kill(W)[source(S)] <- .kill_agent(W); .send(S, tell, killed(W)).
+''',
+    "clash.asl": "+!stop <- .stopMAS.\n",
+    "worker.asl": '!start.\n+!start <- .df_register("echo"); .send(asker, achieve, ready).\n+?ping(X) <- X = pong.\n',
+    "asker.asl": r'''
++!ready[source(W)] <-
+    .send(W, askOne, ping(X), A, 10000); .print(answer(A));
+    .send(twin, askOne, role(R), T, 10000); .print(twin(T));
+    .all_names(L); .print(names(L));
+    .df_search("echo", P); .print(providers(P));
+    .kill_agent(twin);
+    .send(maker, achieve, kill(W)).
++killed(W)[source(maker)] <- !gone(W).
++!gone(W) <- .all_names(L);
+    if (.member(W, L) | .member(twin, L)) { .wait(50); !gone(W) }
+    else { .print(left(L)); .df_search("echo", P); .print(after(P)); .send(W, tell, hi); .print(sent_anyway); .stopMAS }.
+-!gone(W)[error(E), agent_not_found(A)] <- .print(send_failed(E, A)); .send(asker_1, achieve, stop).
+''',
+}
+
+EXPECTED = ['[maker] clash("asker_1")', "[asker] answer(ping(pong)[source(worker)])",
+            "[asker] twin(role(maker)[source(twin)])", "[asker] names([asker,asker_1,maker,twin,worker])",
+            "[asker] providers([worker])", "[asker] left([asker,asker_1,maker])", "[asker] after([])",
+            "[asker] send_failed(receiver_not_found,worker)"]
+
+
+def test_made_agents_are_agents_of_every_process_until_killed(tmp_path):
+    write_files(tmp_path, MADE)
+    here: list[str] = []
+    runtime = build_local_mas(load_mas2j(str(tmp_path / "made.mas2j")), printer=lambda n, t: here.append(f"[{n}] {t}"))
+    runtime.source_dirs = [str(tmp_path)]
+    assert runtime.run(timeout=30) == "stopped"
+    assert here == EXPECTED
+    run = mas_run(tmp_path / "made.mas2j", "--processes", "--timeout", "60", cwd=tmp_path)
+    assert run.finish(90) == 0, run.err[-20:]
+    # (two processes: their lines are relayed by two threads, so only each agent's own order is fixed)
+    assert [line for line in run.out if line.startswith("[maker]")] == EXPECTED[:1], (run.out, run.err[-20:])
+    assert [line for line in run.out if line.startswith("[asker]")] == EXPECTED[1:], (run.out, run.err[-20:])
+    assert not [line for line in run.err if "dropped" in line and "unknown agent 'worker'" not in line], run.err[-20:]
+
+
+def test_create_agent_is_refused_in_the_secure_profile_saying_why(tmp_path):
+    write_files(tmp_path, {
+        "s.mas2j": 'MAS s { agents: maker [key="keys"]; }\n', "worker.asl": "",
+        "maker.asl": '!start.\n+!start <- .create_agent(worker, "worker.asl").\n'
+                     '-!start[error(E), error_msg(M)] <- .print(E); .print(M); .stopMAS.\n'})
+    generate_keys(tmp_path / "keys", ["maker"])
+    run = mas_run(tmp_path / "s.mas2j", "--processes", "--timeout", "60", cwd=tmp_path)
+    assert run.finish(90) == 0, run.err[-20:]
+    assert run.out[0] == "[maker] secure_profile", run.out
+    assert "cannot create agent worker in the secure profile" in run.out[1] and "key=" in run.out[1], run.out
+
+
+def test_members_are_the_projects_agents_and_those_they_made(tmp_path, monkeypatch):
+    """The bridge's trust (two 'processes' on the in-memory bus): an agent made by a member may make others act
+    and stop the MAS, and stays a member after it is killed (its last messages may come after it is gone); one
+    made by a stranger, or a stranger, may not; a name taken in the other process gets Jason's suffix."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "kid.asl").write_text("!go.\n+!go <- .send(b, achieve, hello).\n")
+    mas, bus = unique_mas("made"), LocalBus()
+    out: list[str] = []
+    here, there = (LocalRuntime(printer=lambda n, t: out.append(f"[{n}] {t}")) for _ in range(2))
+    here.add_agent("a", '+!make <- .create_agent(kid, "kid.asl"); .create_agent(b, "kid.asl").\n')
+    there.add_agent("b", "+!hello[source(S)] <- .print(hello(S)).\n")
+    transports = [LocalTransport(mas, bus).open() for _ in range(2)]
+    bridges = [TransportBridge(runtime, transport, declared=["a", "b"], members=["a", "b"]).attach()
+               for runtime, transport in zip((here, there), transports)]
+    here.route(Message("a", "a", "achieve", Literal("make")))
+    here.run(timeout=2)
+    assert sorted(here.agents) == ["a", "b_1", "kid"] and transports[1].creator_of("b_1") == "a"
+    there_bridge = bridges[1]
+    assert there_bridge.is_member("kid") and there_bridge.may_tell_how("kid")
+    there.run(timeout=2)
+    assert sorted(out) == ["[b] hello(b_1)", "[b] hello(kid)"]  # achieve: only from members
+    here.kill_agent("kid")
+    assert "kid" not in transports[1].alive_agents() and there_bridge.is_member("kid")
+    transports[0].register("stranger", lambda envelope: None)
+    transports[0].register("minion", lambda envelope: None, creator="stranger")
+    assert transports[1].creator_of("minion") == "stranger"
+    assert not any(there_bridge.is_member(name) for name in ("stranger", "minion", "nobody"))
+    transports[0].send(Envelope(mas, "stranger", ("b",), "achieve", "hello"))
+    assert transports[1].dropped["not_a_member"] == 1
+    for bridge in bridges:
+        bridge.detach()
+    for transport in transports:
+        transport.close()
