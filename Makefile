@@ -74,7 +74,8 @@ campaign: speedups
 
 # The soak (tests/hardening/soak.py): one team of 6 that stays up and diagnoses fault after fault until
 # SOAK_SIM_SECONDS of simulated time (default 1 h) or SOAK_WALL_SECONDS of wall time; RSS slopes (this process
-# and every agent), threads, descriptors, Zenoh declarations, stuck intentions, per task. Each task's robot poses are
+# and every agent, each part by part: malloc's heaps, other anonymous and file mappings, huge pages, glibc's in-use
+# and freed-but-kept bytes), threads, descriptors, Zenoh declarations, stuck intentions, per task. Each task's robot poses are
 # in its row and the agents' lines in soak-agents.log (with the paths of a task that did not end correct), so a
 # task can be replayed: python -m tests.hardening.soak_replay soak.jsonl N
 SOAK_SIM_SECONDS ?= 3600

@@ -190,10 +190,24 @@ class ProgressLog:
         self.done = threading.Event()
         self.died: list[tuple[str, int]] = []  # (agent, exit status) of processes that died (processes only)
         self.frozen: list[tuple[str, float]] = []  # (process, seconds) seen stopped (SIGSTOP) during the run
+        self.ended = False
+
+    def end(self) -> None:
+        """The run is over: later reports are still echoed (a team held up for the inspector, or given task
+        after task as issue 22's soak does) but no longer kept, so a team held for days does not grow by
+        them (~280 bytes a report, ~30 reports a task) and the run's result stays the run's."""
+        with self._lock:
+            self.ended = True
 
     def record(self, report) -> None:
         """Takes an ``agents.progress.ProgressReport`` (from any thread)."""
         mark = Mark(report.agent, report.step, report.detail, self.clock(), time.monotonic() - self.start)
+        with self._lock:
+            ended = self.ended
+        if ended:
+            if self.echo is not None:
+                self.echo(mark)
+            return
         with self._lock:
             self.marks.append(mark)
             if report.step in FINAL_STEPS:
@@ -486,6 +500,7 @@ def run_agent_processes(scenario: Scenario, extra_args: list[str], timeout: floa
             log.died.extend(launcher.failures)
             log.frozen.extend(watch.report())  # named whatever the outcome: a freeze explains a timeout
             if hold is not None and not log.died:
+                log.end()
                 hold()
         finally:
             cancel_sim_watch()

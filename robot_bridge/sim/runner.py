@@ -17,6 +17,7 @@ import threading
 import time
 import weakref
 
+from robot_bridge.sim import allocator
 from robot_bridge.sim.world import World
 
 
@@ -67,8 +68,12 @@ class WorldRunner:
     def _run(self) -> None:
         world, dt = self.world, self.world.dt
         anchor_wall, anchor_sim, flat_out = time.monotonic(), world.time, False
+        next_trim = anchor_wall + allocator.TRIM_EVERY_S
         try:
             while not self._stop.is_set():
+                if time.monotonic() >= next_trim:  # served for hours: what malloc keeps freed goes back
+                    allocator.trim()
+                    next_trim = time.monotonic() + allocator.TRIM_EVERY_S
                 fast = self.speed == 0 and world.busy()
                 cap = self.busy_cap
                 if fast and cap is None:

@@ -250,6 +250,26 @@ def test_the_fault_option_is_injected_into_every_faulty_robot_of_a_team():
         team_scenario(3, 1, seed=4, fault="gremlins")
 
 
+def test_reports_after_the_run_ended_are_echoed_but_not_kept():
+    """Found by the soak (issue 22): a team held up after its run (``faultmas run --inspect``, the soak's
+    task after task) kept every later progress report in the run's log, ~0.85 MiB per hour of tasks for as
+    long as it was held; and a diagnosis made after a run timed out became that run's result."""
+    from agents.cooperative import ProgressLog
+    from agents.progress import ProgressReport
+
+    scenario = team_scenario(2, 1, seed=1)
+    faulty = next(r.name for r in scenario.robots if r.under_test)
+    echoed = []
+    log = ProgressLog(scenario, None, lambda: None, echoed.append, clock=lambda: 0.0)
+    log.record(ProgressReport(faulty, "started"))
+    log.end()
+    for _ in range(50):
+        log.record(ProgressReport(faulty, "diagnosed", "left_actuator"))
+    assert [m.step for m in log.marks] == ["started"]
+    assert len(echoed) == 51, "reports after the run must still be shown"
+    assert next(r for r in log.results() if r.name == faulty).diagnosis is None
+
+
 def test_faulty_without_robots_is_an_error(capsys):
     from agents.cli import main
     assert main(["run", "--faulty", "2"]) == 2

@@ -1,6 +1,7 @@
 """How the simulator-serving process's memory behaves world after world (issue 22's leak): ``N`` team worlds
 of six robots with cameras, each served over a Zenoh hub for ``--hold`` seconds and shut down, in this one
-process; after each, resident memory (anonymous, file, shared) and Python's gc-tracked objects.
+process; after each, what resident memory is made of (``memory.memory_breakdown``) and Python's gc-tracked
+objects.
 
 ``python -m tests.hardening.serve_probe --worlds 12 --hold 3``. Figures in docs/reliability.md ("Soak")."""
 from __future__ import annotations
@@ -9,10 +10,7 @@ import argparse
 import gc
 import time
 
-
-def _rss_mib() -> dict:
-    with open("/proc/self/status") as status:
-        return {line.split(":")[0]: int(line.split()[1]) // 1024 for line in status if line.startswith("Rss")}
+from tests.hardening.memory import memory_breakdown
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -36,7 +34,7 @@ def main(argv: list[str] | None = None) -> int:
         hub.close()
         del world, bridges, server
         gc.collect()
-        print(f"world {i + 1}: resident MiB {_rss_mib()}, gc objects {len(gc.get_objects())}", flush=True)
+        print(f"world {i + 1}: resident MiB {memory_breakdown()}, gc objects {len(gc.get_objects())}", flush=True)
     return 0
 
 

@@ -10,9 +10,11 @@ near a wall), resets the odometry, injects a fault into one robot chosen at rand
 leak anywhere in the team adds up over the hour, and an hour of simulated time costs about an hour of wall
 time (the simulator runs in real time while the robots stand, faster while they move).
 
-What it watches, after every task: this process (hub, simulator server, world) for RSS, threads and open
-descriptors; every agent (the inspector's summary query) for intentions, events and beliefs once it should
-be idle (an agent still busy then has a stuck intention); every agent process for RSS and threads; the
+What it watches, after every task: this process (hub, simulator server, world) for RSS, what the RSS is made
+of (``soak_memory``: malloc's heap and arenas, other anonymous and file-backed mappings, huge pages, and glibc's
+in-use versus freed-but-kept bytes; tests/hardening/memory.py), threads and open descriptors; every agent
+(the inspector's summary query) for intentions, events and beliefs once it should be idle (an agent still busy
+then has a stuck intention); every agent process for RSS (and its parts) and threads; the
 Zenoh declarations of this process's hub; what the simulator keeps that may grow (the camera renderer's
 static layers, the trajectory rows kept: both bounded) and the gc-tracked objects. The summary gives the
 least-squares slope of each RSS per hour of simulated time, over the run and over its second half (after
@@ -37,6 +39,8 @@ from typing import Callable
 
 import psutil
 
+from tests.hardening.memory import memory_breakdown, smaps_breakdown
+
 PROGRAM = "team_robot_tasks.asl"
 FINAL = ("arrived", "diagnosed", "undiagnosed")
 SENDER = "fleet"
@@ -57,8 +61,9 @@ def _team_state(hub, mas: str) -> dict:
 
 
 def _agent_processes(launched: dict) -> tuple[dict, dict]:
-    """RSS (MiB) and threads of the agent processes still running, by agent name; and the names of those
-    that ended (``launched``: name -> pid, as first seen; not reaped here: the launcher reports the status)."""
+    """RSS (MiB, and what it is made of) and threads of the agent processes still running, by agent name; and
+    the names of those that ended (``launched``: name -> pid, as first seen; not reaped here: the launcher
+    reports the status)."""
     found = {}
     for child in psutil.Process().children():
         try:
@@ -66,8 +71,9 @@ def _agent_processes(launched: dict) -> tuple[dict, dict]:
             if "--name" in argv and child.status() != psutil.STATUS_ZOMBIE:
                 name = argv[argv.index("--name") + 1]
                 launched.setdefault(name, child.pid)
-                found[name] = {"rss_mib": round(child.memory_info().rss / 2 ** 20, 1), "threads": child.num_threads()}
-        except psutil.Error:
+                found[name] = {"rss_mib": round(child.memory_info().rss / 2 ** 20, 1), "threads": child.num_threads(),
+                               "memory": smaps_breakdown(child.pid)}
+        except (psutil.Error, OSError):      # ended meanwhile (its smaps gone)
             pass
     return found, {name: pid for name, pid in launched.items() if name not in found}
 
@@ -293,7 +299,8 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
                    "missing_agents": sorted(set(robots) - set(states)),
                    "agents": {a: {k: s.get(k) for k in ("intentions", "events", "beliefs")} for a, s in states.items()},
                    "agent_processes": processes, "ended_agents": ended_agents,
-                   "soak_rss_mib": round(me.memory_info().rss / 2 ** 20, 1), "soak_threads": threading.active_count(),
+                   "soak_rss_mib": round(me.memory_info().rss / 2 ** 20, 1), "soak_memory": memory_breakdown(),
+                   "soak_threads": threading.active_count(),
                    "soak_os_threads": me.num_threads(), "soak_fds": me.num_fds(), "hub_declared": _declared(hub),
                    **_kept_by_simulator(world)}
             if n == 1:
@@ -342,6 +349,17 @@ def _slope(xs: list[float], ys: list[float]) -> float:
     return float(np.polyfit(xs, ys, 1)[0])
 
 
+MEMORY_PARTS = ("rss", "heap", "arenas", "anon", "file", "huge", "advised", "malloc.in_use", "malloc.free",
+                "malloc.mmapped")
+
+
+def _part(memory: dict, part: str) -> float:
+    """``part`` of a row's ``soak_memory`` (``malloc.free``: a field of glibc's account; 0 without it)."""
+    for key in part.split("."):
+        memory = (memory or {}).get(key)
+    return memory or 0.0
+
+
 def summarize(rows: list[dict], ended_by: str, died, frozen, started: float, task_timeout: float = 240.0) -> dict:
     settled = rows[1:] or rows  # the first task loads the interpreter, models, Zenoh and caches: not a leak
     hours = [r["sim_total_s"] / 3600 for r in settled]
@@ -369,6 +387,11 @@ def summarize(rows: list[dict], ended_by: str, died, frozen, started: float, tas
         "soak_rss_slope_mib_per_sim_hour": round(_slope(hours, [r["soak_rss_mib"] for r in settled]), 2),
         "soak_rss_slope_second_half_mib_per_sim_hour": round(_slope(
             [r["sim_total_s"] / 3600 for r in second_half], [r["soak_rss_mib"] for r in second_half]), 2),
+        "soak_memory_first_last": first_last("soak_memory"),
+        "soak_memory_slope_second_half_mib_per_sim_hour": {
+            part: round(_slope([r["sim_total_s"] / 3600 for r in second_half],
+                               [_part(r["soak_memory"], part) for r in second_half]), 2)
+            for part in MEMORY_PARTS} if second_half and "soak_memory" in second_half[0] else None,
         "static_layers_mib_first_last": first_last("static_layers_mib"),
         "gc_objects_first_last": first_last("gc_objects"),
         "soak_threads_first_last": first_last("soak_os_threads"),
