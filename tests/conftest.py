@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import secrets
+import sys
 import time
 
 SESSION_ENV = "FAULTMAS_TEST_SESSION"
@@ -41,6 +42,9 @@ def pytest_sessionfinish(session, exitstatus) -> None:
 
     if os.environ.get(SESSION_ENV) != _token:
         return
+    render_processes = sys.modules.get("robot_bridge.sim.render_processes")
+    if render_processes is not None:      # this process's own render workers live until its exit: end them first
+        render_processes.close_shared_pool()
     deadline = time.monotonic() + LEFTOVER_GRACE
     left = _session_processes()
     while left and time.monotonic() < deadline:

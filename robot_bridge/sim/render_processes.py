@@ -370,7 +370,7 @@ _shared_lock = threading.Lock()
 def shared_pool() -> RenderProcesses | None:
     """This process's render workers, started on first use; None if it has none (see ``default_workers``)."""
     with _shared_lock:
-        if _shared and _shared[0]._pid != os.getpid():
+        if _shared and _shared[0] is not None and _shared[0]._pid != os.getpid():
             _shared.clear()                 # inherited through fork: not ours to use
         if not _shared:
             workers = default_workers()
@@ -378,8 +378,18 @@ def shared_pool() -> RenderProcesses | None:
             _shared.append(pool)
             if pool is not None:
                 pool.start()
-                atexit.register(pool.close)
+                atexit.register(close_shared_pool)
         return _shared[0]
+
+
+def close_shared_pool() -> None:
+    """End this process's render workers now (they are otherwise ended at exit): for a host that must know its
+    children are gone before it exits, such as the test session's check for processes left behind."""
+    with _shared_lock:
+        pool = _shared[0] if _shared and _shared[0] is not None and _shared[0]._pid == os.getpid() else None
+        _shared.clear()
+    if pool is not None:
+        pool.close()
 
 
 def _create(name: str, size: int) -> mmap.mmap:
