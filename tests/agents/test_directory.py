@@ -142,8 +142,9 @@ def test_bridged_runtimes_share_one_directory_and_refuse_false_notices():
     assert second.directory.search("x") == []
 
 
-def test_an_outsider_cannot_answer_for_an_agent_in_the_secure_profile(tmp_path):
-    mas = unique_mas("sdf")
+def _secure_pair_and_outsider(tmp_path, mas: str):
+    """alice's and bob's transports in the secure profile (keys listed in a project), and an outsider's plain
+    Zenoh session on the same loopback endpoint; none of them opened yet."""
     generate_keys(tmp_path / "keys", ["alice", "bob"])
     (tmp_path / "p.mas2j").write_text(f'MAS {mas} {{ agents: alice [key="keys"]; bob [key="keys"]; }}\n')
     project = load_mas2j(str(tmp_path / "p.mas2j"))
@@ -151,6 +152,12 @@ def test_an_outsider_cannot_answer_for_an_agent_in_the_secure_profile(tmp_path):
     alice_side = ZenohTransport(mas, ZenohOptions(listen=(endpoint,)), identity=project_identity(project, ["alice"]))
     bob_side = ZenohTransport(mas, ZenohOptions(connect=(endpoint,)), identity=project_identity(project, ["bob"]))
     outsider = zenoh.open(build_config(ZenohOptions(connect=(endpoint,))))
+    return alice_side, bob_side, outsider
+
+
+def test_an_outsider_cannot_answer_for_an_agent_in_the_secure_profile(tmp_path):
+    mas = unique_mas("sdf")
+    alice_side, bob_side, outsider = _secure_pair_and_outsider(tmp_path, mas)
     try:
         alice_side.open()
         bob_side.open()
@@ -181,13 +188,7 @@ def test_in_the_secure_profile_a_subscription_token_counts_only_while_its_agents
     and never reported (before: every token was a subscription). (A run against an outsider process:
     tests/hardening/test_run_secure_outsider.py.)"""
     mas = unique_mas("sdt")
-    generate_keys(tmp_path / "keys", ["alice", "bob"])
-    (tmp_path / "p.mas2j").write_text(f'MAS {mas} {{ agents: alice [key="keys"]; bob [key="keys"]; }}\n')
-    project = load_mas2j(str(tmp_path / "p.mas2j"))
-    endpoint = loopback_endpoint()
-    alice_side = ZenohTransport(mas, ZenohOptions(listen=(endpoint,)), identity=project_identity(project, ["alice"]))
-    bob_side = ZenohTransport(mas, ZenohOptions(connect=(endpoint,)), identity=project_identity(project, ["bob"]))
-    outsider = zenoh.open(build_config(ZenohOptions(connect=(endpoint,))))
+    alice_side, bob_side, outsider = _secure_pair_and_outsider(tmp_path, mas)
     seen: list = []
     try:
         alice_side.open()

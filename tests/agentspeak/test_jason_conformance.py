@@ -278,36 +278,28 @@ def test_at_posts_the_event_later():
     assert out == ["now", "later"]
 
 
-def test_create_and_kill_agent(tmp_path):
+def test_create_and_kill_agent(tmp_path, monkeypatch):
     (tmp_path / "child.asl").write_text('!hi.\n+!hi <- .print(hello).\n')
-    cwd = os.getcwd()
-    os.chdir(tmp_path)
-    try:
-        out = run_mas({"parent": asl("""
-            !g.
-            +!g <- .create_agent(kid, "child.asl"); .wait(200); .kill_agent(kid); .all_names(L); .print(L).
-        """)}, timeout=3)
-    finally:
-        os.chdir(cwd)
+    monkeypatch.chdir(tmp_path)
+    out = run_mas({"parent": asl("""
+        !g.
+        +!g <- .create_agent(kid, "child.asl"); .wait(200); .kill_agent(kid); .all_names(L); .print(L).
+    """)}, timeout=3)
     assert "[kid] hello" in out
     assert "[parent] [parent]" in out
 
 
-def test_a_name_in_use_gets_jasons_suffix_and_a_send_to_nobody_fails(tmp_path):
+def test_a_name_in_use_gets_jasons_suffix_and_a_send_to_nobody_fails(tmp_path, monkeypatch):
     """Jason's ``getNewAgentName`` (``kid``, then ``kid_1``, ``kid_2``) and ``ReceiverNotFoundException``: a
     ``.send`` to an agent that does not exist (killed) fails with ``receiver_not_found``."""
     (tmp_path / "child.asl").write_text("")
-    cwd = os.getcwd()
-    os.chdir(tmp_path)
-    try:
-        out = run_mas({"parent": asl("""
-            !g.
-            +!g <- .create_agent(kid, "child.asl"); .create_agent(kid, "child.asl"); .create_agent(Kid, "child.asl");
-                   .all_names(L); .print(L, " ", Kid); .kill_agent(kid_1); .send(kid_1, tell, hi); .print(sent).
-            -!g[error(E), agent_not_found(A), error_msg(M)] <- .print(E, " ", A); .print(M).
-        """)}, timeout=3)
-    finally:
-        os.chdir(cwd)
+    monkeypatch.chdir(tmp_path)
+    out = run_mas({"parent": asl("""
+        !g.
+        +!g <- .create_agent(kid, "child.asl"); .create_agent(kid, "child.asl"); .create_agent(Kid, "child.asl");
+               .all_names(L); .print(L, " ", Kid); .kill_agent(kid_1); .send(kid_1, tell, hi); .print(sent).
+        -!g[error(E), agent_not_found(A), error_msg(M)] <- .print(E, " ", A); .print(M).
+    """)}, timeout=3)
     assert out[:2] == ["[parent] [kid,kid_1,kid_2,parent] kid_2", "[parent] receiver_not_found kid_1"], out
     assert out[2].startswith("[parent] Receiver 'kid_1' does not exist! Could not send <"), out
 
