@@ -112,8 +112,10 @@ class ZenohBridge(RobotBridge):
         self._publisher = session.declare_publisher(robot_key(self.mas, self.robot, "actions"))
         self._declared = [
             self._publisher,
-            session.declare_subscriber(robot_key(self.mas, self.robot, "status"), self._on_status),
-            session.declare_subscriber(robot_key(self.mas, self.robot, "percepts"), self._on_percepts),
+            # one subscriber for status and percepts: zenoh-python runs each subscriber's callbacks on a
+            # thread of its own, and the server's last snapshot must be stored before the status it precedes
+            # (an agent that sees ``move`` completed perceives where the robot ended up)
+            session.declare_subscriber(robot_key(self.mas, self.robot, "*"), self._on_robot),
             session.declare_subscriber(clock_key(self.mas), self._on_clock),
         ]
         self._expirer = threading.Thread(target=self._expire_loop, name=f"zenoh-bridge-{self.robot}", daemon=True)
@@ -173,6 +175,14 @@ class ZenohBridge(RobotBridge):
         if self.sealed is None:
             return payload
         return self.sealed.open(payload, self.sealed.environment, str(sample.key_expr))
+
+    def _on_robot(self, sample) -> None:
+        """A sample of this robot's keys, in the order the server sent them (its own ``actions`` ignored)."""
+        channel = str(sample.key_expr).rpartition("/")[2]
+        if channel == "status":
+            self._on_status(sample)
+        elif channel == "percepts":
+            self._on_percepts(sample)
 
     def _on_status(self, sample) -> None:
         from robot_bridge.ros2 import wire

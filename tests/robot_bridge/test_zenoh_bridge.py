@@ -146,3 +146,50 @@ def test_the_bridges_clock_is_the_servers_and_an_actions_time_bound_counts_in_it
         server.join(2)
         bridge.shutdown()
         session.close()
+
+
+def test_an_action_completes_after_the_snapshot_its_server_sent_before_the_status():
+    """The server sends a robot's last percepts, then the action's status (``SimServer._answer``); an agent
+    that sees the action completed must perceive that snapshot, not an older one. zenoh-python runs each
+    subscriber's callbacks on a thread of its own, so two subscribers (status, percepts) could reorder them:
+    with ``--processes`` an agent read ``odom`` from before a ``move`` right after it completed (1 run in 4)."""
+    import json
+    import threading
+
+    endpoint = loopback_endpoint()
+    server = zenoh.open(build_config(ZenohOptions(listen=(endpoint,))))
+    percepts = server.declare_publisher(robot_key("zo", "r", "percepts"))
+    status = server.declare_publisher(robot_key("zo", "r", "status"))
+
+    def snapshot(n: int) -> str:
+        return json.dumps({"source": "sim", "literals": [f"odom({n},0,0)"], "ttl": 60})
+
+    current = [-1]      # the robot's state: what every snapshot says, the periodic ones too (as the server's)
+
+    def answer(sample) -> None:     # as SimServer._answer: the final snapshot, then the status
+        request = json.loads(sample.payload.to_bytes())
+        current[0] = request["id"]
+        percepts.put(snapshot(request["id"]))
+        status.put(json.dumps({"agent_name": "r", "id": request["id"], "result": True}))
+
+    requests = server.declare_subscriber(robot_key("zo", "r", "actions"), answer)
+    stop = threading.Event()
+    feeder = threading.Thread(target=lambda: [percepts.put(snapshot(current[0])) for _ in iter(lambda: stop.wait(0.05), True)],
+                              daemon=True)
+    feeder.start()
+    bridge = ZenohBridge("r", mas="zo", connect=(endpoint,))
+    try:
+        bridge.setup(timeout=10)
+        stale = []
+        for _ in range(150):
+            action = Action("move", (0.1,))
+            assert bridge.act(action).result(10).ok
+            seen = [p.args[0] for p in bridge.percepts() if p.name == "odom"]
+            if seen != [action.id]:
+                stale.append((action.id, seen))
+        assert not stale, f"{len(stale)} of 150 actions completed before their snapshot: {stale[:5]}"
+    finally:
+        stop.set()
+        bridge.shutdown()
+        requests.undeclare()
+        server.close()
