@@ -255,6 +255,11 @@ class Identity:
             raise BadMessage("unsigned", "a signed message without its seq field", sender)
         return document, seq
 
+    @staticmethod
+    def as_sealed(document: bytes) -> bytes:
+        """A document ``open`` returned, as it was given to ``seal`` (without its ``seq``)."""
+        return document[:document.rfind(_SEQ)] + b"}"
+
     def check_fresh(self, sender: str, receiver: str, seq: int) -> None:
         """Raise ``BadMessage`` (``replayed``/``stale``) unless ``seq`` is new from ``sender`` to ``receiver``."""
         reason = self.replays.check(sender, receiver, seq)

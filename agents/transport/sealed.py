@@ -14,8 +14,6 @@ from typing import Any, Callable
 from agents.transport.envelope import BadMessage
 from agents.transport.identity import ENVIRONMENT, Identity
 
-_SEQ = b',"seq":'
-
 
 class SealedChannel:
     """Seal and open documents for one process (its ``Identity``), dropping refused ones through ``drop``
@@ -44,7 +42,7 @@ class SealedChannel:
         except BadMessage as bad:
             self._drop(bad.reason, where, None if bad.reason == "unsigned" else bad.sender, bad.detail)
             return None
-        return document[:document.rfind(_SEQ)] + b"}"
+        return self.identity.as_sealed(document)
 
     def refuse(self, reason: str, where: str, sender: Any = None, detail: str = "") -> None:
         """Drop a message for another reason found by the caller (counted and logged like the others)."""
