@@ -28,6 +28,7 @@ from agents.transport.base import Transport, log
 from agents.transport.config import ZenohOptions, build_config, listen_endpoints
 from agents.transport.envelope import DEFAULT_MAX_SIZE, BadMessage, Envelope, is_valid_name
 from agents.transport.identity import claimed_agent
+from agents.transport.inbox_barrier import InboxBarriers
 from agents.transport.proved_presence import HEARTBEAT, LEASE, ProvedPresence
 from agents.transport.registrations import QUERY_TIMEOUT, encode_services, new_nonce, open_services
 from agents.transport.status import AgentStatus
@@ -59,6 +60,7 @@ class ZenohTransport(Transport):
         self._tokens: dict[str, Any] = {}
         self._created_tokens: dict[str, Any] = {}   # agent made at run time -> its 'created' token
         self._departed: set[str] = set()   # agents whose liveliness token went (and has not come back)
+        self._barriers = InboxBarriers(self._put_marker)   # events handed over behind the messages before them
         self._statuses: dict[str, AgentStatus] = {}
         self._declared: list[Any] = []
         # the secure profile: presence needs a signed proof besides the token
@@ -83,14 +85,19 @@ class ZenohTransport(Transport):
             self.endpoints = listen_endpoints(config)
             self.session = zenoh.open(config)
         liveliness = self.session.liveliness()
+        # Liveliness called on Zenoh's own thread (not ``indirect``, where each subscriber's callbacks run on a thread
+        # of their own, which may lag behind the inboxes' threads): an agent is known alive, or made at run time,
+        # before its first message, which came after its token, is handed over (``inbox_barrier`` for the end)
         self._declared = [
-            liveliness.declare_subscriber(keys.alive_pattern(self.mas), self._on_alive, history=True),
+            liveliness.declare_subscriber(keys.alive_pattern(self.mas),
+                                          zenoh.handlers.Callback(self._on_alive, indirect=False), history=True),
             self.session.declare_subscriber(keys.control_key(self.mas), self._on_control),
             self.session.declare_subscriber(keys.status_pattern(self.mas), self._on_status),
             self.session.declare_queryable(keys.status_pattern(self.mas), self._on_status_query),
             self.session.declare_queryable(keys.df_pattern(self.mas), self._on_df_query),
             liveliness.declare_subscriber(keys.subscribes_pattern(self.mas), self._on_subscribes, history=True),
-            liveliness.declare_subscriber(keys.created_pattern(self.mas), self._on_created, history=True),
+            liveliness.declare_subscriber(keys.created_pattern(self.mas),
+                                          zenoh.handlers.Callback(self._on_created, indirect=False), history=True),
         ]
         self._subscription_thread = threading.Thread(target=self._report_subscriptions, daemon=True,
                                                      name="faultmas-df-subscriptions")
@@ -144,12 +151,17 @@ class ZenohTransport(Transport):
         switch interval): one sample per wait. Here the samples queue in Zenoh's channel without
         the GIL, and each time this thread gets the GIL it handles every sample waiting."""
         receive = self.receive_bytes
+        barriers = self._barriers
         try:
             sample = channel.recv()  # blocks without the GIL; ends when the subscriber goes
             while True:
                 while sample is not None:
                     try:
-                        receive(agent, sample.payload.to_bytes(), key)
+                        attachment = sample.attachment
+                        if attachment is not None and barriers.is_marker(marker := attachment.to_bytes()):
+                            barriers.reached(agent, marker)   # an event queued behind what came before it
+                        else:
+                            receive(agent, sample.payload.to_bytes(), key)
                     except Exception:  # never lose the inbox over one message
                         log.exception("inbox of %s: a received message could not be handled", agent)
                     sample = channel.try_recv()
@@ -167,6 +179,21 @@ class ZenohTransport(Transport):
                 entity.undeclare()
         self._statuses.pop(agent, None)
         self._join_drain(agent)
+        self._barriers.release(agent)   # what its inbox held is handed over: nothing more to wait for
+
+    def _put_marker(self, agent: str, attachment: bytes) -> bool:
+        """Queue a marker (``inbox_barrier``) behind what ``agent``'s inbox holds; False if it has no inbox."""
+        import zenoh
+
+        if agent not in self._inboxes:
+            return False
+        try:
+            self.session.put(keys.inbox_key(self.mas, agent), b"", attachment=attachment,
+                             allowed_destination=zenoh.Locality.SESSION_LOCAL)
+        except Exception:  # the session closing: nothing will be handed over any more
+            log.debug("marker for the inbox of %s not put", agent, exc_info=True)
+            return False
+        return True
 
     def _join_drain(self, agent: str) -> None:
         """Wait for the inbox thread, which ends once its subscriber is undeclared. Left running, it
@@ -252,11 +279,18 @@ class ZenohTransport(Transport):
         import zenoh
 
         agent = keys.last_chunk(str(sample.key_expr))
-        (self._departed.discard if sample.kind == zenoh.SampleKind.PUT else self._departed.add)(agent)
+        if sample.kind == zenoh.SampleKind.PUT:
+            self._departed.discard(agent)
+            self._token(agent, True)
+        else:   # reported once every local inbox has handed over what the agent sent before it went
+            self._departed.add(agent)
+            self._barriers.after(list(self._inboxes), lambda: agent in self._departed and self._token(agent, False))
+
+    def _token(self, agent: str, up: bool) -> None:
         if self._proof is not None:   # the secure profile: a token is a claim until a signed heartbeat proves it
-            self._proof.token(agent, sample.kind == zenoh.SampleKind.PUT)
-            return
-        self._presence.update(agent, sample.kind == zenoh.SampleKind.PUT)
+            self._proof.token(agent, up)
+        else:
+            self._presence.update(agent, up)
 
     def _on_created(self, sample: Any) -> None:
         """A ``created/<agent>/<creator>`` token appeared (``creator_of``; its end changes nothing)."""
@@ -281,6 +315,10 @@ class ZenohTransport(Transport):
             return
         except (ValueError, RecursionError) as exc:
             self._drop("bad_control", str(sample.key_expr), None, str(exc)[:80])
+            return
+        agent = message.get("agent")
+        if isinstance(agent, str) and agent in self._inboxes:   # about an agent of ours (a kill): behind its messages
+            self._barriers.after([agent], lambda: self._control_received(message))
             return
         self._control_received(message)
 

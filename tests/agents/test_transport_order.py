@@ -1,0 +1,118 @@
+"""Order between what different subscribers of one process receive, over real Zenoh sessions on loopback.
+
+zenoh-python runs each subscriber's callbacks on a thread of its own and an inbox is drained by a thread of ours,
+so a process could hand things over in another order than they were sent: a ``kill`` of an agent before the
+message sent to it just before (the message then lost uncounted: a launcher waiting for as many messages received
+as sent waited for its timeout), an agent's leave before its last message, its first message before its join,
+a made agent's first message before the token saying who made it (so an ``achieve`` from it was refused as from
+a stranger). Each test sends ``PAIRS`` pairs and counts the pairs handed over in the wrong order (before the fix:
+13, 33-78, 10 and 18 of 200; ``agents.transport.inbox_barrier``, ``config.build_config``)."""
+from __future__ import annotations
+
+import threading
+
+import pytest
+
+from agents.transport import Envelope, ZenohOptions, ZenohTransport
+from tests.agents.transport_fixtures import poll, unique_mas
+
+PAIRS = 200
+
+
+class Log:
+    """What the receiving process handed over, in its order (events come from several threads)."""
+
+    def __init__(self) -> None:
+        self.events: list[tuple[str, str]] = []
+        self._lock = threading.Lock()
+
+    def __call__(self, kind: str, name: str) -> None:
+        with self._lock:
+            self.events.append((kind, name))
+
+    def inversions(self, first: str, then: str) -> int:
+        """Names whose ``then`` event was handed over before their ``first`` one."""
+        seen, wrong = set(), set()
+        for kind, name in list(self.events):
+            if kind == first:
+                seen.add(name)
+            elif kind == then and name not in seen:
+                wrong.add(name)
+        return len(wrong)
+
+
+@pytest.fixture
+def pair():
+    """Two processes' transports of one MAS (two Zenoh sessions, linked on loopback): sender and receiver."""
+    mas = unique_mas("order")
+    receiver = ZenohTransport(mas).open()
+    sender = ZenohTransport(mas, ZenohOptions(connect=tuple(receiver.endpoints))).open()
+    try:
+        yield sender, receiver
+    finally:
+        sender.close()
+        receiver.close()
+
+
+def tell(transport: ZenohTransport, sender: str, receiver: str) -> None:
+    assert transport.send(Envelope(transport.mas, sender, (receiver,), "tell", "last")) == ()
+
+
+def test_a_kill_is_handed_over_after_the_message_sent_to_the_agent_before_it(pair):
+    sender, receiver = pair
+    log = Log()
+    victims = [f"b{i}" for i in range(PAIRS)]
+    for name in victims:
+        receiver.register(name, lambda envelope, name=name: log("message", name))
+    receiver.on_control(lambda message: message.get("command") == "kill" and log("kill", message["agent"]))
+    sender.register("a", lambda envelope: None)
+    assert sender.wait_for_agents(victims, timeout=30)
+    for name in victims:   # as `.send(B, tell, ...); .kill_agent(B)` of an agent of another process
+        tell(sender, "a", name)
+        sender.publish_control("kill", agent=name, by="a")
+    assert poll(lambda: len(log.events) == 2 * PAIRS, timeout=30), len(log.events)
+    assert log.inversions("message", "kill") == 0
+
+
+def test_an_agent_that_leaves_is_reported_gone_after_its_last_message(pair):
+    sender, receiver = pair
+    log = Log()
+    receiver.register("b", lambda envelope: log("message", envelope.sender))
+    receiver.on_presence(lambda name, alive: alive or log("gone", name))
+    for i in range(PAIRS):
+        name = f"d{i}"
+        sender.register(name, lambda envelope: None)
+        assert receiver.wait_for_agents([name], timeout=10)
+        tell(sender, name, "b")
+        sender.unregister(name)          # its last message, then its presence goes
+    assert poll(lambda: len(log.events) == 2 * PAIRS, timeout=30), len(log.events)
+    assert log.inversions("message", "gone") == 0
+
+
+def test_a_new_agent_is_reported_alive_before_its_first_message(pair):
+    sender, receiver = pair
+    log = Log()
+    receiver.register("b", lambda envelope: log("message", envelope.sender))
+    receiver.on_presence(lambda name, alive: alive and log("alive", name))
+    sender.register("a", lambda envelope: None)
+    assert receiver.wait_for_agents(["a"], timeout=30)
+    for i in range(PAIRS):
+        name = f"j{i}"
+        sender.register(name, lambda envelope: None)   # its token, then at once its first message
+        tell(sender, name, "b")
+    assert poll(lambda: len(log.events) >= 2 * PAIRS, timeout=30), len(log.events)
+    assert log.inversions("alive", "message") == 0
+
+
+def test_an_agent_made_at_run_time_is_known_as_such_before_its_first_message(pair):
+    sender, receiver = pair
+    creators: dict[str, str | None] = {}
+    receiver.register("b", lambda envelope: creators.setdefault(envelope.sender, receiver.creator_of(envelope.sender)))
+    sender.register("a", lambda envelope: None)
+    assert sender.wait_for_agents(["b"], timeout=30)
+    for i in range(PAIRS):   # as `.create_agent(c, "c.asl")` whose first act is `.send(b, achieve, ...)`
+        sender.register(f"c{i}", lambda envelope: None, creator="a")
+        tell(sender, f"c{i}", "b")
+    assert poll(lambda: len(creators) == PAIRS, timeout=30), len(creators)
+    unknown = [name for name, creator in creators.items() if creator != "a"]
+    assert len(unknown) == 0, f"{len(unknown)} of {PAIRS} made agents not known as made: {unknown[:5]}"
