@@ -207,6 +207,15 @@ class ZenohTransport(Transport):
                 log.warning("inbox thread of %s still running %.0f s after its inbox closed",
                             agent, DRAIN_JOIN_TIMEOUT)
 
+    def _open_signed(self, agent: str, payload: bytes) -> Envelope:
+        """The secure profile's check; a fresh envelope its sender signed proves the sender alive, as its heartbeat
+        does: with its token up (seen before this message, which came after it) it is reported alive before its
+        first message is handed over, not when its first heartbeat's callback gets round to it."""
+        envelope = super()._open_signed(agent, payload)
+        if envelope.mas == self.mas and agent in envelope.receivers and not self._presence.is_alive(envelope.sender):
+            self._proof.proved(envelope.sender)   # checked fresh by the base (a replay proves nothing)
+        return envelope
+
     def _put(self, receiver: str, envelope: Envelope, encoded: Callable[[], bytes]) -> bool:
         publisher = self._publishers.get(receiver)
         if publisher is None:
