@@ -24,7 +24,7 @@ import threading
 import time
 from collections import OrderedDict
 from functools import partial
-from typing import Iterable
+from typing import Callable, Iterable
 
 from agents.directory import PROVIDER_NOTICE, NetworkDirectory, notice_service
 from agents.transport.base import Transport
@@ -352,7 +352,8 @@ class TransportBridge:
     def _on_presence(self, name: str, alive: bool) -> None:
         for agent in list(self.runtime.agents.values()):
             if agent.name != name:
-                agent.post_feedback(partial(_presence_percept, agent, name, alive))
+                change = partial(_presence_percept, agent, name, alive)
+                agent.post_feedback(change if alive else _after_mail(agent, change))
 
     def _on_control(self, message: dict) -> None:
         if message.get("command") == "died" and self._from_launcher(message):
@@ -423,6 +424,27 @@ class TransportBridge:
                 return "timeout"
             if runtime.wait_for_work(0.5 if remaining is None else min(remaining, 0.5)) and self.published_idle:
                 self.publish_status(busy=True)
+
+
+def _after_mail(agent: Agent, action: Callable[[], None]) -> Callable[[], None]:
+    """``action`` once ``agent`` has read the messages in its mailbox now. An agent's leave is reported after the
+    messages it sent before it went are in the mailboxes (``agents.transport.inbox_barrier``), but a cycle runs its
+    feedback before it reads a message (as Jason perceives before it reads its mail): ``-agent_alive(d)`` would come
+    before the last message of ``d``, handed over an instant before it. So it waits, a cycle at a time (a timer due
+    at once runs in the next cycle, after this one read a message), until the first message is none of those."""
+    held = list(agent.mailbox)   # the references keep their ids unique while they are held
+    if not held:
+        return action
+    ids = {id(message) for message in held}
+
+    def when_read() -> None:
+        mailbox = agent.mailbox
+        if mailbox and id(mailbox[0]) in ids:
+            agent.add_timer(0.0, when_read)
+        else:
+            held.clear()
+            action()
+    return when_read
 
 
 def _presence_percept(agent: Agent, name: str, alive: bool) -> None:
