@@ -14,6 +14,11 @@ may declare one): an agent is present while its token is up and its signed heart
 it; a directory query that says who subscribes is signed by that agent. Messages are put reliably with congestion control
 BLOCK on a cached publisher per receiver (a burst from the agents' thread in batches, see
 ``outbox``); agents of this process are served without the network.
+
+Order across subscribers (zenoh-python runs each subscriber's callbacks on a thread of its own): the liveliness
+callbacks run on Zenoh's own thread, so an agent's join and the token saying who made it are seen before its
+messages that came after them; a leave, and a control message about one of our agents (``kill``), go through the
+inboxes (``inbox_barrier``) and come after the messages that came before them.
 """
 from __future__ import annotations
 
