@@ -242,8 +242,13 @@ class TransportBridge:
 
     # -- names and trust -----------------------------------------------------------------------
     def all_names(self) -> list[str]:
-        """Agents of the project, agents of this process and every agent seen alive on the network."""
-        names = set(self.policy.declared_agents) | set(self.runtime.agents) | self.transport.alive_agents()
+        """Agents of the project not seen gone, agents of this process and every agent alive on the network.
+
+        A project's agent is listed before its process is seen (as Jason's platform creates every agent before
+        any runs), and no longer once it has left: killed by ``.kill_agent``, ended, or its process died."""
+        transport = self.transport
+        names = ((set(self.policy.declared_agents) - transport.departed_agents()) | set(self.runtime.agents)
+                 | transport.alive_agents())
         return sorted(names)
 
     def may_tell_how(self, sender: str) -> bool:
