@@ -44,6 +44,9 @@ INBOX_CAPACITY = 8192
 MAX_CLAIMS = 4096
 """Subscription tokens of other processes' agents a process keeps in the secure profile (each a claim until
 the agent's heartbeats list it); more are refused, so an outsider's tokens cannot grow its memory."""
+TO_AN_AGENT = frozenset({"kill"})
+"""Control commands for one agent (its name in ``agent``): its process hands them over after the messages sent to
+the agent before them (``inbox_barrier``), as they would be in one process."""
 DRAIN_JOIN_TIMEOUT = 10.0
 """Seconds ``unregister``/``close`` wait for an inbox thread to hand over what it holds and end."""
 
@@ -331,8 +334,8 @@ class ZenohTransport(Transport):
             self._drop("bad_control", str(sample.key_expr), None, str(exc)[:80])
             return
         agent = message.get("agent")
-        if isinstance(agent, str) and agent in self._inboxes:   # about an agent of ours (a kill): behind its messages
-            self._barriers.after([agent], lambda: self._control_received(message))
+        if message["command"] in TO_AN_AGENT and isinstance(agent, str) and agent in self._inboxes:
+            self._barriers.after([agent], lambda: self._control_received(message))   # behind the messages before it
             return
         self._control_received(message)
 
