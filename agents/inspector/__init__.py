@@ -10,6 +10,6 @@ step in ``pause``; the observers' state in ``observers``; ``faultmas inspect`` i
 """
 
 TIMELINE_MARKS = 10_000
-"""Timeline marks the viewer keeps by default, the newest (``hub``; ``--timeline-marks``): ~200 bytes each, and a
-diagnosis makes ~30, so days of a team's reports at a few a minute, and more than a page draws readably. Here, not
-in ``hub``, so that the command line's ``--help`` does not import the hub."""
+"""Timeline marks the viewer keeps by default, the newest (``hub``; ``--timeline-marks``): ~500 bytes each, so
+~5 MB (tracemalloc); a diagnosis makes ~30, so days of a team's reports at a few a minute, and more than a page
+draws readably. Here, not in ``hub``, so that the command line's ``--help`` does not import the hub."""
