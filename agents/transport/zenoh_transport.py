@@ -299,6 +299,9 @@ class ZenohTransport(Transport):
         if sample.kind == zenoh.SampleKind.PUT:
             self._departed.discard(agent)
             self._token(agent, True)
+        elif not self._presence.is_alive(agent):   # nobody to report gone (a claim withdrawn): at once
+            self._departed.add(agent)
+            self._token(agent, False)
         else:   # reported once every local inbox has handed over what the agent sent before it went
             self._departed.add(agent)
             self._barriers.after(list(self._inboxes), lambda: agent in self._departed and self._token(agent, False))
