@@ -2,8 +2,8 @@
 
 zenoh-python runs each subscriber's callbacks on a thread of its own and an inbox is drained by a thread of ours,
 so a process could hand things over in another order than they were sent: a ``kill`` of an agent before the
-message sent to it just before (which then came for an agent no longer there, uncounted), an agent's leave before
-its last message, its first message before its join,
+message sent to it just before (the agent layer acts on a kill in the agent's next turn, which hid it there: 0 of
+60 kills of agents of another process with the code before), an agent's leave before its last message, its first message before its join,
 a made agent's first message before the token saying who made it (with which an ``achieve`` from it is checked). Each test sends ``PAIRS`` pairs and counts the pairs handed over in the wrong order (before the fix,
 in 4-7 runs: kills 26-103 of 200, leaves 87-137, joins 12-37 (secure profile: 23-73), made agents 7-26; after: 0;
 ``agents.transport.inbox_barrier``, ``config.build_config``, ``ZenohTransport._open_signed``)."""
