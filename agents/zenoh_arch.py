@@ -122,8 +122,8 @@ class NetworkArch(LocalArch):
     def stop_mas(self, agent: Agent, delay: float = 0.0, exit_code: int = 0) -> None:
         self.bridge.stop_mas(agent.name, delay, exit_code)
 
-    def kill_agent(self, agent: Agent, name: str) -> bool:
-        return self.runtime.kill_agent(name) or self.bridge.kill_elsewhere(agent.name, name)
+    def kill_agent(self, agent: Agent, name: str, delay: float = 0.0) -> bool:
+        return self.runtime.kill_agent(name, delay) or self.bridge.kill_elsewhere(agent.name, name, delay)
 
     def accepts_plans_from(self, agent: Agent, sender: str) -> bool:
         return self.bridge.may_tell_how(sender)
@@ -277,13 +277,13 @@ class TransportBridge:
             self.on_message("out", message.sender, message)
         return not self.transport.send(envelope)
 
-    def kill_elsewhere(self, by: str, name: str) -> bool:
+    def kill_elsewhere(self, by: str, name: str, delay: float = 0.0) -> bool:
         """``.kill_agent`` of an agent of another process (Jason's agents may kill any agent of the MAS): its
         process kills it when told (a control message; signed by ``by`` in the secure profile). False when no
         agent of that name is alive anywhere."""
         if name not in self.transport.alive_agents():
             return False
-        self.transport.publish_control("kill", agent=name, by=by)
+        self.transport.publish_control("kill", agent=name, by=by, delay=delay)
         return True
 
     def _on_kill(self, message: dict) -> None:
@@ -296,7 +296,9 @@ class TransportBridge:
         if self.members is not None and not (isinstance(by, str) and self.is_member(by)):
             self.transport.report_control_refused(message, "not_a_member")
             return
-        agent.post_feedback(partial(self.runtime.kill_agent, name))
+        delay = message.get("delay", 0.0)
+        delay = float(delay) if isinstance(delay, (int, float)) and not isinstance(delay, bool) and delay > 0 else 0.0
+        agent.post_feedback(partial(self.runtime.kill_agent, name, delay))
 
     def stop_mas(self, by: str, delay: float = 0.0, exit_code: int = 0) -> None:
         """``.stopMAS``: every process of the MAS (this one too) stops after ``delay`` seconds; the
