@@ -206,8 +206,8 @@ class TransportBridge:
 
     # -- agents made and killed at run time (``LocalRuntime.membership``) ----------------------
     def taken(self, name: str) -> bool:
-        """A name of the project, or of an agent alive anywhere in the MAS: a new agent gets another."""
-        return name in self.policy.declared_agents or name in self.transport.alive_agents()
+        """A name ``.all_names`` lists (of the project and not gone, or alive anywhere): a new agent gets another."""
+        return name in self._names()
 
     def admit(self, name: str) -> None:
         """A made agent is on the network under its name, so the name must be one a key expression can hold;
@@ -242,9 +242,15 @@ class TransportBridge:
 
     # -- names and trust -----------------------------------------------------------------------
     def all_names(self) -> list[str]:
-        """Agents of the project, agents of this process and every agent seen alive on the network."""
-        names = set(self.policy.declared_agents) | set(self.runtime.agents) | self.transport.alive_agents()
-        return sorted(names)
+        """Agents of the project not seen gone, agents of this process and every agent alive on the network."""
+        return sorted(self._names())
+
+    def _names(self) -> set[str]:
+        """A project's agent is listed before its process is seen (as Jason's platform creates every agent before
+        any runs), and no longer once it has left: killed by ``.kill_agent``, ended, or its process died."""
+        transport = self.transport
+        return ((set(self.policy.declared_agents) - transport.departed_agents()) | set(self.runtime.agents)
+                | transport.alive_agents())
 
     def may_tell_how(self, sender: str) -> bool:
         """As in Jason, every agent of the project may send plans, and so may those they made at run time."""

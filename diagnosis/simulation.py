@@ -75,19 +75,32 @@ class BatchSimulator:
         m = len(candidates[0])
         size = max(1, (1 << m) // 8)    # bytes per candidate
         n = len(candidates)
-        patterns = [sum(1 << a for a in range(8 * size) if a >> j & 1).to_bytes(size, "little") for j in range(m)]
-        ones = b"\xff" * size
         masks: dict[int, bytearray] = {}
         forced: dict[int, bytearray] = {}
         index = self._index
-        for i, cand in enumerate(candidates):
-            at = i * size
-            for j, g in enumerate(cand):
-                k = index[g]
-                if k not in masks:
-                    masks[k], forced[k] = bytearray(size * n), bytearray(size * n)
-                masks[k][at:at + size] = ones
-                forced[k][at:at + size] = patterns[j]
+        if size == 1:   # up to 3 members (the hitting-set tree's sizes): a byte per candidate, set by item
+            lanes = [sum(1 << a for a in range(8) if a >> j & 1) for j in range(m)]
+            for i, cand in enumerate(candidates):
+                for j, g in enumerate(cand):
+                    k = index[g]
+                    mask = masks.get(k)
+                    if mask is None:
+                        mask = masks[k] = bytearray(n)
+                        forced[k] = bytearray(n)
+                    mask[i] = 255
+                    forced[k][i] = lanes[j]
+        else:
+            patterns = [sum(1 << a for a in range(8 * size) if a >> j & 1).to_bytes(size, "little")
+                        for j in range(m)]
+            ones = b"\xff" * size
+            for i, cand in enumerate(candidates):
+                at = i * size
+                for j, g in enumerate(cand):
+                    k = index[g]
+                    if k not in masks:
+                        masks[k], forced[k] = bytearray(size * n), bytearray(size * n)
+                    masks[k][at:at + size] = ones
+                    forced[k][at:at + size] = patterns[j]
         keep = [-1] * self._count
         set_to = [0] * self._count
         for k, b in masks.items():
@@ -99,5 +112,5 @@ class BatchSimulator:
             bad |= values[k] ^ expected
         ok = (~bad & ((1 << (8 * size * n)) - 1)).to_bytes(size * n, "little")
         if size == 1:
-            return [b != 0 for b in ok]
+            return list(map(bool, ok))
         return [any(ok[i * size:(i + 1) * size]) for i in range(n)]

@@ -91,6 +91,7 @@ class Presence:
 
     def __init__(self) -> None:
         self._alive: set[str] = set()
+        self._departed: set[str] = set()     # seen alive, then gone (killed, ended, died) and not back
         self._callbacks: list[OnPresence] = []
         self._changed = threading.Condition()
 
@@ -99,6 +100,7 @@ class Presence:
             if (agent in self._alive) == alive:
                 return  # a join seen twice (token + history) is reported once
             (self._alive.add if alive else self._alive.discard)(agent)
+            (self._departed.discard if alive else self._departed.add)(agent)
             callbacks = list(self._callbacks)
             self._changed.notify_all()
         for callback in callbacks:
@@ -118,6 +120,11 @@ class Presence:
     def alive(self) -> frozenset[str]:
         with self._changed:
             return frozenset(self._alive)
+
+    def departed(self) -> frozenset[str]:
+        """Agents seen alive that are gone now."""
+        with self._changed:
+            return frozenset(self._departed)
 
     def wait_for(self, agents: Iterable[str], timeout: float, alive: bool = True) -> bool:
         """Block until every agent in ``agents`` is alive (or, with ``alive=False``, gone)."""
@@ -423,6 +430,10 @@ class Transport(ABC):
 
     def alive_agents(self) -> frozenset[str]:
         return self._presence.alive()
+
+    def departed_agents(self) -> frozenset[str]:
+        """Agents of this MAS seen alive that have left since (killed, ended or died) and not come back."""
+        return self._presence.departed()
 
     def wait_for_agents(self, agents: Iterable[str], timeout: float = 10.0, alive: bool = True) -> bool:
         """Wait until all ``agents`` are alive (or all gone with ``alive=False``); False on timeout."""

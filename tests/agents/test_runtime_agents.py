@@ -113,3 +113,28 @@ def test_members_are_the_projects_agents_and_those_they_made(tmp_path, monkeypat
         bridge.detach()
     for transport in transports:
         transport.close()
+
+
+def test_a_project_agent_killed_in_another_process_leaves_every_all_names(tmp_path, monkeypatch):
+    """As in Jason, ``.all_names`` lists the agents there are: a project's agent before its process is seen (Jason
+    creates all before any runs), not after ``.kill_agent`` removed it, wherever that happened; its name is then
+    free for ``.create_agent`` again."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "kid.asl").write_text("")
+    mas, bus = unique_mas("names"), LocalBus()
+    here, there = LocalRuntime(), LocalRuntime()
+    here.add_agent("a", "")
+    there.add_agent("b", "")
+    transports = [LocalTransport(mas, bus).open() for _ in range(2)]
+    bridges = [TransportBridge(runtime, transport, declared=["a", "b", "c"], members=["a", "b", "c"]).attach()
+               for runtime, transport in zip((here, there), transports)]
+    assert transports[0].wait_for_agents(["b"], timeout=5)
+    assert bridges[0].all_names() == ["a", "b", "c"]          # c: of the project, not started yet
+    there.kill_agent("b")
+    assert transports[0].wait_for_agents(["b"], timeout=5, alive=False)
+    assert bridges[0].all_names() == ["a", "c"] and bridges[1].all_names() == ["a", "c"]
+    assert here.create_agent("b", "kid.asl") == "b" and here.create_agent("c", "kid.asl") == "c_1"
+    for bridge in bridges:
+        bridge.detach()
+    for transport in transports:
+        transport.close()
