@@ -5,7 +5,8 @@ how much, not what. With ``FAULTMAS_MEMTRACE_DIR=DIR`` in its environment (``fau
 theirs on to the agents), each ``faultmas agent run`` starts ``tracemalloc`` (``FAULTMAS_MEMTRACE_FRAMES``
 frames a traceback, default 8) and writes, every ``FAULTMAS_MEMTRACE_EVERY`` wall seconds (default 120) and
 whenever it gets SIGUSR1, a snapshot ``DIR/NAME-NNN.tracemalloc`` and a census of its live objects by type
-``DIR/NAME-NNN.census.json``. ``python -m agents.memory_trace DIR NAME`` then says what grew between the
+``DIR/NAME-NNN.census.json``. With ``FAULTMAS_MEMTRACE_FRAMES=0`` there is no tracemalloc (it costs memory and time of its own), only the
+censuses, which also carry pymalloc's own account. ``python -m agents.memory_trace DIR NAME`` then says what grew between the
 second snapshot and the last (the first is taken while the agent is still loading): the tracebacks whose
 memory grew most and the object types whose count did. tracemalloc slows the agent and costs memory of its
 own, so this is for a diagnostic run, never the default."""
@@ -27,11 +28,55 @@ ENV_DIR = "FAULTMAS_MEMTRACE_DIR"
 ENV_EVERY = "FAULTMAS_MEMTRACE_EVERY"
 ENV_FRAMES = "FAULTMAS_MEMTRACE_FRAMES"
 ENV_HOLDERS = "FAULTMAS_MEMTRACE_HOLDERS"
+ENV_COLLECT = "FAULTMAS_MEMTRACE_COLLECT"
 
 
 def census() -> dict[str, int]:
     """Live gc-tracked objects by type (module-qualified name)."""
     return dict(collections.Counter(f"{type(o).__module__}.{type(o).__qualname__}" for o in gc.get_objects()))
+
+
+_PYMALLOC_FIELDS = {"# arenas allocated current": "arenas", "# arenas highwater mark": "arenas_highwater",
+                    "# bytes in allocated blocks": "in_use", "# bytes in available blocks": "free_blocks",
+                    "# bytes lost to quantization": "quantization", "Total": "total"}
+
+
+def pymalloc_stats() -> dict[str, float]:
+    """Python's small-object allocator's own account (``sys._debugmallocstats``, which only writes to the C
+    stderr, read through a temporary file): its arenas (1 MiB each), the bytes of blocks in use, of free
+    blocks in its pools, and the tuples kept on the free lists: what tells objects that are kept from pages
+    that are only fragmented. Lines others write to stderr meanwhile (a few ms) land in the file and are
+    copied back."""
+    import tempfile
+
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile(mode="w+") as captured:
+        try:
+            os.dup2(captured.fileno(), 2)
+            sys._debugmallocstats()
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+        captured.seek(0)
+        text = captured.read()
+    stats: dict[str, float] = {"free_tuples": 0}
+    kept_out = []
+    for line in text.splitlines():
+        head, _, value = line.partition("=")
+        name = _PYMALLOC_FIELDS.get(head.strip())
+        if name is not None and name not in stats:     # the first "Total" is the arenas'
+            stats[name] = int(value.replace(",", "").strip())
+        elif "-sized PyTupleObjects" in line:
+            stats["free_tuples"] += int(line.split()[0])
+        elif "unused pools" in line:
+            stats["unused_pools"] = int(value.replace(",", "").strip())
+        elif not ("=" in line or line.startswith((" ", "class", "-----", "arena map")) or not line.strip()):
+            kept_out.append(line)     # another thread's line
+    if kept_out:
+        print("\n".join(kept_out), file=sys.stderr)
+    return {k: round(v / 2 ** 20, 2) if k not in ("arenas", "arenas_highwater", "free_tuples") else v
+            for k, v in stats.items()}
 
 
 def holders(lines: list[tuple[str, int]], samples: int = 5) -> dict[str, dict]:
@@ -83,7 +128,7 @@ class MemoryTrace:
 
     def start(self) -> MemoryTrace:
         self.directory.mkdir(parents=True, exist_ok=True)
-        if not tracemalloc.is_tracing():
+        if self.frames > 0 and not tracemalloc.is_tracing():
             tracemalloc.start(self.frames)
         self._thread.start()
         return self
@@ -110,9 +155,12 @@ class MemoryTrace:
         """One snapshot and census, numbered; returns the snapshot's path."""
         stem = self.directory / f"{self.name}-{self.count:03d}"
         self.count += 1
-        snapshot = tracemalloc.take_snapshot()
-        snapshot.dump(f"{stem}.tracemalloc")
-        kept = {"types": census()}
+        if tracemalloc.is_tracing():
+            tracemalloc.take_snapshot().dump(f"{stem}.tracemalloc")
+        kept = {"types": census(), "pymalloc": pymalloc_stats(), "gc_stats": gc.get_stats()}
+        if os.environ.get(ENV_COLLECT):      # how much of it was garbage in cycles, waiting for a full collection
+            kept["collected"] = gc.collect()
+            kept["types_after_collect"] = census()
         if os.environ.get(ENV_HOLDERS):
             kept["holders"] = holders(_lines(os.environ[ENV_HOLDERS]))
         if self.holdings is not None:
@@ -139,6 +187,8 @@ def agent_holdings(runtime) -> dict:
                       "condition_waiters": len(agent.condition_waiters), "percepts": len(agent.percepts),
                       "plans": len(agent.plans.plans), "dropped": dict(agent.dropped),
                       "pending_futures": agent.pending_futures}
+    from agentspeak.solver import _COMPILED
+    held["compiled_formulas"] = len(_COMPILED)
     from agents.zenoh_arch import CONTENT_CACHE
     texts = list(CONTENT_CACHE._terms)
     held["content_cache"] = {"entries": len(texts), "text_bytes": CONTENT_CACHE._bytes, "newest": texts[-5:]}
