@@ -64,7 +64,8 @@ A suspended intention's objects refer to each other (a Suspend, its finish and o
 future), so they outlive it until Python's gc runs a full collection; an agent process holds ~55,000 objects
 once loaded, and the gc's own rule (a full collection once those not yet fully collected number a quarter of
 the rest) let ~20,000 garbage objects pile up between two, a level that rose as the agents ran (issue 22's
-soak). Collected when idle, the garbage is one task's, and the cost (tens of ms) falls where nothing waits."""
+soak). Collected when idle, the garbage is one task's, and the cost (a few ms: 3.5 ms for 36,000 objects)
+falls where nothing waits."""
 
 
 class ContentCache:
