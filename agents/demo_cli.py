@@ -158,7 +158,8 @@ def cmd_run(args: argparse.Namespace) -> int:
             print(f"faultmas run: {exc}", file=sys.stderr)
             return 2
         try:
-            inspector = LiveInspector(host, port, args.inspect_hold, args.allow_pause, out=show)
+            inspector = LiveInspector(host, port, args.inspect_hold, args.allow_pause, out=show,
+                                      timeline_marks=args.timeline_marks)
         except OSError as exc:
             print(f"faultmas run: cannot serve the inspector on {args.listen}: {exc.strerror or exc}", file=sys.stderr)
             return 1

@@ -24,7 +24,7 @@ import threading
 import time
 from collections import OrderedDict
 from functools import partial
-from typing import Iterable
+from typing import Callable, Iterable
 
 from agents.directory import PROVIDER_NOTICE, NetworkDirectory, notice_service
 from agents.transport.base import Transport
@@ -131,8 +131,8 @@ class NetworkArch(LocalArch):
     def stop_mas(self, agent: Agent, delay: float = 0.0, exit_code: int = 0) -> None:
         self.bridge.stop_mas(agent.name, delay, exit_code)
 
-    def kill_agent(self, agent: Agent, name: str) -> bool:
-        return self.runtime.kill_agent(name) or self.bridge.kill_elsewhere(agent.name, name)
+    def kill_agent(self, agent: Agent, name: str, delay: float = 0.0) -> bool:
+        return self.runtime.kill_agent(name, delay) or self.bridge.kill_elsewhere(agent.name, name, delay)
 
     def accepts_plans_from(self, agent: Agent, sender: str) -> bool:
         return self.bridge.may_tell_how(sender)
@@ -287,13 +287,13 @@ class TransportBridge:
             self.on_message("out", message.sender, message)
         return not self.transport.send(envelope)
 
-    def kill_elsewhere(self, by: str, name: str) -> bool:
+    def kill_elsewhere(self, by: str, name: str, delay: float = 0.0) -> bool:
         """``.kill_agent`` of an agent of another process (Jason's agents may kill any agent of the MAS): its
         process kills it when told (a control message; signed by ``by`` in the secure profile). False when no
         agent of that name is alive anywhere."""
         if name not in self.transport.alive_agents():
             return False
-        self.transport.publish_control("kill", agent=name, by=by)
+        self.transport.publish_control("kill", agent=name, by=by, delay=delay)
         return True
 
     def _on_kill(self, message: dict) -> None:
@@ -306,7 +306,9 @@ class TransportBridge:
         if self.members is not None and not (isinstance(by, str) and self.is_member(by)):
             self.transport.report_control_refused(message, "not_a_member")
             return
-        agent.post_feedback(partial(self.runtime.kill_agent, name))
+        delay = message.get("delay", 0.0)
+        delay = float(delay) if isinstance(delay, (int, float)) and not isinstance(delay, bool) and delay > 0 else 0.0
+        agent.post_feedback(partial(self.runtime.kill_agent, name, delay))
 
     def stop_mas(self, by: str, delay: float = 0.0, exit_code: int = 0) -> None:
         """``.stopMAS``: every process of the MAS (this one too) stops after ``delay`` seconds; the
@@ -368,7 +370,8 @@ class TransportBridge:
     def _on_presence(self, name: str, alive: bool) -> None:
         for agent in list(self.runtime.agents.values()):
             if agent.name != name:
-                agent.post_feedback(partial(_presence_percept, agent, name, alive))
+                change = partial(_presence_percept, agent, name, alive)
+                agent.post_feedback(change if alive else _after_mail(agent, change))
 
     def _on_control(self, message: dict) -> None:
         if message.get("command") == "died" and self._from_launcher(message):
@@ -448,6 +451,27 @@ class TransportBridge:
                 return "timeout"
             if runtime.wait_for_work(0.5 if remaining is None else min(remaining, 0.5)) and self.published_idle:
                 self.publish_status(busy=True)
+
+
+def _after_mail(agent: Agent, action: Callable[[], None]) -> Callable[[], None]:
+    """``action`` once ``agent`` has read the messages in its mailbox now. An agent's leave is reported after the
+    messages it sent before it went are in the mailboxes (``agents.transport.inbox_barrier``), but a cycle runs its
+    feedback before it reads a message (as Jason perceives before it reads its mail): ``-agent_alive(d)`` would come
+    before the last message of ``d``, handed over an instant before it. So it waits, a cycle at a time (a timer due
+    at once runs in the next cycle, after this one read a message), until the first message is none of those."""
+    held = list(agent.mailbox)   # the references keep their ids unique while they are held
+    if not held:
+        return action
+    ids = {id(message) for message in held}
+
+    def when_read() -> None:
+        mailbox = agent.mailbox
+        if mailbox and id(mailbox[0]) in ids:
+            agent.add_timer(0.0, when_read)
+        else:
+            held.clear()
+            action()
+    return when_read
 
 
 def _presence_percept(agent: Agent, name: str, alive: bool) -> None:

@@ -12,6 +12,7 @@ import logging
 import threading
 import time
 from collections import deque
+from functools import partial
 from threading import get_ident
 from typing import Callable, Iterable, Protocol
 
@@ -70,8 +71,8 @@ class LocalArch(AgentArch):
     def create_agent(self, agent: Agent, name: str, source: str) -> str:
         return self.runtime.create_agent(name, source, creator=agent.name)
 
-    def kill_agent(self, agent: Agent, name: str) -> bool:
-        return self.runtime.kill_agent(name)
+    def kill_agent(self, agent: Agent, name: str, delay: float = 0.0) -> bool:
+        return self.runtime.kill_agent(name, delay)
 
     def clone_agent(self, agent: Agent, name: str) -> str:
         return self.runtime.clone_agent(agent, name)
@@ -83,6 +84,13 @@ class LocalArch(AgentArch):
     def act(self, agent: Agent, action: Literal):
         env = self.runtime.environment
         return env(agent, action) if env is not None else None
+
+
+def _shutting_down(agent: Agent, delay: float) -> None:
+    """``+jag_shutting_down(MS)``: the agent is stopped or killed ``delay`` seconds from now (Jason's event)."""
+    from agentspeak.program import ADD, BEL, Trigger
+
+    agent.post_external(Trigger(ADD, BEL, Literal("jag_shutting_down", (round(delay * 1000),))), force=True)
 
 
 class Membership(Protocol):
@@ -245,9 +253,18 @@ class LocalRuntime:
         self._ready_set.add(agent.name)
         self.ready.appendleft(agent)
 
-    def kill_agent(self, name: str) -> bool:
+    def kill_agent(self, name: str, delay: float = 0.0) -> bool:
         """Remove an agent (Jason's ``.kill_agent``): its intentions stop, later messages to it are
-        undeliverable."""
+        undeliverable. With a ``delay`` (seconds) it first gets ``+jag_shutting_down(MS)`` and is removed that
+        long after, by its own clock (Jason's ``LocalRuntimeServices.killAgent``). On the loop's thread."""
+        if delay > 0:
+            agent = self.agents.get(name)
+            if agent is None:
+                return False
+            _shutting_down(agent, delay)
+            agent.add_timer(delay, partial(self.kill_agent, name))
+            self.wake(agent)
+            return True
         agent = self.agents.pop(name, None)
         if agent is None:
             return False
@@ -320,12 +337,14 @@ class LocalRuntime:
         ``exit_code`` (``.stopMAS(D, Code)``) is kept for the process's exit status; the first one wins."""
         if exit_code and not self.exit_code:
             self.exit_code = exit_code
-        if delay > 0 and get_ident() == self._loop_thread:
-            from agentspeak.program import ADD, BEL, Trigger
-            ms = round(delay * 1000)
+        if delay > 0:
+            on_loop = get_ident() == self._loop_thread
             for agent in list(self.agents.values()):
-                agent.post_external(Trigger(ADD, BEL, Literal("jag_shutting_down", (ms,))), force=True)
-                self.wake(agent)
+                if on_loop:
+                    _shutting_down(agent, delay)
+                    self.wake(agent)
+                else:   # told by another process (a network thread): in the agent's next turn
+                    agent.post_feedback(partial(_shutting_down, agent, delay))
         with self._cond:
             self._stop_at = time.monotonic() + delay
             self._cond.notify()

@@ -8,3 +8,8 @@ events. Key expressions are in ``keys``; the JSON a mind is described with in ``
 step in ``pause``; the observers' state in ``observers``; ``faultmas inspect`` in ``cli`` and
 ``faultmas run --inspect`` in ``live``. See docs/inspector.md.
 """
+
+TIMELINE_MARKS = 10_000
+"""Timeline marks the viewer keeps by default, the newest (``hub``; ``--timeline-marks``): ~500 bytes each, so
+~5 MB (tracemalloc); a diagnosis makes ~30, so days of a team's reports at a few a minute, and more than a page
+draws readably. Here, not in ``hub``, so that the command line's ``--help`` does not import the hub."""

@@ -17,6 +17,8 @@ import ipaddress
 import sys
 import time
 
+from agents.inspector import TIMELINE_MARKS
+
 DEFAULT_LISTEN = "127.0.0.1:8470"
 DISCOVERY = 3.0   # seconds to look for a MAS when --mas is not given
 
@@ -43,11 +45,24 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def add_listen_arguments(p: argparse.ArgumentParser) -> None:
-    """``--listen`` and ``--public``, shared with ``faultmas run --inspect``."""
+    """``--listen``, ``--public`` and ``--timeline-marks``: the page's options, shared with ``faultmas run --inspect``."""
     p.add_argument("--listen", default=DEFAULT_LISTEN, metavar="HOST:PORT",
                    help="where the page is served (default %(default)s; port 0: any free port)")
     p.add_argument("--public", action="store_true",
                    help="allow a --listen address other than loopback (anyone who reaches it sees the team)")
+    p.add_argument("--timeline-marks", type=_positive_int, default=TIMELINE_MARKS, metavar="N",
+                   help="timeline marks kept, the newest (default %(default)s); the page says how many earlier "
+                        "ones were dropped")
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number of at least 1, got {text!r}")
+    return value
 
 
 def parse_listen(text: str, public: bool) -> tuple[str, int]:
@@ -125,7 +140,7 @@ def cmd_inspect(args: argparse.Namespace) -> int:
         if identity is not None:   # signatures checked as the MAS's own processes check them
             from agents.transport import ZenohTransport
             transport = ZenohTransport(mas, session=session, identity=identity).open()
-        hub = TeamHub(session, mas, transport=transport).start()
+        hub = TeamHub(session, mas, transport=transport, timeline_marks=args.timeline_marks).start()
         server = WebServer(hub, sock)
         print(f"faultmas inspect: MAS {mas} at {server.url} (Ctrl-C to stop)", flush=True)
         try:

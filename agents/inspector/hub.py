@@ -6,7 +6,10 @@
   (the agent publishes it only while this subscriber exists);
 * the robots: their percept snapshots (odometry pose, camera detections) and, when the simulator runs
   in this process, its ground truth (``truth``);
-* the timeline: the agents' ``.progress`` steps on the MAS's control key (what ``faultmas run`` prints).
+* the timeline: the agents' ``.progress`` steps on the MAS's control key (what ``faultmas run`` prints), the
+  newest ``timeline_marks`` of them (a team held up for days must not grow the viewer without bound): marks are
+  numbered from the first the hub saw, so a reader that asks for the marks from number N on (``view``) gets the
+  same ones whatever was dropped before; the view says how many earlier marks were dropped.
 
 In the secure profile (``transport`` given, with an identity: ``faultmas run --secure --inspect``) the team
 and the timeline come from the transport, which checks signatures: an agent is listed alive only while its
@@ -23,6 +26,8 @@ threads and the hub's poller.
 """
 from __future__ import annotations
 
+import collections
+import itertools
 import json
 import logging
 import math
@@ -30,7 +35,7 @@ import threading
 import time
 from typing import Any, Callable
 
-from agents.inspector import keys
+from agents.inspector import TIMELINE_MARKS, keys
 from agents.transport import keys as mas_keys
 
 log = logging.getLogger("faultmas.inspector")
@@ -72,7 +77,9 @@ class TeamHub:
 
     def __init__(self, session: Any, mas: str, *, clock: Callable[[], float] | None = None,
                  truth: Callable[[], dict[str, tuple[float, float, float]]] | None = None,
-                 transport: Any = None) -> None:
+                 transport: Any = None, timeline_marks: int = TIMELINE_MARKS) -> None:
+        if timeline_marks < 1:
+            raise ValueError(f"timeline_marks must be at least 1, not {timeline_marks}")
         self.session = session
         self.transport = transport if transport is not None and transport.identity is not None else None
         self._sealed = self.transport.sealed_channel() if self.transport is not None else None
@@ -86,7 +93,8 @@ class TeamHub:
         self.agents: dict[str, dict] = {}        # name -> {"alive", "changed_at", "summary"}
         self.minds: dict[str, dict] = {}         # name -> latest full state (with "plans" once)
         self.robots: dict[str, dict] = {}        # name -> {"odom", "trail", "seen", "truth", "truth_trail"}
-        self.timeline: list[dict] = []
+        self._timeline: collections.deque[dict] = collections.deque(maxlen=timeline_marks)   # the newest marks
+        self.timeline_dropped = 0                # marks older than ``timeline``'s first, no longer kept
         self.dropped = 0
         self.refused_marks = 0                   # the secure profile: reports not signed by their agent
         self._trails: dict[tuple[str, str], _Trail] = {}
@@ -327,7 +335,9 @@ class TeamHub:
         mark = {"agent": report.agent, "step": report.step, "detail": report.detail,
                 "t": round(self.clock(), 3), "wall": round(time.monotonic() - self.started, 3)}
         with self._lock:
-            self.timeline.append(mark)
+            if len(self._timeline) == self._timeline.maxlen:
+                self.timeline_dropped += 1       # the oldest goes
+            self._timeline.append(mark)
         self._bump()
 
     # -- the world -------------------------------------------------------------------------------
@@ -381,9 +391,17 @@ class TeamHub:
             self._bump()
 
     # -- what readers get ------------------------------------------------------------------------
+    @property
+    def timeline(self) -> list[dict]:
+        """The marks kept, oldest first (a copy)."""
+        with self._lock:
+            return list(self._timeline)
+
     def view(self, agent: str | None = None, timeline_from: int = 0) -> dict:
-        """A JSON-ready picture: the team, the robots, timeline marks from ``timeline_from`` on, and
-        the mind of ``agent`` if one is watched."""
+        """A JSON-ready picture: the team, the robots, the timeline marks numbered ``timeline_from`` and later
+        that are still kept (``timeline_first``: the number of the first one given; ``timeline_length``: how many
+        marks there have been, the ``timeline_from`` of the next view; ``timeline_dropped``: how many of the
+        oldest are no longer kept), and the mind of ``agent`` if one is watched."""
         with self._lock:
             team = [{**(e.get("summary") or {}), "agent": name, "alive": e["alive"]}
                     for name, e in sorted(self.agents.items())]
@@ -391,6 +409,13 @@ class TeamHub:
                              "truth_trail": list(self._trail(name, "truth").points)}
                       for name, r in sorted(self.robots.items())}
             return {"mas": self.mas, "clock": self.clock_name, "version": self.version, "team": team,
-                    "robots": robots, "timeline": self.timeline[timeline_from:],
-                    "timeline_length": len(self.timeline),
+                    "robots": robots, **self._marks_from(timeline_from),
                     "mind": self.minds.get(agent) if agent else None}
+
+    def _marks_from(self, number: int) -> dict:
+        """The kept marks numbered ``number`` and later (under ``_lock``)."""
+        first = max(number, self.timeline_dropped)
+        marks = list(itertools.islice(self._timeline, first - self.timeline_dropped, None))
+        return {"timeline": marks, "timeline_first": first,
+                "timeline_length": self.timeline_dropped + len(self._timeline),
+                "timeline_dropped": self.timeline_dropped, "timeline_limit": self._timeline.maxlen}

@@ -11,18 +11,21 @@ import sys
 import threading
 from typing import Any, Callable, TextIO
 
+from agents.inspector import TIMELINE_MARKS
+
 
 class LiveInspector:
     """Serve the page for one run: ``serve(hub, world)`` when the hub is open, ``hold()`` at its end.
     ``hold``: seconds to wait at the end (None: until Ctrl-C); ``allow_pause``: the run's switch."""
 
     def __init__(self, host: str, port: int, hold: float | None = None, allow_pause: bool = False,
-                 out: TextIO | None = None) -> None:
+                 out: TextIO | None = None, timeline_marks: int = TIMELINE_MARKS) -> None:
         """Binds ``host:port`` now, so a port in use fails before the run starts (``OSError``)."""
         from agents.inspector.web import listening_socket
 
         self.socket = listening_socket(host, port)
         self.hold_seconds, self.allow_pause = hold, allow_pause
+        self.timeline_marks = timeline_marks
         self.out = out or sys.stderr
         self.url: str | None = None
 
@@ -38,7 +41,8 @@ class LiveInspector:
 
             def clock() -> float:
                 return world.time
-        team = TeamHub(hub.session, hub.mas, clock=clock, truth=truth, transport=hub).start()
+        team = TeamHub(hub.session, hub.mas, clock=clock, truth=truth, transport=hub,
+                       timeline_marks=self.timeline_marks).start()
         server = WebServer(team, self.socket).start()
         self.url = server.url
         print(f"faultmas: inspector at {server.url}" + (" (pause/step allowed)" if self.allow_pause else ""),

@@ -3,7 +3,7 @@
 Routes: ``/`` the page; ``/static/*`` its JS and CSS (package data, no build step, no CDN);
 ``/events?agent=NAME`` server-sent events, one JSON ``view`` per change (at most ``MAX_RATE`` a second)
 with the mind of ``NAME`` while the page shows it; ``/api/team``; ``/api/agents/NAME/mind``;
-``/api/timeline.json`` (the export); ``POST /api/agents/NAME/control`` ``{"command": "pause"|"step"|
+``/api/timeline.json`` (the export: the marks kept, and how many earlier ones were dropped); ``POST /api/agents/NAME/control`` ``{"command": "pause"|"step"|
 "resume"}``, which the agent refuses unless its MAS allows it. A POST must be JSON from this page's
 own origin, so another web site open in the same browser cannot pause the team.
 """
@@ -43,7 +43,8 @@ def build_app(hub: TeamHub) -> Any:
 
     async def timeline(request):
         view = hub.view()
-        return JSONResponse({"mas": hub.mas, "clock": view["clock"], "marks": view["timeline"]},
+        return JSONResponse({"mas": hub.mas, "clock": view["clock"], "marks": view["timeline"],
+                             "dropped": view["timeline_dropped"]},
                             headers={"Content-Disposition": f'attachment; filename="{hub.mas}-timeline.json"'})
 
     async def control(request):
@@ -77,7 +78,8 @@ def build_app(hub: TeamHub) -> Any:
 
 
 async def _stream(request: Any, hub: TeamHub, agent: str | None):
-    """One page's events: a full view at once, then on every change (rate-limited)."""
+    """One page's events: a full view at once, then on every change (rate-limited). Each view carries the timeline
+    marks after those sent before (by number: ``TeamHub.view``), so the page appends them."""
     sent_version, sent_marks = -1, 0
     waited = 0.0
     try:

@@ -14,6 +14,11 @@ may declare one): an agent is present while its token is up and its signed heart
 it; a directory query that says who subscribes is signed by that agent. Messages are put reliably with congestion control
 BLOCK on a cached publisher per receiver (a burst from the agents' thread in batches, see
 ``outbox``); agents of this process are served without the network.
+
+Order across subscribers (zenoh-python runs each subscriber's callbacks on a thread of its own): the liveliness
+callbacks run on Zenoh's own thread, so an agent's join and the token saying who made it are seen before its
+messages that came after them; a leave, and a control message about one of our agents (``kill``), go through the
+inboxes (``inbox_barrier``) and come after the messages that came before them.
 """
 from __future__ import annotations
 
@@ -28,6 +33,7 @@ from agents.transport.base import Transport, log
 from agents.transport.config import ZenohOptions, build_config, listen_endpoints
 from agents.transport.envelope import DEFAULT_MAX_SIZE, BadMessage, Envelope, is_valid_name
 from agents.transport.identity import claimed_agent
+from agents.transport.inbox_barrier import InboxBarriers
 from agents.transport.proved_presence import HEARTBEAT, LEASE, ProvedPresence
 from agents.transport.registrations import QUERY_TIMEOUT, encode_services, new_nonce, open_services
 from agents.transport.status import AgentStatus
@@ -38,6 +44,9 @@ INBOX_CAPACITY = 8192
 MAX_CLAIMS = 4096
 """Subscription tokens of other processes' agents a process keeps in the secure profile (each a claim until
 the agent's heartbeats list it); more are refused, so an outsider's tokens cannot grow its memory."""
+TO_AN_AGENT = frozenset({"kill"})
+"""Control commands for one agent (its name in ``agent``): its process hands them over after the messages sent to
+the agent before them (``inbox_barrier``), as they would be in one process."""
 DRAIN_JOIN_TIMEOUT = 10.0
 """Seconds ``unregister``/``close`` wait for an inbox thread to hand over what it holds and end."""
 
@@ -59,6 +68,7 @@ class ZenohTransport(Transport):
         self._tokens: dict[str, Any] = {}
         self._created_tokens: dict[str, Any] = {}   # agent made at run time -> its 'created' token
         self._departed: set[str] = set()   # agents whose liveliness token went (and has not come back)
+        self._barriers = InboxBarriers(self._put_marker)   # events handed over behind the messages before them
         self._statuses: dict[str, AgentStatus] = {}
         self._declared: list[Any] = []
         # the secure profile: presence needs a signed proof besides the token
@@ -83,14 +93,19 @@ class ZenohTransport(Transport):
             self.endpoints = listen_endpoints(config)
             self.session = zenoh.open(config)
         liveliness = self.session.liveliness()
+        # Liveliness called on Zenoh's own thread (not ``indirect``, where each subscriber's callbacks run on a thread
+        # of their own, which may lag behind the inboxes' threads): an agent is known alive, or made at run time,
+        # before its first message, which came after its token, is handed over (``inbox_barrier`` for the end)
         self._declared = [
-            liveliness.declare_subscriber(keys.alive_pattern(self.mas), self._on_alive, history=True),
+            liveliness.declare_subscriber(keys.alive_pattern(self.mas),
+                                          zenoh.handlers.Callback(self._on_alive, indirect=False), history=True),
             self.session.declare_subscriber(keys.control_key(self.mas), self._on_control),
             self.session.declare_subscriber(keys.status_pattern(self.mas), self._on_status),
             self.session.declare_queryable(keys.status_pattern(self.mas), self._on_status_query),
             self.session.declare_queryable(keys.df_pattern(self.mas), self._on_df_query),
             liveliness.declare_subscriber(keys.subscribes_pattern(self.mas), self._on_subscribes, history=True),
-            liveliness.declare_subscriber(keys.created_pattern(self.mas), self._on_created, history=True),
+            liveliness.declare_subscriber(keys.created_pattern(self.mas),
+                                          zenoh.handlers.Callback(self._on_created, indirect=False), history=True),
         ]
         self._subscription_thread = threading.Thread(target=self._report_subscriptions, daemon=True,
                                                      name="faultmas-df-subscriptions")
@@ -144,12 +159,17 @@ class ZenohTransport(Transport):
         switch interval): one sample per wait. Here the samples queue in Zenoh's channel without
         the GIL, and each time this thread gets the GIL it handles every sample waiting."""
         receive = self.receive_bytes
+        barriers = self._barriers
         try:
             sample = channel.recv()  # blocks without the GIL; ends when the subscriber goes
             while True:
                 while sample is not None:
                     try:
-                        receive(agent, sample.payload.to_bytes(), key)
+                        attachment = sample.attachment
+                        if attachment is not None and barriers.is_marker(marker := attachment.to_bytes()):
+                            barriers.reached(agent, marker)   # an event queued behind what came before it
+                        else:
+                            receive(agent, sample.payload.to_bytes(), key)
                     except Exception:  # never lose the inbox over one message
                         log.exception("inbox of %s: a received message could not be handled", agent)
                     sample = channel.try_recv()
@@ -167,6 +187,21 @@ class ZenohTransport(Transport):
                 entity.undeclare()
         self._statuses.pop(agent, None)
         self._join_drain(agent)
+        self._barriers.release(agent)   # what its inbox held is handed over: nothing more to wait for
+
+    def _put_marker(self, agent: str, attachment: bytes) -> bool:
+        """Queue a marker (``inbox_barrier``) behind what ``agent``'s inbox holds; False if it has no inbox."""
+        import zenoh
+
+        if agent not in self._inboxes:
+            return False
+        try:
+            self.session.put(keys.inbox_key(self.mas, agent), b"", attachment=attachment,
+                             allowed_destination=zenoh.Locality.SESSION_LOCAL)
+        except Exception:  # the session closing: nothing will be handed over any more
+            log.debug("marker for the inbox of %s not put", agent, exc_info=True)
+            return False
+        return True
 
     def _join_drain(self, agent: str) -> None:
         """Wait for the inbox thread, which ends once its subscriber is undeclared. Left running, it
@@ -179,6 +214,15 @@ class ZenohTransport(Transport):
             if drain.is_alive():
                 log.warning("inbox thread of %s still running %.0f s after its inbox closed",
                             agent, DRAIN_JOIN_TIMEOUT)
+
+    def _open_signed(self, agent: str, payload: bytes) -> Envelope:
+        """The secure profile's check; a fresh envelope its sender signed proves the sender alive, as its heartbeat
+        does: with its token up (seen before this message, which came after it) it is reported alive before its
+        first message is handed over, not when its first heartbeat's callback gets round to it."""
+        envelope = super()._open_signed(agent, payload)
+        if envelope.mas == self.mas and agent in envelope.receivers and not self._presence.is_alive(envelope.sender):
+            self._proof.proved(envelope.sender)   # checked fresh by the base (a replay proves nothing)
+        return envelope
 
     def _put(self, receiver: str, envelope: Envelope, encoded: Callable[[], bytes]) -> bool:
         publisher = self._publishers.get(receiver)
@@ -252,11 +296,21 @@ class ZenohTransport(Transport):
         import zenoh
 
         agent = keys.last_chunk(str(sample.key_expr))
-        (self._departed.discard if sample.kind == zenoh.SampleKind.PUT else self._departed.add)(agent)
+        if sample.kind == zenoh.SampleKind.PUT:
+            self._departed.discard(agent)
+            self._token(agent, True)
+        elif not self._presence.is_alive(agent):   # nobody to report gone (a claim withdrawn): at once
+            self._departed.add(agent)
+            self._token(agent, False)
+        else:   # reported once every local inbox has handed over what the agent sent before it went
+            self._departed.add(agent)
+            self._barriers.after(list(self._inboxes), lambda: agent in self._departed and self._token(agent, False))
+
+    def _token(self, agent: str, up: bool) -> None:
         if self._proof is not None:   # the secure profile: a token is a claim until a signed heartbeat proves it
-            self._proof.token(agent, sample.kind == zenoh.SampleKind.PUT)
-            return
-        self._presence.update(agent, sample.kind == zenoh.SampleKind.PUT)
+            self._proof.token(agent, up)
+        else:
+            self._presence.update(agent, up)
 
     def _on_created(self, sample: Any) -> None:
         """A ``created/<agent>/<creator>`` token appeared (``creator_of``; its end changes nothing)."""
@@ -281,6 +335,10 @@ class ZenohTransport(Transport):
             return
         except (ValueError, RecursionError) as exc:
             self._drop("bad_control", str(sample.key_expr), None, str(exc)[:80])
+            return
+        agent = message.get("agent")
+        if message["command"] in TO_AN_AGENT and isinstance(agent, str) and agent in self._inboxes:
+            self._barriers.after([agent], lambda: self._control_received(message))   # behind the messages before it
             return
         self._control_received(message)
 

@@ -49,13 +49,17 @@ def clone(ctx, name):
     return True
 
 
-@internal_action(".kill_agent", args=1)
-def kill_agent(ctx, name):
-    """``.kill_agent(Name)``: stop and remove an agent of this MAS (fails if there is none of that name)."""
+@internal_action(".kill_agent", args=(1, 2))
+def kill_agent(ctx, name, deadline=0):
+    """``.kill_agent(Name[, Deadline])``: stop and remove an agent of this MAS (fails if there is none of that
+    name). With a deadline (ms), as Jason's, the agent first gets ``+jag_shutting_down(Deadline)`` and runs
+    until then (its own clock: simulated time under a simulator, as ``.wait``)."""
+    if isinstance(deadline, bool) or not isinstance(deadline, (int, float)) or deadline < 0:
+        raise wrong_arguments(".kill_agent: the deadline is a number of milliseconds, 0 or more")
     kill = getattr(ctx.agent.arch, "kill_agent", None)
     if kill is None:
         raise IAError("ia_failed", f"the architecture of {ctx.agent.name} cannot kill agents")
-    return bool(kill(ctx.agent, _text(name)))
+    return bool(kill(ctx.agent, _text(name), deadline / 1000.0))
 
 
 @internal_action(".list_files", args=(2, 3))

@@ -8,15 +8,17 @@ changes handed to callbacks. ``ZenohTap`` feeds them to the observers; the learn
 A configured topic ``/robot1/scan`` is the key expression ``robot1/scan``; payloads are decoded as JSON
 only when an observer reads a field (``score``, ``movement``; ``timestamp`` reads ``header.stamp``).
 ``activated(node)`` holds while a liveliness token whose key is the node's name, or ends with
-``/<name>``, is alive (e.g. ``faultmas/<mas>/alive/<agent>``). Messages and a timer may come on
-Zenoh's threads: the shared ``LiveTap`` keeps them in order.
+``/<name>``, is alive (e.g. ``faultmas/<mas>/alive/<agent>``). Samples of every key and liveliness changes are
+handed over in the order they arrived (``ZenohKeys``), and the shared ``LiveTap`` keeps them in order with its timer.
 """
 from __future__ import annotations
 
 import json
+import logging
+import queue
 import threading
 import time
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 from detection.config import ObserverConfig
 from detection.observation import Observation
@@ -24,6 +26,8 @@ from detection.observer_set import ObserverSet
 from detection.taps.live import LiveTap
 
 INFO_KEY = "faultmas/observers/info"
+
+log = logging.getLogger("faultmas.detection")
 
 
 def zenoh_config(connect: Sequence[str] = (), listen: Sequence[str] = ()):
@@ -44,8 +48,12 @@ def key_of(topic: str) -> str:
 
 
 class ZenohKeys:
-    """Raw samples on one Zenoh session: ``subscribe(key_expr, fn)`` calls ``fn(key, payload)`` on
-    Zenoh's threads; ``liveliness(key_expr, fn)`` calls ``fn(key, alive)`` (history included)."""
+    """Raw samples on one Zenoh session: ``subscribe(key_expr, fn)`` calls ``fn(key, payload)``;
+    ``liveliness(key_expr, fn)`` calls ``fn(key, alive)`` (history included). All on one thread of ours, in the
+    order the samples arrived: zenoh-python runs each subscriber's callbacks on a thread of its own, so a request
+    on one key and its answer on another were handed over the other way round (65 of 500 pairs 1 ms apart), and a
+    ``timing(a, b)`` observer measured the delay to the *next* answer. Zenoh's own thread only queues each sample
+    (not ``indirect``: a callback there sees the samples of all keys in arrival order)."""
 
     def __init__(self, *, session=None, connect: Sequence[str] = ()) -> None:
         import zenoh
@@ -53,17 +61,35 @@ class ZenohKeys:
         self._owns = session is None
         self.session = session if session is not None else zenoh.open(zenoh_config(connect))
         self._declared: list = []
+        self._arrived: queue.SimpleQueue = queue.SimpleQueue()   # (handler, args), in arrival order; None: stop
+        self._handing: threading.Thread | None = None
 
     def subscribe(self, key_expr: str, on_sample: Callable[[str, bytes], None]) -> None:
-        self._declared.append(self.session.declare_subscriber(
-            key_expr, lambda sample: on_sample(str(sample.key_expr), sample.payload.to_bytes())))
+        self._declared.append(self.session.declare_subscriber(key_expr, self._queued(
+            lambda sample: (on_sample, (str(sample.key_expr), sample.payload.to_bytes())))))
 
     def liveliness(self, key_expr: str, on_change: Callable[[str, bool], None]) -> None:
         import zenoh
 
-        self._declared.append(self.session.liveliness().declare_subscriber(
-            key_expr, lambda sample: on_change(str(sample.key_expr), sample.kind == zenoh.SampleKind.PUT),
-            history=True))
+        self._declared.append(self.session.liveliness().declare_subscriber(key_expr, self._queued(
+            lambda sample: (on_change, (str(sample.key_expr), sample.kind == zenoh.SampleKind.PUT))), history=True))
+
+    def _queued(self, call_for: Callable[[Any], tuple]) -> Any:
+        """A Zenoh handler that queues ``call_for(sample)`` for the handing thread, on Zenoh's own thread."""
+        import zenoh
+
+        if self._handing is None:
+            self._handing = threading.Thread(target=self._hand_over, daemon=True, name="faultmas-zenoh-keys")
+            self._handing.start()
+        return zenoh.handlers.Callback(lambda sample: self._arrived.put(call_for(sample)), indirect=False)
+
+    def _hand_over(self) -> None:
+        while (item := self._arrived.get()) is not None:
+            handler, args = item
+            try:
+                handler(*args)
+            except Exception:  # one bad sample must not stop the others
+                log.exception("Zenoh tap: a sample on %s could not be handled", args[0])
 
     def publisher(self, key: str):
         pub = self.session.declare_publisher(key)
@@ -77,6 +103,10 @@ class ZenohKeys:
             except Exception:       # already gone with the session
                 pass
         self._declared = []
+        if self._handing is not None:
+            self._arrived.put(None)
+            self._handing.join(5.0)
+            self._handing = None
         if self._owns:
             self.session.close()
 

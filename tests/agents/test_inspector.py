@@ -10,7 +10,7 @@ import threading
 import pytest
 import zenoh
 
-from agents.inspector import keys
+from agents.inspector import TIMELINE_MARKS, keys
 from agents.inspector.cli import parse_listen
 from agents.inspector.hub import TeamHub
 from agents.inspector.publisher import MindPublisher
@@ -261,3 +261,36 @@ def test_an_agent_made_at_run_time_is_inspected_until_it_is_killed(tmp_path, mon
         viewer.close()
         bridge.detach()
         transport.close()
+
+
+def report(transport: ZenohTransport, step: str) -> None:
+    """A ``.progress(step)`` of agent ``a``, as an agent of another process publishes it."""
+    transport.publish_control("progress", by="a", agent="a", step=step, detail="")
+
+
+def test_the_timeline_keeps_the_newest_marks_numbered_for_a_reader_that_polls_from_an_offset():
+    """A team held up for days: the hub keeps the newest ``timeline_marks`` (before: every report, for ever), and a
+    reader asking for the marks after those it has (the page's stream) gets the right ones across the drops."""
+    mas = unique_mas("tl")
+    with ZenohTransport(mas) as transport:
+        hub = TeamHub(transport.session, mas, timeline_marks=5).start()
+        try:
+            assert TeamHub(transport.session, mas).view()["timeline_limit"] == TIMELINE_MARKS   # bounded by default
+            for i in range(3):
+                report(transport, f"s{i}")
+            assert poll(lambda: hub.view()["timeline_length"] == 3, 10)
+            seen = hub.view()
+            assert [m["step"] for m in seen["timeline"]] == ["s0", "s1", "s2"] and seen["timeline_dropped"] == 0
+            for i in range(3, 12):
+                report(transport, f"s{i}")
+            assert poll(lambda: hub.view()["timeline_length"] == 12, 10)
+            assert [m["step"] for m in hub.timeline] == [f"s{i}" for i in range(7, 12)]   # the newest 5
+            after = hub.view(timeline_from=seen["timeline_length"])     # the reader had s0-s2; s3-s6 are gone
+            assert [m["step"] for m in after["timeline"]] == [f"s{i}" for i in range(7, 12)]
+            assert (after["timeline_first"], after["timeline_dropped"], after["timeline_length"]) == (7, 7, 12)
+            assert [m["step"] for m in hub.view(timeline_from=10)["timeline"]] == ["s10", "s11"]
+            assert hub.view(timeline_from=12)["timeline"] == []
+        finally:
+            hub.close()
+    with pytest.raises(ValueError, match="timeline_marks must be at least 1"):
+        TeamHub(None, mas, timeline_marks=0)

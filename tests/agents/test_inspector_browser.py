@@ -148,3 +148,43 @@ def test_ten_agents(browser):
         assert "robot3" in page.text_content("#mind-name")
     finally:
         proc.stop(signal.SIGINT, timeout=30)
+
+
+def test_the_page_shows_the_newest_marks_and_how_many_earlier_ones_were_dropped(browser):
+    """A hub that keeps 5 marks: the page opened after 8 reports shows the newest 5 and says 3 were dropped; the
+    reports after are added once each (its stream asks for the marks after those it has), older ones dropped."""
+    from agents.inspector.hub import TeamHub
+    from agents.inspector.web import WebServer, listening_socket
+    from agents.transport import ZenohTransport
+    from tests.agents.transport_fixtures import poll, unique_mas
+
+    def report(step: str) -> None:
+        transport.publish_control("progress", by="a", agent="a", step=step, detail="")
+
+    def shown() -> list[str]:
+        return page.eval_on_selector_all("#timeline .mark", "(marks) => marks.map((m) => m.dataset.step)")
+
+    mas = unique_mas("tlpage")
+    with ZenohTransport(mas) as transport:
+        hub = TeamHub(transport.session, mas, timeline_marks=5).start()
+        server = WebServer(hub, listening_socket("127.0.0.1", 0)).start()
+        try:
+            for i in range(8):
+                report(f"s{i}")
+            assert poll(lambda: hub.view()["timeline_length"] == 8, 10)
+            page = open_page(browser, server.url)
+            page.wait_for_function("document.querySelectorAll('#timeline .mark').length == 5", timeout=30_000)
+            assert shown() == [f"s{i}" for i in range(3, 8)]
+            assert page.text_content("#timeline-dropped") == "3 earlier marks dropped (the newest 5 are kept)"
+            for i in range(8, 12):
+                report(f"s{i}")
+            page.wait_for_function("document.querySelector('#timeline-last').textContent.startsWith('a: s11')",
+                                   timeout=30_000)
+            assert shown() == [f"s{i}" for i in range(7, 12)]
+            assert page.text_content("#timeline-dropped") == "7 earlier marks dropped (the newest 5 are kept)"
+            exported = json.load(urllib.request.urlopen(server.url + "api/timeline.json", timeout=10))
+            assert [m["step"] for m in exported["marks"]] == [f"s{i}" for i in range(7, 12)]
+            assert exported["dropped"] == 7
+        finally:
+            server.stop()
+            hub.close()

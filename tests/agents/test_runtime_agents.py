@@ -138,3 +138,21 @@ def test_a_project_agent_killed_in_another_process_leaves_every_all_names(tmp_pa
         bridge.detach()
     for transport in transports:
         transport.close()
+
+
+SHUTDOWN = {
+    "shut.mas2j": "MAS shut { agents: killer; victim; bystander; }\n",
+    "killer.asl": "!start.\n+!start <- .kill_agent(victim, 300); .wait(1000); .all_names(L); .print(L); .stopMAS(300).\n",
+    "victim.asl": "+jag_shutting_down(T) <- .print(closing(T)).\n",
+    "bystander.asl": "+jag_shutting_down(T) <- .print(shutting(T)).\n",
+}
+
+
+def test_kill_agent_and_stop_mas_with_a_deadline_warn_agents_of_other_processes(tmp_path):
+    """Jason's ``+jag_shutting_down(T)`` reaches an agent of another process: killed with a deadline
+    (``.kill_agent(victim, 300)``), or stopped with the MAS (``.stopMAS(300)`` from another process)."""
+    write_files(tmp_path, SHUTDOWN)
+    run = mas_run(tmp_path / "shut.mas2j", "--processes", "--timeout", "60", cwd=tmp_path)
+    assert run.finish(90) == 0, run.err[-20:]
+    assert sorted(run.out) == ["[bystander] shutting(300)", "[killer] [bystander,killer]",
+                               "[victim] closing(300)"], (run.out, run.err[-20:])

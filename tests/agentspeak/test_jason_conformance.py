@@ -289,6 +289,24 @@ def test_create_and_kill_agent(tmp_path, monkeypatch):
     assert "[parent] [parent]" in out
 
 
+def test_kill_agent_with_a_deadline_lets_the_agent_prepare_first(tmp_path, monkeypatch):
+    """Jason's ``.kill_agent(Name, Deadline)`` (``LocalRuntimeServices.killAgent``): the agent gets
+    ``+jag_shutting_down(Deadline)``, runs until the deadline, then is gone."""
+    (tmp_path / "child.asl").write_text(
+        "+jag_shutting_down(T) <- .print(closing(T)); !tick.\n"
+        "+!tick <- .print(tick); .wait(100); !tick.\n")
+    monkeypatch.chdir(tmp_path)
+    out = run_mas({"parent": asl("""
+        !g.
+        +!g <- .create_agent(kid, "child.asl"); .kill_agent(kid, 250); .print(asked);
+               .all_names(L); .print(L); .wait(500); .all_names(M); .print(M);
+               .send(kid, tell, hi).
+        -!g[error(E)] <- .print(E).
+    """)}, timeout=3)
+    assert out[:4] == ["[parent] asked", "[parent] [kid,parent]", "[kid] closing(250)", "[kid] tick"], out
+    assert 2 <= out.count("[kid] tick") <= 3 and out[-2:] == ["[parent] [parent]", "[parent] receiver_not_found"], out
+
+
 def test_a_name_in_use_gets_jasons_suffix_and_a_send_to_nobody_fails(tmp_path, monkeypatch):
     """Jason's ``getNewAgentName`` (``kid``, then ``kid_1``, ``kid_2``) and ``ReceiverNotFoundException``: a
     ``.send`` to an agent that does not exist (killed) fails with ``receiver_not_found``."""

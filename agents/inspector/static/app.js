@@ -4,7 +4,7 @@
 
 const $ = (id) => document.getElementById(id);
 const COLOURS = ["#1e88e5", "#e53935", "#43a047", "#fb8c00", "#8e24aa", "#00acc1", "#6d4c41", "#3949ab", "#c0ca33", "#d81b60", "#546e7a", "#00897b"];
-const state = { agent: null, source: null, marks: [], view: null, zoom: 8, fit: true, plansShown: -1, colours: {} };
+const state = { agent: null, source: null, marks: [], marksFrom: 0, view: null, zoom: 8, fit: true, plansShown: -1, colours: {} };
 
 function colour(name) {
   if (!(name in state.colours)) state.colours[name] = COLOURS[Object.keys(state.colours).length % COLOURS.length];
@@ -23,6 +23,7 @@ function el(tag, attrs, ...children) {
 function connect() {
   if (state.source) state.source.close();
   state.marks = [];
+  state.marksFrom = 0;
   const url = "/events" + (state.agent ? "?agent=" + encodeURIComponent(state.agent) : "");
   const source = new EventSource(url);
   state.source = source;
@@ -31,10 +32,28 @@ function connect() {
   source.onmessage = (event) => {
     let view;
     try { view = JSON.parse(event.data); } catch (e) { console.warn("bad view", e); return; }
-    state.marks.push(...view.timeline);
+    addMarks(view);
     state.view = view;
     render(view);
   };
+}
+
+// The hub numbers the timeline's marks from the first it saw and keeps the newest timeline_limit of them; a view
+// brings those from number timeline_first on. The page keeps as many (state.marks: numbers state.marksFrom...), so a
+// team held up for days does not grow it either; a reconnected stream sends the kept marks again: they replace ours.
+function addMarks(view) {
+  const first = view.timeline_first ?? state.marksFrom + state.marks.length;
+  if (first < state.marksFrom || first > state.marksFrom + state.marks.length) {
+    state.marks = [];            // a gap (dropped before we saw them) or a stream begun again
+    state.marksFrom = first;
+  }
+  state.marks.splice(first - state.marksFrom);
+  state.marks.push(...view.timeline);
+  const over = state.marks.length - (view.timeline_limit ?? Infinity);
+  if (over > 0) {
+    state.marks.splice(0, over);
+    state.marksFrom += over;
+  }
 }
 
 function select(agent) {
@@ -211,6 +230,9 @@ function renderTimeline(clock) {
     g.append(node("title", {}, `${m.t.toFixed(2)} s ${m.agent}: ${m.step} ${m.detail}`));
     svg.append(g);
   }
+  const limit = state.view ? state.view.timeline_limit : marks.length;
+  $("timeline-dropped").textContent = state.marksFrom
+    ? `${state.marksFrom} earlier mark${state.marksFrom === 1 ? "" : "s"} dropped (the newest ${limit} are kept)` : "";
   const last = marks[marks.length - 1];
   $("timeline-last").textContent = last ? `${last.agent}: ${last.step} ${last.detail}` : "-";
 }
