@@ -161,6 +161,8 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
                       extra_goals=goals, arch=RobotArch(runtime, robot) if robot is not None else None)
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: runtime.stop())
+    from agents.memory_trace import agent_holdings, start_from_environment
+    memory_trace = start_from_environment(args.name, lambda: agent_holdings(runtime))     # None unless FAULTMAS_MEMTRACE_DIR asks (a leak hunt)
     try:
         bridge = TransportBridge(runtime, transport, declared=declared, allowed_code_senders=args.allow_code_from,
                                  members=declared if args.project else None).attach()
@@ -178,6 +180,8 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
             robot.shutdown()
         transport.close()
         _report_drops(args.name, transport.dropped)
+        if memory_trace is not None:
+            memory_trace.stop()
     return EXIT_TIMEOUT if why == "timeout" else 0
 
 

@@ -989,6 +989,10 @@ class Agent:
 
     def drop_intention(self, intention: Intention) -> None:
         intention.dropped = True
+        waiting = intention.waiting
+        on_drop = getattr(getattr(waiting, "inner", waiting), "on_drop", None)   # (.suspend holds the inner wait)
+        if on_drop is not None:
+            on_drop()
         intention.stack.clear()
         try:
             self.running.remove(intention)

@@ -141,6 +141,8 @@ class BeliefBase:
                 d = bucket.by_arg.get(ak)
                 if d is not None:
                     d.pop(plain, None)
+                    if not d:   # its key goes too: percepts whose first argument keeps changing (a time, a
+                        del bucket.by_arg[ak]   # position) would otherwise leave one empty index per value
             self.size -= 1
         else:
             entry.lit = Literal(old.functor, old.args, remaining, old.neg)

@@ -383,6 +383,11 @@ __all__ = ["solve", "solve_first", "SolveError", "KnowledgeBase", "compare_equal
 # so deep rule recursion still costs no Python stack.
 
 _COMPILED: dict[int, tuple] = {}
+COMPILED_LIMIT = 2048
+"""Formulas kept compiled (by identity, the formula held so that its id is not reused). The program's own
+formulas are few and fixed, but formulas made while the agent runs (a question asked of it, a condition or
+query built with bound variables) are new objects each time: kept for ever they grew an agent by ~3 MiB an
+hour (issue 22's soak). Past the limit the oldest entry goes (one that is still used is compiled again)."""
 
 
 def _true_k() -> bool:
@@ -394,6 +399,11 @@ def compiled(formula: Term):
     if entry is not None and entry[0] is formula:
         return entry[1]
     fn = _compile(formula)
+    if len(_COMPILED) >= COMPILED_LIMIT:
+        try:
+            del _COMPILED[next(iter(_COMPILED))]
+        except (KeyError, RuntimeError, StopIteration):   # another agent's thread changed it meanwhile
+            pass
     _COMPILED[id(formula)] = (formula, fn)
     return fn
 

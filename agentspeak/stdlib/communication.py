@@ -90,7 +90,14 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
                                         f"argument of .send ('{to_str(answer, c.b)}')")
         return True
 
+    def forget() -> None:
+        """No answer is awaited any more (timed out, or the intention dropped): their entries go, or each such
+        ask would keep its callback, future and lock for as long as the agent runs (issue 22's soak)."""
+        for asked in asks:
+            agent.pending_asks.pop(asked, None)
+
     def on_timeout(c) -> bool:
+        forget()
         for fut in futures:
             fut.cancel()
         c.unify(answer, Literal("timeout"))  # Jason goes on even when the answer pattern does not match
@@ -107,7 +114,7 @@ def send(ctx, receiver, performative, content, answer=None, timeout=None):
         return False
     return Suspend(future=waiting, on_result=on_result, timeout=seconds,
                    on_timeout=on_timeout if seconds is not None else None, reason="ask",
-                   answer_waiting=answer_waiting if seconds is not None else None)
+                   answer_waiting=answer_waiting if seconds is not None else None, on_drop=forget)
 
 
 def receiver_not_found(message: Message) -> IAError:

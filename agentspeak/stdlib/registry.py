@@ -60,17 +60,19 @@ class Suspend:
     ``event`` (a Trigger) resumes when a matching event is posted. ``term``: why, as a term
     (``.suspended(G, R)`` gives it; Jason's ``wait(W)[time(T)]`` for ``.wait``). ``answer_waiting``: for an
     ask, is an answer sent by this (monotonic) deadline still unread in the mailbox? Then the timeout waits
-    for it to be read.
+    for it to be read. ``on_drop()``: the intention was dropped while suspended here (what the action keeps for
+    its resumption can go).
     """
 
     def __init__(self, future: Future | None = None, on_result: Callable[[Any, Any], bool] | None = None,
                  timeout: float | None = None, on_timeout: Callable[[Any], bool] | None = None,
                  until: Callable[[], bool] | None = None, event: Any = None, reason: str = "suspended",
                  on_event: Callable[[Any, Any], bool] | None = None, term: Any = None,
-                 answer_waiting: Callable[[float], bool] | None = None) -> None:
+                 answer_waiting: Callable[[float], bool] | None = None,
+                 on_drop: Callable[[], None] | None = None) -> None:
         self.future, self.on_result, self.timeout, self.on_timeout = future, on_result, timeout, on_timeout
         self.until, self.event, self.reason, self.on_event, self.term = until, event, reason, on_event, term
-        self.answer_waiting = answer_waiting
+        self.answer_waiting, self.on_drop = answer_waiting, on_drop
 
     def __repr__(self) -> str:
         return (f"Suspend(future={self.future!r}, timeout={self.timeout!r}, event={self.event!r}, "

@@ -59,3 +59,36 @@ d(K, L) :- b(K, L).
     lines = run_asl(src)
     assert [tuple(line.split()) for line in lines] == [(m, m) for _, m in (line.split() for line in lines)]
     assert [line.split()[0] for line in lines] == ["4", "2", "2", "1", "4", "1", "1", "1", "5", "0", "1", "0"]
+
+
+def test_beliefs_that_come_and_go_with_ever_new_first_arguments_leave_nothing_behind():
+    """Issue 22's soak: a robot's percepts (odometry, a time) are added and removed with a new first argument
+    every cycle; the first-argument index kept an empty entry per value ever seen, and agents grew for hours."""
+    import gc
+    import tracemalloc
+
+    from agentspeak.beliefs import BeliefBase
+    from agentspeak.terms import Literal
+
+    percept = (Literal("percept"),)
+    bb = BeliefBase()
+
+    def come_and_go(start: int, count: int) -> None:
+        for i in range(start, start + count):
+            belief = Literal("odom", (i * 0.001, 2.0, 3.0), (Literal("source", percept),))
+            bb.add(belief)
+            assert bb.candidates(Literal("odom", (i * 0.001, 2.0, 3.0)), {}) == [belief]
+            bb.remove(belief)
+
+    come_and_go(0, 200)
+    gc.collect()
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        come_and_go(200, 5000)
+        gc.collect()
+        grown = tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+    assert len(bb) == 0
+    assert grown < 16 * 1024, f"the belief base kept {grown} bytes after 5000 beliefs came and went"

@@ -77,3 +77,26 @@ def test_an_ask_is_answered_after_the_goal_sent_before_it():
     """
     lines = run_mas({"bob": bob, "maria": maria})  # bob first: both messages wait when maria starts
     assert lines == ['[bob] name("Maria")[source(maria)]']
+
+
+def test_asks_no_longer_awaited_leave_nothing_behind():
+    """Issue 22's soak: an ask that timed out, or whose intention was dropped (a new task drops every
+    intention), kept its entry in the asker's pending answers (callback, future, lock) for as long as the
+    agent ran (bob never answers, as a helper that dropped the question for a new task). After 20 of each,
+    nothing is pending."""
+    from agentspeak.runtime import LocalRuntime
+
+    alice = """!start.
++!start <- for ( .range(I, 1, 20) ) { .send(bob, askOne, q(I), A, 10) };
+   for ( .range(I, 1, 20) ) { !!ask(I) };
+   .wait(300); .drop_intention(ask(_)); .print(done).
++!ask(I) <- .send(bob, askOne, q(I), A); .print(never, A).
+"""
+    bob = "+?q(_) <- .wait({+never}).\n"
+    lines: list[str] = []
+    runtime = LocalRuntime(printer=lambda name, text: lines.append(f"[{name}] {text}"))
+    runtime.add_agent("alice", alice)
+    runtime.add_agent("bob", bob)
+    runtime.run(timeout=2.0)
+    assert lines == ["[alice] done"]
+    assert runtime.agents["alice"].pending_asks == {}

@@ -353,6 +353,10 @@ MEMORY_PARTS = ("rss", "heap", "arenas", "anon", "file", "huge", "advised", "mal
                 "malloc.mmapped")
 
 
+AGENT_MEMORY_PARTS = ("rss", "heap", "arenas", "anon", "file")
+"""An agent's row has the smaps parts only (glibc's own account is read in-process, by the soak for itself)."""
+
+
 def _part(memory: dict, part: str) -> float:
     """``part`` of a row's ``soak_memory`` (``malloc.free``: a field of glibc's account; 0 without it)."""
     for key in part.split("."):
@@ -404,6 +408,12 @@ def summarize(rows: list[dict], ended_by: str, died, frozen, started: float, tas
         "agent_rss_slope_second_half_mib_per_sim_hour": {
             a: round(_slope([r["sim_total_s"] / 3600 for r in second_half if a in r["agent_processes"]],
                             [r["agent_processes"][a]["rss_mib"] for r in second_half if a in r["agent_processes"]]), 2)
+            for a in agents},
+        "agent_memory_slope_second_half_mib_per_sim_hour": {
+            a: {part: round(_slope([r["sim_total_s"] / 3600 for r in second_half if a in r["agent_processes"]],
+                                   [_part(r["agent_processes"][a].get("memory"), part)
+                                    for r in second_half if a in r["agent_processes"]]), 2)
+                for part in AGENT_MEMORY_PARTS}
             for a in agents},
         "agent_threads_first_last": {a: [next(r["agent_processes"][a]["threads"] for r in settled if a in r["agent_processes"]),
                                          next(r["agent_processes"][a]["threads"] for r in reversed(settled) if a in r["agent_processes"])]

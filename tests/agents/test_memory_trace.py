@@ -1,0 +1,63 @@
+"""The agents' leak-hunting switch (``FAULTMAS_MEMTRACE_DIR``, agents/memory_trace.py): off by default; on, it
+writes snapshots and censuses that say what grew, which line allocated it and what holds it."""
+from __future__ import annotations
+
+import tracemalloc
+
+from agents.memory_trace import MemoryTrace, agent_holdings, growth, start_from_environment
+
+
+def test_off_unless_asked(monkeypatch):
+    monkeypatch.delenv("FAULTMAS_MEMTRACE_DIR", raising=False)
+    assert start_from_environment("robot1") is None
+    assert not tracemalloc.is_tracing()
+
+
+class _Store:
+    """What keeps the leak: an object's dict (of untracked objects only, so gc lists the dict through it)."""
+
+    def __init__(self) -> None:
+        self.items: dict[int, bytearray] = {}
+
+
+def _leak(store: _Store) -> None:
+    for i in range(2000):
+        store.items[i] = bytearray(200)
+
+
+LEAK_LINE = _leak.__code__.co_firstlineno + 2
+
+
+def test_snapshots_say_what_grew_where_and_what_holds_it(tmp_path, monkeypatch):
+    from agentspeak.runtime import LocalRuntime
+
+    runtime = LocalRuntime()
+    runtime.add_agent("robot1", "b(1).\n")
+    where = f"test_memory_trace.py:{LEAK_LINE}"
+    monkeypatch.setenv("FAULTMAS_MEMTRACE_HOLDERS", where)
+    kept = _Store()
+    trace = MemoryTrace(tmp_path, "robot1", every=3600, holdings=lambda: agent_holdings(runtime)).start()
+    try:
+        trace.write()
+        trace.write()
+        _leak(kept)
+        trace.stop()                   # a last snapshot
+    finally:
+        tracemalloc.stop()
+    report = growth(tmp_path, "robot1")
+    assert "robot1-001.tracemalloc -> robot1-002.tracemalloc" in report
+    top = report.split("top growth by line:\n")[1].splitlines()[0]
+    blocks = int(top.split("blocks")[0].split()[-1])
+    assert where in top and blocks >= 4000, report     # each bytearray and its buffer (and the dict's growth)
+    assert '"beliefs": 1' in report   # each agent's holdings, first and last
+    import json
+    census = json.loads((tmp_path / "robot1-002.census.json").read_text())
+    assert census["holders"][where]["objects"] == {"bytearray": 2000}
+    assert census["holders"][where]["held_by"] == {"dict": 2000}
+
+
+def test_the_report_names_a_missing_directory(tmp_path, capsys):
+    from agents.memory_trace import main
+
+    assert main([str(tmp_path / "none"), "robot1"]) == 2
+    assert "fewer than two snapshots of robot1" in capsys.readouterr().err
