@@ -33,6 +33,7 @@ EXIT_CODES = {"stopped": 0, "idle": 0, "failed": 1, "timeout": 124, "interrupted
 CHECK_INTERVAL = 0.05    # seconds between quiescence checks
 START_TIMEOUT = 60.0     # seconds the children get to become reachable
 GRACE = 2.0              # seconds between the stop steps (control, SIGINT, SIGTERM, SIGKILL)
+MAX_STOP_DELAY = 60.0    # longest .stopMAS(D) the launcher waits for before it stops the processes itself
 REPO = Path(__file__).resolve().parents[1]
 
 
@@ -128,6 +129,7 @@ class Launcher:
         self.failures: list[tuple[str, int]] = []
         self._print_lock = threading.Lock()
         self._stopping = False
+        self.stop_delay = 0.0   # seconds the agents were given by .stopMAS(D) to finish before they stop
         hub.on_status(self._on_status)
         hub.on_control(self._on_control)
 
@@ -141,6 +143,10 @@ class Launcher:
             code = message.get("code", 0)
             if isinstance(code, int) and not isinstance(code, bool) and code and not self.exit_code:
                 self.exit_code = code   # .stopMAS(_, Code): the run exits with Code (the first one wins)
+            delay = message.get("delay", 0.0)
+            if isinstance(delay, (int, float)) and not isinstance(delay, bool) and delay > 0:
+                # .stopMAS(D): every agent has D ms (+jag_shutting_down) before its process stops by itself
+                self.stop_delay = max(self.stop_delay, min(float(delay), MAX_STOP_DELAY))
             self.stop_requested.set()
         else:
             self.hub.report_control_refused(message, "not_a_member")
@@ -242,6 +248,11 @@ class Launcher:
     def stop_all(self) -> None:
         """Ask every child to stop, then insist: control message, SIGINT, SIGTERM, SIGKILL."""
         running = [c for c in self.children.values() if c.poll() is None]
+        if running and self.stop_delay:   # .stopMAS(D): they stop by themselves once D is over
+            end = time.monotonic() + self.stop_delay + GRACE
+            while running and time.monotonic() < end:
+                time.sleep(0.02)
+                running = [c for c in running if c.poll() is None]
         if running:
             self.hub.publish_control("stop", by="launcher", delay=0.0, token=self.token)
         stop_processes(running, GRACE, (None, *ESCALATION))
