@@ -1,9 +1,9 @@
 """The hand-written ground-term reader must build exactly what the grammar builds, or step aside."""
 from __future__ import annotations
 
-from hypothesis import given, settings, strategies as st
+from hypothesis import example, given, settings, strategies as st
 
-from agentspeak.ground_terms import read_ground_term
+from agentspeak.ground_terms import _KEYWORDS, read_ground_term
 from agentspeak.parser import parse_literal, parse_program
 from agentspeak.terms import Cons, Literal, to_str
 
@@ -90,8 +90,11 @@ _flat_strings = st.text(alphabet=st.sampled_from('ab ,()[]\'"\\\\n\t'), max_size
 @settings(max_examples=200, deadline=None)
 @given(st.lists(st.one_of(st.integers(-99, 99), _atoms.map(Literal), _flat_strings), min_size=1, max_size=4),
        st.sampled_from(["", " ", "\n"]))
+@example([Literal("if")], "")
 def test_flat_structures_with_awkward_strings_read_as_the_grammar_reads_them(args, blank) -> None:
     text = f"{blank}m({blank}{(',' + blank).join(to_str(a) for a in args)}){blank}"
     fast = read_ground_term(text)
-    assert fast is not None, text
+    if fast is None:   # words the grammar reserves (if, div, not...) are left to it (hypothesis found m(if))
+        assert any(isinstance(a, Literal) and a.functor in _KEYWORDS for a in args), text
+        return
     assert _same(fast, _full_parse(text)), text
