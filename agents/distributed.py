@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import IO, Callable
 
 from agents.transport.trust import is_member
-from agents.zenoh_arch import LAUNCHER_TOKEN_ENV
+from agents.zenoh_arch import LAUNCHER_TOKEN_ENV, control_delay
 from robot_bridge.processes import ESCALATION, spawn, stop_processes
 
 log = logging.getLogger("faultmas.agents")
@@ -143,10 +143,8 @@ class Launcher:
             code = message.get("code", 0)
             if isinstance(code, int) and not isinstance(code, bool) and code and not self.exit_code:
                 self.exit_code = code   # .stopMAS(_, Code): the run exits with Code (the first one wins)
-            delay = message.get("delay", 0.0)
-            if isinstance(delay, (int, float)) and not isinstance(delay, bool) and delay > 0:
-                # .stopMAS(D): every agent has D ms (+jag_shutting_down) before its process stops by itself
-                self.stop_delay = max(self.stop_delay, min(float(delay), MAX_STOP_DELAY))
+            # .stopMAS(D): every agent has D ms (+jag_shutting_down) before its process stops by itself
+            self.stop_delay = max(self.stop_delay, min(control_delay(message), MAX_STOP_DELAY))
             self.stop_requested.set()
         else:
             self.hub.report_control_refused(message, "not_a_member")

@@ -306,9 +306,7 @@ class TransportBridge:
         if self.members is not None and not (isinstance(by, str) and self.is_member(by)):
             self.transport.report_control_refused(message, "not_a_member")
             return
-        delay = message.get("delay", 0.0)
-        delay = float(delay) if isinstance(delay, (int, float)) and not isinstance(delay, bool) and delay > 0 else 0.0
-        agent.post_feedback(partial(self.runtime.kill_agent, name, delay))
+        agent.post_feedback(partial(self.runtime.kill_agent, name, control_delay(message)))
 
     def stop_mas(self, by: str, delay: float = 0.0, exit_code: int = 0) -> None:
         """``.stopMAS``: every process of the MAS (this one too) stops after ``delay`` seconds; the
@@ -386,8 +384,7 @@ class TransportBridge:
                     and not self._from_launcher(message):
                 self.transport.report_control_refused(message, "not_a_member")
                 return
-            delay = message.get("delay", 0.0)
-            self.runtime.stop(float(delay) if isinstance(delay, (int, float)) else 0.0)
+            self.runtime.stop(control_delay(message))
 
     @staticmethod
     def _from_launcher(message: dict) -> bool:
@@ -451,6 +448,13 @@ class TransportBridge:
                 return "timeout"
             if runtime.wait_for_work(0.5 if remaining is None else min(remaining, 0.5)) and self.published_idle:
                 self.publish_status(busy=True)
+
+
+def control_delay(message: dict) -> float:
+    """The seconds a ``stop`` or ``kill`` control message gives (``.stopMAS(D)``, ``.kill_agent(N, D)``); 0 for a
+    missing field or one that is no positive number (a control message comes from another process)."""
+    delay = message.get("delay", 0.0)
+    return float(delay) if isinstance(delay, (int, float)) and not isinstance(delay, bool) and delay > 0 else 0.0
 
 
 def _after_mail(agent: Agent, action: Callable[[], None]) -> Callable[[], None]:
