@@ -30,6 +30,7 @@ from agents.directory import PROVIDER_NOTICE, NetworkDirectory, notice_service
 from agents.transport.base import Transport
 from agents.transport.envelope import BadMessage, Envelope, make_envelope
 from agents.transport.keys import check_name
+from agents.transport.name_claims import CLAIM_TIMEOUT, NameUndecided
 from agents.transport.trust import CODE_PERFORMATIVES, TrustPolicy, is_member
 from agentspeak.agent import Agent
 from agentspeak.beliefs import SOURCE_PERCEPT
@@ -184,6 +185,8 @@ class TransportBridge:
         once it is on the network or off it (the inspector serves its mind)."""
         self._attached = False
         self._collected_at = time.monotonic()
+        self.claim_timeout = CLAIM_TIMEOUT
+        """Seconds a ``.create_agent`` may wait for the other processes to agree that its name is free."""
 
     # -- set-up --------------------------------------------------------------------------------
     def attach(self) -> "TransportBridge":
@@ -234,6 +237,16 @@ class TransportBridge:
                 f"own name its messages would be refused by every receiver as forged. Make it an agent of the "
                 f"project (declared with its key=, started with the MAS), or run a project without key= options"))
 
+    def claim(self, name: str, creator: str) -> bool:
+        """The name is this process's once no other process of the MAS makes an agent of that name at the same
+        moment (``agents.transport.name_claims``); False: another one does (the creator takes the next name)."""
+        try:
+            return self.transport.claim_name(name, creator, self.claim_timeout)
+        except NameUndecided as exc:
+            raise IAError("ia_failed", (
+                f"cannot create agent {name}: the MAS's other processes could not agree that the name is free "
+                f"within {self.claim_timeout:g} s: {exc}; nothing was created")) from None
+
     def joined(self, agent: Agent, creator: str) -> None:
         """On the network like a launched agent: its inbox, its presence, announced as made by ``creator`` (a
         member for the other processes as long as its creator is one)."""
@@ -242,13 +255,15 @@ class TransportBridge:
             self.on_membership(agent.name, agent)
 
     def left(self, name: str) -> None:
-        """Killed: its last counters published (a launcher's message count stays whole), then off the network
-        (its presence and inbox go; its registrations went with ``Directory.forget``)."""
+        """Killed (or never made, its name claimed): its last counters published (a launcher's message count stays
+        whole), then off the network (its presence, inbox and claim go; its registrations went with
+        ``Directory.forget``)."""
         if name in self.transport.local_agents():
             self.transport.publish_status(name, busy=False)
             self.transport.unregister(name)
             if self.on_membership is not None:
                 self.on_membership(name, None)
+        self.transport.release_name(name)   # its claim, if it was made here (its name is free in the MAS again)
 
     # -- names and trust -----------------------------------------------------------------------
     def all_names(self) -> list[str]:

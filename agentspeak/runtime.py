@@ -103,6 +103,10 @@ class Membership(Protocol):
     def admit(self, name: str) -> None:
         """Raise ``IAError`` (the creating formula fails, saying why) if no agent may be created as ``name``."""
 
+    def claim(self, name: str, creator: str) -> bool:
+        """Is ``name``, free as far as this process sees, now this process's, agreed with the MAS's other processes
+        (False: another process makes an agent of that name; ``IAError`` if that cannot be decided in time)?"""
+
     def joined(self, agent: Agent, creator: str) -> None:
         """``agent``, made by ``creator`` of this process, is now an agent of this runtime."""
 
@@ -188,7 +192,6 @@ class LocalRuntime:
         if path is None:
             raise IAError("ia_failed", f".create_agent: cannot find {source!r} (looked in ., "
                                        f"{', '.join(self.source_dirs)})")
-        unique = self._new_name(name)
         try:
             with open(path, encoding="utf-8") as f:
                 text = f.read()
@@ -197,10 +200,13 @@ class LocalRuntime:
             raise IAError("ia_failed", f".create_agent: cannot read {path}: {exc.strerror or exc}") from None
         except AslSyntaxError as exc:
             log.warning("%s", exc)
-            raise IAError("ia_failed", f".create_agent({unique}): {exc}") from None
+            raise IAError("ia_failed", f".create_agent({name}): {exc}") from None
+        # named once the program is read: a name claimed from the MAS's other processes is used at once
+        unique = self._new_name(name, creator)
         if self.trusted_senders is not None:
             self.trusted_senders.add(unique)
-        self._joined(self.add_agent(unique, source_file=path, program=program), creator)
+        self._joined(self._add_named(unique, partial(self.add_agent, unique, source_file=path, program=program)),
+                     creator)
         # the creator's turn ends after this cycle, so the new agent starts before the creator goes on
         # (Jason starts it on a thread of its own at once; a creator that loops must not starve it)
         self._yield_turn = True
@@ -211,31 +217,49 @@ class LocalRuntime:
         """A new agent with a copy of ``original``'s beliefs, rules and plans (Jason's ``.clone``): no
         events, goals or intentions, so it waits for messages. A name in use gets a number appended."""
         import copy
-        unique = self._new_name(name)
-        clone = Agent(unique, arch=LocalArch(self), source_file=original.source_file)
-        for plan in original.plans.plans:
-            clone.plans.add(copy.copy(plan))  # a plan is not changed once in a library: a shallow copy
-        for rule in original.bb.rules():
-            clone.bb.add_rule(rule)
-        for lit in original.bb.literals():
-            clone.bb.add(lit, at_end=True)  # as they are, in order; no +b events (Jason clones the BB)
+        unique = self._new_name(name, original.name)
+
+        def make_clone() -> Agent:
+            clone = Agent(unique, arch=LocalArch(self), source_file=original.source_file)
+            for plan in original.plans.plans:
+                clone.plans.add(copy.copy(plan))  # a plan is not changed once in a library: a shallow copy
+            for rule in original.bb.rules():
+                clone.bb.add_rule(rule)
+            for lit in original.bb.literals():
+                clone.bb.add(lit, at_end=True)  # as they are, in order; no +b events (Jason clones the BB)
+            self.agents[unique] = clone
+            self.wake(clone)
+            return clone
+
         if self.trusted_senders is not None:
             self.trusted_senders.add(unique)
-        self.agents[unique] = clone
-        self.wake(clone)
-        self._joined(clone, original.name)
+        self._joined(self._add_named(unique, make_clone), original.name)
         return unique
 
-    def _new_name(self, name: str) -> str:
+    def _new_name(self, name: str, creator: str | None = None) -> str:
         """``name``, or ``name_1``, ``name_2``... if it is taken (Jason's ``getNewAgentName``), admitted by the
-        ``membership`` (``IAError`` otherwise)."""
+        ``membership`` (``IAError`` otherwise) and claimed from the MAS's other processes: a name another process
+        makes at the same moment counts as taken (``agents.transport.name_claims``)."""
+        membership = self.membership
         unique, n = name, 0
-        while unique in self.agents or (self.membership is not None and self.membership.taken(unique)):
+        while True:
+            if unique not in self.agents and (membership is None or not membership.taken(unique)):
+                if membership is None:
+                    return unique
+                membership.admit(unique)
+                if membership.claim(unique, creator or name):
+                    return unique
             n += 1
             unique = f"{name}_{n}"
-        if self.membership is not None:
-            self.membership.admit(unique)
-        return unique
+
+    def _add_named(self, name: str, add: Callable[[], Agent]) -> Agent:
+        """``add()`` the agent named ``name``; if it fails, the name claimed for it goes back to the MAS."""
+        try:
+            return add()
+        except BaseException:
+            if self.membership is not None:
+                self.membership.left(name)
+            raise
 
     def _joined(self, agent: Agent, creator: str | None) -> None:
         if self.membership is not None:

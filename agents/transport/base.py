@@ -20,6 +20,7 @@ from agents.transport.envelope import (BATCH_BYTES, BATCH_SEPARATOR, DEFAULT_MAX
                                        Envelope, decode, split_batch)
 from agents.transport.drop_log import DropLog
 from agents.transport.keys import check_name
+from agents.transport.name_claims import CLAIM_TIMEOUT, Claimant, NameClaims
 from agents.transport.outbox import Outbox
 from agents.transport.registrations import QUERY_TIMEOUT
 from agents.transport.status import AgentStatus
@@ -182,6 +183,7 @@ class Transport(ABC):
         self._agents: dict[str, OnEnvelope] = {}
         self._delivered: dict[str, OnDelivered] = {}
         self._creators: dict[str, str] = {}  # agent made at run time (here or elsewhere) -> who made it
+        self._name_claims = NameClaims()     # names this process claims for agents made at run time
         self._outbox = Outbox()
         self._batching: int | None = None  # the thread whose sends to other processes are batched
         self._presence = Presence()
@@ -244,6 +246,7 @@ class Transport(ABC):
         if self._agents.pop(agent, None) is not None:
             self._delivered.pop(agent, None)
             self._detach(agent)
+        self.release_name(agent)
 
     def local_agents(self) -> tuple[str, ...]:
         return tuple(self._agents)
@@ -254,6 +257,18 @@ class Transport(ABC):
         is still from a member. A claim in the default profile, as every name is (``trust.is_member``); in the
         secure profile none (a token proves nothing there, and no agent is made at run time)."""
         return self._creators.get(agent) if self.identity is None else None
+
+    def claim_name(self, name: str, creator: str, timeout: float = CLAIM_TIMEOUT) -> bool:
+        """Claim ``name`` for an agent ``creator`` makes at run time, deciding with the other processes of the MAS
+        (``name_claims``): True when this process may register an agent under it (the claim is held until that agent
+        unregisters, or ``release_name``), False when another process has it or gets it (the creator takes the next
+        name). ``NameUndecided`` when not every process answered within ``timeout`` seconds."""
+        check_name(name)
+        return self._name_claims.claim(name, check_name(creator), self._ask_claims, timeout)
+
+    def release_name(self, name: str) -> None:
+        """Withdraw this process's claim on ``name`` (the agent it was for is gone, or was never made)."""
+        self._name_claims.release(name)
 
     def _created(self, agent: str, creator: str) -> None:
         """For concrete transports: another process announced an agent made at run time by ``creator``."""
@@ -525,6 +540,11 @@ class Transport(ABC):
     def _put(self, receiver: str, envelope: Envelope, encoded: "_Encoded") -> bool:
         """Send to a receiver outside this transport; False when nobody listens for it.
         ``encoded()`` gives the wire bytes, encoded once per envelope."""
+
+    @abstractmethod
+    def _ask_claims(self, name: str, timeout: float) -> dict[Claimant, bool]:
+        """The claims the processes of the MAS hold on ``name`` ({claimant: won}), read from each process's
+        ``NameClaims`` after every one has answered (``NameUndecided`` when not all did within ``timeout``)."""
 
     @abstractmethod
     def _publish_control(self, message: dict[str, Any]) -> None: ...

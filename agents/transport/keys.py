@@ -45,6 +45,16 @@ def created_pattern(mas: str) -> str:
     return f"{mas_prefix(mas)}/created/*/*"
 
 
+def claim_key(mas: str, name: str) -> str:
+    """The queryable that answers with the claims a process holds on ``name``, a name being made at run time or
+    made (``name_claims``: how two processes that make one name at once do not both get it)."""
+    return f"{mas_prefix(mas)}/claim/{check_name(name)}"
+
+
+def claim_pattern(mas: str) -> str:
+    return f"{mas_prefix(mas)}/claim/*"
+
+
 def control_key(mas: str) -> str:
     """MAS-wide commands (``stop``), seen by every process of the MAS."""
     return f"{mas_prefix(mas)}/control"

@@ -13,6 +13,7 @@ from typing import Any, Callable
 
 from agents.transport.base import Transport
 from agents.transport.envelope import DEFAULT_MAX_SIZE, Envelope
+from agents.transport.name_claims import Claimant
 from agents.transport.status import AgentStatus
 
 
@@ -83,6 +84,11 @@ class LocalTransport(Transport):
         else:
             owner._deliver(receiver, envelope)
         return True
+
+    def _ask_claims(self, name: str, timeout: float) -> dict[Claimant, bool]:
+        """Every transport on the bus answers at once, from its own claims (as a process does over Zenoh)."""
+        return {claimant: won for peer in self.bus.peers(self.mas)
+                for held, claimant, won in peer._name_claims.held() if held == name}
 
     def put_raw(self, receiver: str, payload: bytes) -> None:
         """Hand arbitrary bytes to ``receiver``'s inbox checks, as if they came from the network."""

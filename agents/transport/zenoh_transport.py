@@ -34,6 +34,7 @@ from agents.transport.config import ZenohOptions, build_config, listen_endpoints
 from agents.transport.envelope import DEFAULT_MAX_SIZE, BadMessage, Envelope, is_valid_name
 from agents.transport.identity import claimed_agent
 from agents.transport.inbox_barrier import InboxBarriers
+from agents.transport.name_claims import Claimant, NameUndecided, decode_claim, encode_claim
 from agents.transport.proved_presence import HEARTBEAT, LEASE, ProvedPresence
 from agents.transport.registrations import QUERY_TIMEOUT, encode_services, new_nonce, open_services
 from agents.transport.status import AgentStatus
@@ -103,6 +104,7 @@ class ZenohTransport(Transport):
             self.session.declare_subscriber(keys.status_pattern(self.mas), self._on_status),
             self.session.declare_queryable(keys.status_pattern(self.mas), self._on_status_query),
             self.session.declare_queryable(keys.df_pattern(self.mas), self._on_df_query),
+            self.session.declare_queryable(keys.claim_pattern(self.mas), self._on_claim_query),
             liveliness.declare_subscriber(keys.subscribes_pattern(self.mas), self._on_subscribes, history=True),
             liveliness.declare_subscriber(keys.created_pattern(self.mas),
                                           zenoh.handlers.Callback(self._on_created, indirect=False), history=True),
@@ -391,6 +393,37 @@ class ZenohTransport(Transport):
             if asked.intersects(zenoh.KeyExpr(key)):
                 status = self._statuses.get(agent) or self.status_of(agent, busy=False)
                 query.reply(key, self._sealed_status(status))
+
+    # -- names made at run time (name_claims) -----------------------------------------------------
+    def _on_claim_query(self, query: Any) -> None:
+        """Answer with the claims this process holds on the name asked about (pending or won)."""
+        import zenoh
+
+        asked = zenoh.KeyExpr(str(query.key_expr))
+        for name, claimant, won in self._name_claims.held():
+            key = keys.claim_key(self.mas, name)
+            if asked.intersects(zenoh.KeyExpr(key)):
+                query.reply(key, encode_claim(name, claimant, won))
+
+    def _ask_claims(self, name: str, timeout: float) -> dict[Claimant, bool]:
+        """Ask every process of the MAS (this one too); a process that does not answer in time leaves the claim
+        undecided (one that is gone is dropped by Zenoh: its link closes, or its lease ends)."""
+        import zenoh
+
+        claims: dict[Claimant, bool] = {}
+        # every reply, unconsolidated: the processes all answer on the same key
+        for reply in self.session.get(keys.claim_key(self.mas, name), timeout=timeout,
+                                      consolidation=zenoh.ConsolidationMode.NONE):
+            if reply.ok is None:
+                raise NameUndecided(f"a process of the MAS did not answer within {timeout:.1f} s "
+                                    f"({reply.err.payload.to_string()[:60]})")
+            try:
+                claimant, won = decode_claim(reply.ok.payload.to_bytes(), name)
+            except BadMessage as bad:
+                self._drop(bad.reason, str(reply.ok.key_expr), None, bad.detail)
+                continue
+            claims[claimant] = claims.get(claimant, False) or won
+        return claims
 
     # -- directory facilitator --------------------------------------------------------------------
     def _on_df_query(self, query: Any) -> None:

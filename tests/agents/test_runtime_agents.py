@@ -156,3 +156,52 @@ def test_kill_agent_and_stop_mas_with_a_deadline_warn_agents_of_other_processes(
     assert run.finish(90) == 0, run.err[-20:]
     assert sorted(run.out) == ["[bystander] shutting(300)", "[killer] [bystander,killer]",
                                "[victim] closing(300)"], (run.out, run.err[-20:])
+
+
+
+# Two agents in two processes make an agent named after the variable `Kid` (so `kid`, else the next free `kid_N`) at
+# the same moment, 20 rounds: each round's creators must get two different names, each name must be one agent (one
+# `up` line), and both processes' `.all_names` must agree at the end. A round starts when an agent has told the other
+# it is at that round and heard the same from it (a barrier of two messages, a millisecond or so apart).
+ROUNDS = 20
+RACER = r'''
+!round(1).
++!round(N) : N > %d <- +finishing; .send(PEER, tell, done); !finish.
++!round(N) <- +mine(N); .send(PEER, tell, at(N)); !maybe(N).
++at(N)[source(_)] : mine(N) <- !maybe(N).
+@maybe[atomic] +!maybe(N) : mine(N) & at(N)[source(_)] & not made(N) <- +made(N); !make(N).
++!maybe(N).
++!make(N) <- .create_agent(Kid, "kid.asl"); .print(made(N, Kid)); !round(N + 1).
++done[source(_)] : finishing <- !finish.
+@finish[atomic] +!finish : finishing & done[source(_)] & not finished <-
+    +finished; .all_names(L); .print(names(L)); .send(PEER, tell, printed); !stop.
++!finish.
++printed[source(_)] : finished <- !stop.
+@stop[atomic] +!stop : .my_name(racer1) & finished & printed[source(_)] & not stopping <- +stopping; .stopMAS.
++!stop.
+''' % ROUNDS
+RACE = {"race.mas2j": "MAS race { agents: racer1; racer2; }\n", "kid.asl": "!up.\n+!up <- .print(up).\n",
+        "racer1.asl": RACER.replace("PEER", "racer2"), "racer2.asl": RACER.replace("PEER", "racer1")}
+
+
+def test_two_processes_making_one_name_at_once_get_two_names(tmp_path):
+    """Issue 22: a name made at run time is unique across processes even when two make it at the same moment (the
+    loser gets the next free name, as in Jason); before, both processes got it in about one round of two."""
+    write_files(tmp_path, RACE)
+    run = mas_run(tmp_path / "race.mas2j", "--processes", "--timeout", "60", cwd=tmp_path)
+    assert run.finish(90) == 0, run.err[-20:]
+    made: dict[int, list[str]] = {}
+    for line in run.out:
+        if "] made(" in line:
+            round_, name = line.split("made(", 1)[1].rstrip(")").split(",")
+            made.setdefault(int(round_), []).append(name.strip('"'))
+    assert sorted(made) == list(range(1, ROUNDS + 1)) and all(len(names) == 2 for names in made.values()), run.out
+    clashes = {round_: names for round_, names in made.items() if names[0] == names[1]}
+    ups = [line.split("]", 1)[0][1:] for line in run.out if line.endswith("] up")]
+    twice = sorted({name for name in ups if ups.count(name) > 1})
+    assert not clashes and not twice, f"{len(clashes)} of {ROUNDS} rounds gave one name twice: {clashes}; " \
+                                      f"agents that ran twice: {twice}"
+    assert sorted(ups) == sorted(name for pair in made.values() for name in pair)
+    names = [line.split("names(", 1)[1] for line in run.out if "] names(" in line]
+    expected = f"[{','.join(sorted(['racer1', 'racer2', *ups]))}])"
+    assert names == [expected, expected], (names, expected)
