@@ -93,6 +93,11 @@ def _shutting_down(agent: Agent, delay: float) -> None:
     agent.post_external(Trigger(ADD, BEL, Literal("jag_shutting_down", (round(delay * 1000),))), force=True)
 
 
+MAX_CLAIMS_LOST = 100
+"""Names one ``.create_agent`` may lose to other processes that make them at the same moment before it fails: each
+lost name is another process's, so this bounds only a process that claims every name (a bug, or an outsider)."""
+
+
 class Membership(Protocol):
     """What a runtime whose MAS extends beyond this process (``agents.zenoh_arch``) is told of agents that come
     and go at run time (``.create_agent``, ``.clone``, ``.kill_agent``), so that they come and go everywhere."""
@@ -241,7 +246,7 @@ class LocalRuntime:
         ``membership`` (``IAError`` otherwise) and claimed from the MAS's other processes: a name another process
         makes at the same moment counts as taken (``agents.transport.name_claims``)."""
         membership = self.membership
-        unique, n = name, 0
+        unique, n, lost = name, 0, 0
         while True:
             if unique not in self.agents and (membership is None or not membership.taken(unique)):
                 if membership is None:
@@ -249,6 +254,11 @@ class LocalRuntime:
                 membership.admit(unique)
                 if membership.claim(unique, creator or name):
                     return unique
+                lost += 1
+                if lost >= MAX_CLAIMS_LOST:
+                    from agentspeak.stdlib.registry import IAError
+                    raise IAError("ia_failed", f"cannot create agent {name}: {lost} names in a row ({name} to {unique}) "
+                                               f"were claimed by other processes of the MAS at the same moment")
             n += 1
             unique = f"{name}_{n}"
 

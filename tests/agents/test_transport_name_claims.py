@@ -12,7 +12,7 @@ import pytest
 
 from agents.transport import LocalBus, LocalTransport, ZenohOptions, ZenohTransport
 from agents.transport import keys
-from agents.transport.name_claims import Claimant, NameClaims, NameUndecided
+from agents.transport.name_claims import Claimant, NameClaims, NameUndecided, encode_claim
 from agents.zenoh_arch import TransportBridge
 from agentspeak.runtime import LocalRuntime
 from agentspeak.stdlib.registry import IAError
@@ -185,3 +185,19 @@ def test_a_made_agent_holds_its_name_in_the_other_processes_until_it_is_killed(t
         bridge.detach()
     for transport in transports:
         transport.close()
+
+
+def test_a_process_that_claims_every_name_makes_create_agent_fail_not_loop(two_processes, tmp_path):
+    """Every name lost is another process's, so a creator moves on; one that claims them all (a bug, or an outsider
+    in the default profile, where a name is a claim) makes ``.create_agent`` fail after ``MAX_CLAIMS_LOST`` names."""
+    one, _ = two_processes
+    greedy = one.session.declare_queryable(keys.claim_pattern(one.mas), lambda query: query.reply(
+        str(query.key_expr), encode_claim(keys.last_chunk(str(query.key_expr)), Claimant("mallory", "x"), True)))
+    try:
+        runtime = LocalRuntime()
+        TransportBridge(runtime, one).attach()
+        with pytest.raises(IAError, match=r"cannot create agent kid: 100 names in a row \(kid to kid_99\) were claimed"):
+            runtime.create_agent("kid", str(write_files(tmp_path, {"kid.asl": ""}) / "kid.asl"))
+        assert one._name_claims.held() == [] and not runtime.agents
+    finally:
+        greedy.undeclare()
