@@ -16,6 +16,10 @@ Last, where a tell's CPU goes (the smallest size), by stage, the same two progra
 network (``_stages``): the sending agent (loop, ``.send``, envelope encoding, batching); on the sink's
 side the envelope's decoding and checks, the content's reading, and the reasoning (belief, event,
 plan); beside them, the CPU a tell may cost on each side for the 30% target at the raw rate measured.
+
+And what ``.create_agent`` of a fresh name costs (``_creates``): in one process without a network, and in a MAS over
+Zenoh with another process, where the name is first claimed from every process (issue 22: two processes making one
+name at once must not both get it), with the claim alone beside it.
 """
 from __future__ import annotations
 
@@ -88,8 +92,12 @@ def run(quick: bool = False) -> str:
                  f"{percepts['secure_agent']:.1f} µs (+{percepts['secure_agent'] - percepts['plain_agent']:.1f}): "
                  f"at most {1e6 / percepts['secure_agent']:,.0f} snapshots/s per core at a bridge "
                  f"({1e6 / percepts['plain_agent']:,.0f} unsigned); the simulator sends <= 50/s per robot")
+    creates = _creates(100 if quick else 400)
+    lines.append("`.create_agent` of a fresh name, median / p95: "
+                 + "; ".join(f"{where} {_ms(times, 0.5):.2f} / {_ms(times, 0.95):.2f} ms" for where, times in creates.items()))
     lines.append("raw round trip: 200 B ping/pong; ratio: agents / raw for rates, raw / agents for latencies")
-    lines.append("targets: tell >= 30% of raw; askOne median < 1,000 µs")
+    lines.append("targets: tell >= 30% of raw; askOne median < 1,000 µs; `.create_agent` in one process: no claim "
+                 "(no network); its claim over Zenoh: median < 2 ms")
     return "\n".join(lines)
 
 
@@ -201,6 +209,60 @@ def _agents(count: int, trips: int) -> tuple[dict[int, float], list[float], dict
             child.kill()
             child.wait()
     return rates, rtt, cpu
+
+
+KID = "!up.\n+!up <- .print(up).\n"
+
+
+def _creates(count: int) -> dict[str, list[float]]:
+    """Seconds per ``.create_agent`` of a fresh name (``LocalRuntime.create_agent``, called as the internal action
+    does): in one process without a network, and in a process of a MAS over Zenoh with one other process (a
+    ``faultmas agent run`` child), where the name is claimed first (``agents.transport.name_claims``); and that
+    claim alone (a round trip to every process of the MAS)."""
+    from agents.transport import ZenohOptions, ZenohTransport, loopback_endpoint
+
+    folder = Path(tempfile.mkdtemp(prefix="bench_creates_"))
+    (folder / "kid.asl").write_text(KID)
+    (folder / "sink.asl").write_text(SINK)
+
+    def timed(make: Callable[[int], object]) -> list[float]:
+        times = []
+        for i in range(count):
+            started = time.perf_counter()
+            make(i)
+            times.append(time.perf_counter() - started)
+        return times
+
+    kid = str(folder / "kid.asl")
+    alone = LocalRuntime()
+    results = {"one process": timed(lambda i: alone.create_agent(f"kid{i}", kid))}
+    mas = f"creates{uuid.uuid4().hex[:6]}"
+    runtime = LocalRuntime()
+    transport = ZenohTransport(mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
+    bridge = TransportBridge(runtime, transport, declared=("sink",)).attach()
+    child = subprocess.Popen([sys.executable, "-m", "agents", "agent", "run", str(folder / "sink.asl"),
+                              "--name", "sink", "--mas", mas, "--connect", transport.endpoints[0]],
+                             cwd=REPO, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                             env=dict(os.environ, PYTHONUNBUFFERED="1"))
+    try:
+        if not transport.wait_for_agents(["sink"], 60):
+            raise RuntimeError("agent sink did not come up")
+        results["over Zenoh, 2 processes"] = timed(lambda i: runtime.create_agent(f"kid{i}", kid, creator="bench"))
+        results["its claim alone"] = timed(lambda i: transport.claim_name(f"free{i}", "bench"))
+    finally:
+        transport.publish_control("stop", by="bench")
+        bridge.detach()
+        transport.close()
+        try:
+            child.wait(10)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            child.wait()
+    return results
+
+
+def _ms(times: list[float], quantile: float) -> float:
+    return sorted(times)[min(len(times) - 1, int(quantile * len(times)))] * 1e3
 
 
 class _CapturingTransport(LocalTransport):
