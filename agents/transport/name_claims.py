@@ -3,7 +3,7 @@
 Jason's ``LocalRuntimeServices.createAgent`` holds a lock around ``getNewAgentName`` and adding the agent, so of two
 agents that make ``bob`` at once one gets ``bob``, the other ``bob_1``. The processes of a MAS share no lock, and
 seeing another process's agent takes the milliseconds its liveliness token takes to travel: two processes that made
-one name within them both got it (9 rounds in 20 in ``tests/agents/test_runtime_agents.py``), and the name's
+one name within them both got it (9 to 11 rounds of 20 in ``tests/agents/test_runtime_agents.py``), and the name's
 messages reached both agents. A claim decides instead:
 
 1. A process records its claim on the name (pending), and only then asks every process of the MAS which claims they
@@ -134,7 +134,8 @@ class NameClaims:
         while True:
             remaining = deadline - time.monotonic()
             if remaining <= 0:
-                raise NameUndecided(f"claims on {name!r} still pending after the wait: {sorted(waiting_for or ())}")
+                pending = ", ".join(f"{c.creator}'s (process {c.process})" for c in sorted(waiting_for or ()))
+                raise NameUndecided(f"the claims on {name} of {pending or 'nobody'} still undecided")
             others = {claimant: won for claimant, won in ask(name, remaining).items() if claimant != mine}
             if any(others.values()):
                 return False   # an agent of that name lives, or a claimant that did not see ours was first
