@@ -87,8 +87,9 @@ _SOURCE_SELF_ONLY = (SOURCE_SELF,)
 
 
 def fresh_goal(lit: Term, b: dict) -> Term:
-    """The literal of a goal event (``!g``, ``?g`` with plans, ``!!g``, an initial goal): apply bindings, rename unbound variables apart (binding the caller's to the new ones),
-    and add ``source(self)``: the literal of a goal event (Jason's prepareBodyForEvent)."""
+    """The literal of a goal event (``!g``, ``?g`` with plans, ``!!g``, ``.at``, an initial goal; Jason's
+    prepareBodyForEvent): apply bindings, rename unbound variables apart (binding the caller's to the new ones),
+    and add ``source(self)``."""
     if type(lit) is Literal and lit.annots is None and lit.annot_tail is None:
         # the usual goal: arguments that resolve to numbers, strings or atoms; built once
         args = []
