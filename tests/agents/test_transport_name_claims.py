@@ -1,8 +1,9 @@
 """Claims on names made at run time (``agents.transport.name_claims``): of processes that claim one name at the same
 moment exactly one gets it, a won claim holds the name until it is released, a process that does not answer makes
 a claim fail in bounded time with a reason, and an answer that cannot be read is dropped with a log line. Real Zenoh
-sessions on loopback (two in this process, and the in-memory bus for the runtime's side); the two-process run is
-``tests/agents/test_runtime_agents.py``."""
+sessions on loopback (two in this process), the in-memory bus (the runtime's side), and the deciding rule alone with
+its asks ordered step by step (the cases a race hits only now and then); the two-process run of `faultmas mas run`
+is in ``tests/agents/test_runtime_agents.py``."""
 from __future__ import annotations
 
 import threading
