@@ -6,6 +6,8 @@ its asks ordered step by step (the cases a race hits only now and then); the two
 is in ``tests/agents/test_runtime_agents.py``."""
 from __future__ import annotations
 
+import os
+import signal
 import threading
 import time
 
@@ -18,7 +20,7 @@ from agents.zenoh_arch import TransportBridge
 from agentspeak.runtime import LocalRuntime
 from agentspeak.stdlib.registry import IAError
 from tests.agents.distributed_fixtures import write_files
-from tests.agents.transport_fixtures import unique_mas
+from tests.agents.transport_fixtures import probe, unique_mas
 
 
 @pytest.fixture
@@ -202,3 +204,21 @@ def test_a_process_that_claims_every_name_makes_create_agent_fail_not_loop(two_p
         assert one._name_claims.held() == [] and not runtime.agents
     finally:
         greedy.undeclare()
+
+
+def test_a_claim_is_decided_without_a_frozen_process_once_its_link_lease_ends():
+    """A process frozen (SIGSTOP: its link stays open) cannot answer; Zenoh drops it when the link lease (1 s) ends and
+    the claim is decided among those left, well before the claim's own timeout: the creator waits, never hangs."""
+    mas = unique_mas("claim")
+    with ZenohTransport(mas) as transport:
+        child = probe("echo", mas, "bob", transport.endpoints)
+        try:
+            assert transport.wait_for_agents(["bob"], timeout=30)
+            assert transport.claim_name("before", "a")   # the child answers while it runs
+            os.kill(child.pid, signal.SIGSTOP)
+            began = time.monotonic()
+            assert transport.claim_name("kid", "a", timeout=10.0)
+            assert time.monotonic() - began < 6.0
+        finally:
+            os.kill(child.pid, signal.SIGKILL)
+            child.stop()
