@@ -198,6 +198,23 @@ def test_agent_joins_a_mas_running_in_one_process(tmp_path):
         host.stop()
 
 
+def test_an_agent_waiting_for_its_peers_stops_when_told(tmp_path):
+    """``agent run --wait-for-peers``: a stop (a signal here; ``.stopMAS``, the launcher's) ends the wait at once.
+    A peer that ended by ``.stopMAS`` before this one became reachable never will be: ``mas run --processes``
+    then had to SIGKILL such an agent after 6 s of stop, SIGINT and SIGTERM (one run in two of a short MAS)."""
+    write_files(tmp_path, {"b.asl": "", "m.mas2j": "MAS m { agents: a; b; }\n"})
+    endpoint, mas = loopback_endpoint(), unique_mas("peers")
+    with ZenohTransport(mas, ZenohOptions(listen=(endpoint,))) as probe:
+        b = agent_run(tmp_path, "b", mas, endpoint, "--project", str(tmp_path / "m.mas2j"), "--wait-for-peers", "120")
+        try:
+            assert probe.wait_for_agents(["b"], 60), b.err      # b is up, waiting for a (never there)
+            b.process.send_signal(signal.SIGINT)
+            assert b.finish(timeout=30) == 0, b.err               # not after the 120 s wait (nor killed)
+            assert not any("still missing" in line for line in b.err), b.err
+        finally:
+            b.stop()
+
+
 def test_processes_from_a_non_editable_install(tmp_path):
     """``pip install .`` (not editable) of this repository: the agent processes find the installed package
     and the user's sources, from the user's folder."""
