@@ -1,4 +1,4 @@
-"""The ROS domain id of a test module, so the ROS tests of one run never hear another run's nodes.
+"""The ROS domain id of a test module, so that two ROS test modules running at the same time never share one.
 
 One run: ``1 + (pid + offset) % 100``, a different ``offset`` per module. Under pytest-xdist (``make test``
 runs two workers) the modules of both workers run at the same time, and two workers' pids are close, so the
@@ -12,7 +12,8 @@ DOMAINS = 100
 
 
 def ros_domain(offset: int) -> int:
-    """This test process's domain for a module that picked ``offset`` (any int; distinct per module)."""
+    """This test process's domain for a module that picked ``offset``: distinct per module that may run while
+    another's nodes are up, modulo the slice's width (50 with two workers: 0 and 50 would be the same)."""
     worker = os.environ.get("PYTEST_XDIST_WORKER", "")           # "gw0", "gw1"... set by pytest-xdist
     workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
     index = int(worker[2:]) if worker.startswith("gw") and worker[2:].isdigit() else 0
