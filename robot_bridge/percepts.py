@@ -18,6 +18,9 @@ percept                             meaning
 ``bumper(Side)``                    a front bumper is pressed; Side is ``left``, ``centre`` or ``right``
 ``over_current(Wheel)``             a wheel motor is overloaded (pushing a blocked wheel); ``left``/``right``
 ``camera_ok``                       the camera delivers frames
+``camera_failed(Part)``             the camera's frames arrive but ``Part`` of its pipeline (``detector``) has
+                                    failed on every frame for a while (a second in the simulator): no
+                                    ``robot_seen`` until it works again; replaces ``camera_ok`` meanwhile
 ``robot_seen(Name, AngleDeg,        the camera sees robot ``Name`` (the seed paper's
 DepthM, YawDeg)``                   ``robot(Name,Angle,Depth,Yaw)``): bearing from the optical axis, left
                                     positive (so ``turn(AngleDeg)`` faces it; the paper's formula has the
@@ -50,6 +53,7 @@ VOCABULARY: dict[tuple[str, int], PerceptSpec] = {(s.name, len(s.args)): s for s
     PerceptSpec("bumper", ("Side left|centre|right",), "a front bumper is pressed"),
     PerceptSpec("over_current", ("Wheel left|right",), "a wheel motor is overloaded"),
     PerceptSpec("camera_ok", (), "the camera delivers frames"),
+    PerceptSpec("camera_failed", ("Part",), "a part of the camera's pipeline fails on every frame"),
     PerceptSpec("robot_seen", ("Name", "AngleDeg deg", "DepthM m", "YawDeg deg"),
                 "another robot seen by the camera"),
 )}
@@ -97,6 +101,11 @@ def over_current(wheel: str) -> Percept:
 def camera_ok() -> Percept:
     """``camera_ok``."""
     return Percept("camera_ok")
+
+
+def camera_failed(part: str) -> Percept:
+    """``camera_failed(Part)``: ``part`` (e.g. ``detector``) of the camera's pipeline keeps failing."""
+    return Percept("camera_failed", (str(part),))
 
 
 def robot_seen(name: str, angle_deg: float, depth_m: float, yaw_deg: float) -> Percept:
