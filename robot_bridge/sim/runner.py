@@ -46,6 +46,10 @@ class WorldRunner:
         self._gate = threading.Condition()
         self._pausers = 0
         self._stepping = False
+        self._waiting = False
+        self._owed = False
+        """A pause ended while the thread waited to step: the next pause waits for that step (pausers taking
+        turns back to back would hold the world still for ever)."""
         self.error: BaseException | None = None
         """What ended the thread, if something did (a failure of the world itself, not of a camera listener's:
         those cost a frame, see ``World.subscribe_camera``); the bridges then fail actions with it."""
@@ -86,7 +90,11 @@ class WorldRunner:
         ``cv2.findContours`` is filling, with the GIL released, in the camera detector is one of them: OpenCV
         then fails that frame with ``SystemError: ... bad argument to internal function`` (issue 22, see
         docs/reliability.md, ``tests/hardening/gc_census_race.py``)."""
+        if threading.current_thread() is self._thread:   # asked from within a step (a listener): nothing else steps
+            yield
+            return
         with self._gate:
+            self._gate.wait_for(lambda: not self._owed, timeout=1.0)   # a pause after a pause: one step between
             self._pausers += 1
             while self._stepping:
                 self._gate.wait()
@@ -95,14 +103,19 @@ class WorldRunner:
         finally:
             with self._gate:
                 self._pausers -= 1
+                self._owed = self._pausers == 0 and self._waiting
                 self._gate.notify_all()
 
     def _step(self, world: World) -> None:
         """One step, unless someone holds the world still (``paused``)."""
         with self._gate:
+            self._waiting = True
             while self._pausers and not self._stop.is_set():
                 self._gate.wait(0.05)
+            self._waiting = False
             if self._stop.is_set():
+                self._owed = False
+                self._gate.notify_all()
                 return
             self._stepping = True
         try:
@@ -110,7 +123,8 @@ class WorldRunner:
         finally:
             with self._gate:
                 self._stepping = False
-                if self._pausers:
+                if self._pausers or self._owed:
+                    self._owed = False
                     self._gate.notify_all()
 
     def _run(self) -> None:
