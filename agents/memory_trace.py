@@ -18,6 +18,7 @@ import collections
 import contextlib
 import gc
 import json
+import logging
 import os
 import signal
 import sys
@@ -146,10 +147,14 @@ class MemoryTrace:
         self._thread.join(timeout=60)
 
     def _loop(self) -> None:
-        while True:
+        from robot_bridge.failure_log import FailureLog
+
+        failures = FailureLog(logging.getLogger(__name__), f"memory trace of {self.name}: a snapshot")   # a full
+        while True:                                                            # disk costs snapshots, not the trace
             self._wake.wait(self.every)
             self._wake.clear()
-            self.write()
+            with failures.contained(f"number {self.count}"):
+                self.write()
             if self._stopped.is_set():
                 return
 

@@ -78,7 +78,7 @@ class FailureLog:
                            self.total, earlier, exc_info=exc)
         else:
             self.log.error("%s failed %d times in a row%s%s: %r; carrying on (%d failures in all%s)", self.what,
-                           consecutive, where, " (reported failed)" if became_persistent else "", exc,
+                           consecutive, where, " (persistent now)" if became_persistent else "", exc,
                            self.total, earlier)
         return consecutive
 

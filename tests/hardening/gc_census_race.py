@@ -94,6 +94,13 @@ def run_world(mode: str, seconds: float) -> dict:
     world = _world()
     bridge = SimBridge("watcher", world=world, camera=True)
     bridge.setup()
+    detect, detections = bridge._detect, [0]
+
+    def counted(rgb, depth, camera):
+        detections[0] += 1
+        return detect(rgb, depth, camera)
+
+    bridge._detect = counted       # the real detector, its calls counted
     bridge.act(Action("rotate", (30.0,)))
     runner = bridge._runner
     listener = world._robots["watcher"].camera_listeners[0]
@@ -112,7 +119,8 @@ def run_world(mode: str, seconds: float) -> dict:
     bridge.shutdown()
     error = listener.failures.last_error
     return {"setup": "world + runner + SimBridge", "mode": mode, "seconds": round(elapsed, 1), "frames": frames,
-            "frames_failed": failed, "per_1000": round(1000 * failed / max(1, frames), 1),
+            "detections": detections[0], "failed": failed,
+            "per_1000": round(1000 * failed / max(1, detections[0]), 1),
             "runner_alive": runner.error is None, **counts, "first_error": repr(error) if error else ""}
 
 

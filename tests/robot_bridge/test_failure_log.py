@@ -30,7 +30,7 @@ def test_a_repeating_failure_is_logged_once_with_its_traceback_then_at_10_100_10
     assert len(lines) == 4, lines
     assert lines[0].startswith("robot a's camera detector failed (frame at 1.00 s): ValueError('bad frame')")
     assert caplog.records[0].exc_info is not None                  # the traceback, once
-    assert "10 times in a row" in lines[1] and "(reported failed)" in lines[1]
+    assert "10 times in a row" in lines[1] and "(persistent now)" in lines[1]
     assert "100 times in a row" in lines[2] and "1000 times in a row" in lines[3]
     assert failures.total == failures.consecutive == 1500 and failures.persistent
 
