@@ -19,7 +19,7 @@ percept                             meaning
 ``over_current(Wheel)``             a wheel motor is overloaded (pushing a blocked wheel); ``left``/``right``
 ``camera_ok``                       the camera delivers frames
 ``camera_failed(Part)``             the camera's frames arrive but ``Part`` of its pipeline (``detector``) has
-                                    failed on every frame for a while (a second in the simulator): no
+                                    failed on the last ``CAMERA_FAILED_AFTER`` (10) frames in a row: no
                                     ``robot_seen`` until it works again; replaces ``camera_ok`` meanwhile
 ``robot_seen(Name, AngleDeg,        the camera sees robot ``Name`` (the seed paper's
 DepthM, YawDeg)``                   ``robot(Name,Angle,Depth,Yaw)``): bearing from the optical axis, left
@@ -57,6 +57,13 @@ VOCABULARY: dict[tuple[str, int], PerceptSpec] = {(s.name, len(s.args)): s for s
     PerceptSpec("robot_seen", ("Name", "AngleDeg deg", "DepthM m", "YawDeg deg"),
                 "another robot seen by the camera"),
 )}
+
+
+CAMERA_FAILED_AFTER = 10
+"""A camera's pipeline that has failed on this many frames in a row (a second at 10 Hz) is reported as
+``camera_failed(Part)`` (instead of ``camera_ok``) until it handles a frame again, by every bridge: one bad frame
+is dropped and logged, a pipeline that keeps failing is a fault the robot perceives, as a real robot's diagnostics
+report a camera driver or perception node that stopped working, instead of the robot silently seeing nothing."""
 
 
 def normalize_degrees(angle: float) -> float:

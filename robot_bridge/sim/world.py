@@ -24,6 +24,7 @@ import numpy as np
 
 from robot_bridge import percepts as vocabulary
 from robot_bridge.failure_log import FailureLog
+from robot_bridge.percepts import CAMERA_FAILED_AFTER
 from robot_bridge.protocol import Completion, Percept
 from robot_bridge.sim import allocator, faults, imu, kobuki, motion, odometry
 from robot_bridge.sim.camera_frame import CameraFrame
@@ -60,12 +61,6 @@ LOG_KEEP_S = 600.0
 """Simulated seconds of trajectory a world keeps per robot by default (the oldest points go first): a world
 that runs for hours (the soak of issue 22, a served simulator) logged 20 points a second per robot for ever,
 ~20 MiB per robot and simulated hour. ``World(log_keep=None)`` keeps everything (``faultmas sim --csv``)."""
-
-CAMERA_FAILED_AFTER = 10
-"""A camera listener that has failed on this many frames in a row (one second at the default 10 Hz) makes its
-robot perceive ``camera_failed(Part)`` instead of ``camera_ok``, until it handles a frame again: one bad frame is
-dropped and logged, a camera whose pipeline keeps failing is reported as a fault, as a real robot's diagnostics
-report a camera driver or perception node that stopped working, instead of the robot silently seeing nothing."""
 
 OVER_CURRENT_HOLD_S = 1.0
 """An over-current flag stays up this long (simulated s) after the motor stopped pushing, like a latched

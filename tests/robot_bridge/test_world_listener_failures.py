@@ -10,7 +10,8 @@ import numpy as np
 
 from robot_bridge import Action
 from robot_bridge.sim.bridge import SimBridge
-from robot_bridge.sim.world import CAMERA_FAILED_AFTER, World
+from robot_bridge.percepts import CAMERA_FAILED_AFTER
+from robot_bridge.sim.world import World
 
 
 def pair() -> World:
