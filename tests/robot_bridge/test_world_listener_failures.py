@@ -98,6 +98,25 @@ def test_a_robot_whose_detector_keeps_failing_perceives_camera_failed_and_still_
             bridge.shutdown()
 
 
+def test_frames_a_robot_detector_skips_do_not_hide_that_it_keeps_failing():
+    """A detector (``robots_only``) examines only the frames that may show a robot: the frames it skips between
+    its failures (a turning robot looks away) are no sign that it works again."""
+    world = pair()
+    calls, examined = [], []
+
+    def detector(frame):
+        calls.append(frame.time)
+        if frame.may_show_robots:
+            examined.append(frame.time)
+            raise RuntimeError("no detector")
+
+    world.subscribe_camera("watcher", detector, reads_pixels=True, robots_only=True, part="detector")
+    world.command("watcher", "rotate", (90.0,))
+    assert world.run_until(lambda: len(examined) >= CAMERA_FAILED_AFTER, max_seconds=30.0)
+    assert len(calls) > len(examined) + 10           # it looked away in between, more than once
+    assert ("camera_failed", ("detector",)) in names(world)
+
+
 def many_blobs() -> np.ndarray:
     """A mask of 400 blobs: ``cv2.findContours`` fills a tuple of 400 contours, each converted with the GIL
     released (the window a census beside it falls into)."""
