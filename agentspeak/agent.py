@@ -5,7 +5,8 @@ message), **deliberate** (select ONE event, find its relevant then applicable pl
 in source order, push the intended means), **act** (select ONE intention round-robin, execute ONE
 body formula, then clear finished intended means). Method names follow the rules of the formal
 semantics (``sel_ev``, ``appl_pl``, ``clr_int``; rule ExecInt is ``act``'s body, inlined because
-it runs once per cycle).
+it runs once per cycle). The body formulas ACT executes are ``agentspeak/body.py``; what an intention
+that waits (``.wait``, an ask, a robot's action) goes through is ``agentspeak/suspension.py``.
 
 The agent does no I/O of its own: perception, actions, messages and printing go through its
 architecture (``agentspeak.arch.AgentArch``), so the same agent runs in-process, over Zenoh, or on a
@@ -18,19 +19,19 @@ import itertools
 import logging
 import time
 from collections import deque
-from concurrent.futures import Future
 from typing import Any, Callable, Iterator
 
 from agentspeak import program as P
 from agentspeak.beliefs import SOURCE_PERCEPT, SOURCE_SELF, BeliefBase, has_source
-from agentspeak.body import _DISPATCH, IAContext, _new  # noqa: F401  (_new: documented there, named here by others)
+from agentspeak.body import _DISPATCH, IAContext, _new, bindings_free, fresh_goal  # noqa: F401  (_new: documented there, named here by others)
 from agentspeak.communication import receive_message
 from agentspeak.intentions import Event, Frame, IntendedMeans, Intention, PlanLibrary, _intention_ids
 from agentspeak.program import ACHIEVE, ADD, BEL, DEL, META, Plan, Program, Trigger, plan_matcher
 from agentspeak.solver import SolveError, _true_k, solve_first
 from agentspeak.stdlib.registry import STDLIB, IAError, Registry, Suspend, yields_solutions
+from agentspeak.suspension import check_conditions, notify_waiters, suspend_on
 from agentspeak.terms import (
-    _EXACT, INT_OPS, NS_SEP, Arith, ArithmeticError_, Literal, NsTerm, Term, Var, rename, resolve, to_str, variables,
+    NS_SEP, ArithmeticError_, Literal, NsTerm, Term, Var, resolve, to_str,
 )
 from agentspeak.unify import unify
 
@@ -142,7 +143,7 @@ class Agent:
             self.post_external(Trigger(ADD, BEL, added))
 
     def add_initial_goal(self, goal: Literal) -> None:
-        goal = self._fresh_goal(goal, {})
+        goal = fresh_goal(goal, {})
         self.post_external(Trigger(ADD, ACHIEVE, goal), force=True)
 
     # ------------------------------------------------------------------ knowledge base (for the solver)
@@ -181,7 +182,7 @@ class Agent:
     # ------------------------------------------------------------------ events
     def post_external(self, trigger: Trigger, force: bool = False) -> None:
         """An event that starts a new intention (percepts, messages, ``!!g``, initial goals)."""
-        self._notify_waiters(trigger)
+        notify_waiters(self, trigger)
         if self.plans.has_meta and trigger.kind == ACHIEVE and trigger.op == ADD:
             self.goal_state(trigger, "pending")
         if force or self.plans.relevant(trigger) or self.plans.has_update_sub_plans:
@@ -192,22 +193,9 @@ class Agent:
     def post_internal(self, trigger: Trigger, intention: Intention) -> None:
         """An event on ``intention``, which waits until the event is handled."""
         if self.event_waiters:
-            self._notify_waiters(trigger)
+            notify_waiters(self, trigger)
         self.events.append(Event(trigger, intention))
         intention.suspended = "event"
-
-    def _notify_waiters(self, trigger: Trigger) -> None:
-        if not self.event_waiters:
-            return
-        for entry in list(self.event_waiters):
-            pattern, intention, susp = entry
-            b = dict(intention.stack[-1].b) if intention.stack else {}
-            trail: list = []
-            if pattern.op == trigger.op and pattern.kind == trigger.kind and unify(pattern.literal, trigger.literal, b, trail):
-                self.event_waiters.remove(entry)
-                im = intention.stack[-1]
-                im.b.update(b)
-                self._resume(intention, True, susp)
 
     # ------------------------------------------------------------------ the reasoning cycle
     def cycle(self) -> bool:
@@ -230,7 +218,7 @@ class Agent:
             self.act()
             did = True
         if self.condition_waiters:
-            self._check_conditions()
+            check_conditions(self)
         if self.plans.has_extras:
             self._end_of_cycle()
         return did
@@ -722,7 +710,7 @@ class Agent:
                     self._goal_achieved(top)
                 if len(stack) == 1:
                     top.result = plan.trigger.literal
-                elif not _bindings_free(top.result):  # the usual chain keeps the first call's literal
+                elif not bindings_free(top.result):  # the usual chain keeps the first call's literal
                     top.result = resolve(top.result, top.b)
                 top.plan = plan
                 top.b = b
@@ -975,7 +963,7 @@ class Agent:
                 if type(lit) is Literal and (self.plans.relevant(failed) or (
                         self.plans.has_sub_plans and self._relevant_in_scope(failed, intention))):
                     self.events.append(Event(Trigger(DEL, trig.kind, _add_annots(lit, annots)), intention, im))
-                    self._notify_waiters(self.events[-1].trigger)
+                    notify_waiters(self, self.events[-1].trigger)
                     self._suspend(intention, "event")
                     return
         top = stack[-1] if stack else None
@@ -1006,120 +994,15 @@ class Agent:
         if intention.fork is not None:
             intention.fork.branch_done(self, intention, False)
 
-    # ------------------------------------------------------------------ suspension and resumption
+    # ------------------------------------------------------------------ waiting (agentspeak.suspension)
     def suspend_on(self, intention: Intention, im: IntendedMeans, susp: Suspend, instr) -> None:
         """Suspend ``intention`` until ``susp`` says it may go on (then the formula succeeds or fails)."""
-        self._suspend(intention, susp.reason)
-        intention.waiting = susp
-        done = [False]
+        suspend_on(self, intention, im, susp, instr)
 
-        def finish(ok: bool, error: str = "ia_failed", message: str = "", extra: tuple = ()) -> None:
-            if done[0] or intention.dropped:
-                return
-            done[0] = True
-            # ended otherwise (timeout, future): its waiter must go, or a later matching event would
-            # "resume" an intention that has moved on or finished (an IndexError that killed the agent)
-            if susp.event is not None:
-                self.event_waiters = [w for w in self.event_waiters if w[2] is not susp]
-            if susp.until is not None:
-                self.condition_waiters = [w for w in self.condition_waiters if w[1] is not susp]
-            held = intention.waiting
-            if held is not susp:
-                if held is not None and getattr(held, "inner", None) is susp:
-                    # suspended by .suspend while waiting (Jason keeps it pending): .resume completes this
-                    held.complete = lambda: complete(ok, error, message, extra)
-                # else the wait was abandoned (its goal failed or succeeded meanwhile)
-                return
-            complete(ok, error, message, extra)
+    def _notify_waiters(self, trigger: Trigger) -> None:
+        notify_waiters(self, trigger)
 
-        def complete(ok: bool, error: str, message: str, extra: tuple) -> None:
-            intention.waiting = None
-            if ok:
-                self._advance(im)
-                self._requeue(intention)
-                self.clr_int(intention)
-            else:
-                # Not back in the run queue: _fail either suspends the intention on its -!g event
-                # or drops it. Requeued, it would run the failed formula again before the event.
-                intention.suspended = None
-                self.suspended.pop(intention.id, None)
-                self._fail(intention, error, message or f"{instr} failed", instr, extra=extra)
-
-        susp.finish = finish  # type: ignore[attr-defined]
-        if self.plans.has_meta:
-            for gim in reversed(intention.stack):
-                t = gim.plan.trigger
-                if t.op == ADD and t.kind == ACHIEVE:
-                    self.goal_state(Trigger(ADD, ACHIEVE, resolve(gim.event_literal, gim.b)), "waiting",
-                                    susp.term if susp.term is not None else Literal(susp.reason))
-                    break
-        ctx = IAContext(self, intention, im, im.b, [])
-        if susp.future is not None:
-            self.pending_futures += 1
-
-            def on_done(fut: Future) -> None:
-                def apply() -> None:
-                    self.pending_futures -= 1
-                    if done[0]:
-                        return
-                    try:
-                        value = fut.result()
-                    except Exception as exc:  # the awaited work failed: the formula fails with its reason
-                        finish(False, "ia_failed", f"{instr}: {exc}")
-                        return
-                    try:
-                        ok = susp.on_result(ctx, value) if susp.on_result else True
-                    except IAError as exc:
-                        finish(False, exc.error, exc.message, exc.annots)
-                        return
-                    finish(bool(ok) or ok is None)
-                self.feedback.append(apply)
-                self.arch.wake(self)
-            susp.future.add_done_callback(on_done)
-        if susp.timeout is not None:
-            # answers are stamped in wall time; on an environment's clock the timeout's wall time is when it fires
-            deadline = time.monotonic() + susp.timeout if self.clock == time.monotonic else None
-
-            def on_timeout() -> None:
-                if done[0]:
-                    return
-                if susp.answer_waiting is not None and \
-                        susp.answer_waiting(deadline if deadline is not None else time.monotonic()):
-                    self.add_timer(0.0, on_timeout)  # again once the answer in the mailbox is read
-                    return
-                if susp.on_timeout is not None:
-                    try:
-                        ok = susp.on_timeout(ctx)
-                    except IAError as exc:
-                        finish(False, exc.error, exc.message)
-                        return
-                    finish(bool(ok), "timeout", f"{instr} timed out")
-                else:
-                    finish(False, "timeout", f"{instr} timed out after {susp.timeout} s")
-                if susp.future is not None and not susp.future.done():
-                    susp.future.cancel()
-            self.add_timer(susp.timeout, on_timeout)
-        if susp.event is not None:
-            self.event_waiters.append((susp.event, intention, susp))
-        if susp.until is not None:
-            self.condition_waiters.append((intention, susp))
-
-    def _resume(self, intention: Intention, ok: bool, susp: Suspend) -> None:
-        finish = getattr(susp, "finish", None)
-        if finish is not None:
-            finish(ok)
-
-    def _check_conditions(self) -> None:
-        for entry in list(self.condition_waiters):
-            intention, susp = entry
-            try:
-                holds = susp.until()
-            except Exception:  # a broken condition must not stop the agent
-                holds = False
-            if holds:
-                self.condition_waiters.remove(entry)
-                self._resume(intention, True, susp)
-
+    # ------------------------------------------------------------------ timers, feedback, mail (any thread)
     def add_timer(self, seconds: float, callback: Callable[[], None]) -> None:
         now = self.clock()   # the agent's time: its environment's clock, if it has one
         if not self.timers:  # (set in a cycle of this agent: the time to its next cycle is busy if it is then)
@@ -1162,56 +1045,6 @@ class Agent:
     def count_dropped(self, reason: str) -> None:
         self.dropped[reason] = self.dropped.get(reason, 0) + 1
 
-    # ------------------------------------------------------------------ goals as data (for stdlib)
-    def _fresh_goal(self, lit: Term, b: dict) -> Term:
-        """Apply bindings, rename unbound variables apart (binding the caller's to the new ones),
-        and add ``source(self)``: the literal of a goal event (Jason's prepareBodyForEvent)."""
-        if type(lit) is Literal and lit.annots is None and lit.annot_tail is None:
-            # the usual goal: arguments that resolve to numbers, strings or atoms; built once
-            args = []
-            for a in lit.args:
-                ta = type(a)
-                if ta is Var:
-                    a = b.get(a, a)
-                    ta = type(a)
-                if ta is not int and ta is not float and ta is not str:
-                    if ta is Arith and a.right is not None and a.op in INT_OPS:
-                        # `N + 1` over integers (resolve's own fast case, without the call)
-                        x, y = a.left, a.right
-                        if type(x) is Var:
-                            x = b.get(x, x)
-                        if type(y) is Var:
-                            y = b.get(y, y)
-                        if type(x) is int and type(y) is int:
-                            r = INT_OPS[a.op](x, y)
-                            if -_EXACT < r < _EXACT:
-                                args.append(r)
-                                continue
-                    a = resolve(a, b)
-                    ta = type(a)
-                    if not (ta is int or ta is float or ta is str
-                            or (ta is Literal and not a.args and a.annots is None)):
-                        break
-                args.append(a)
-            else:
-                return Literal(lit.functor, tuple(args), _SOURCE_SELF_ONLY, lit.neg)
-        value = resolve(lit, b)
-        if type(value) is Literal:
-            if value.annots or value.annot_tail is not None or not _simple_args(value.args):
-                vs = variables(value)
-                if vs:
-                    mapping: dict = {}
-                    value = rename(value, mapping)
-                    for old, new in mapping.items():
-                        b[old] = new
-            if not value.annots or not has_source(value):
-                value = value.add_annot(SOURCE_SELF)
-        elif type(value) is Var:
-            raise IAError("wrong_arguments", f"unbound variable {value.name} used as a goal")
-        elif type(value) is NsTerm:
-            raise IAError("wrong_arguments", f"the name space of the goal {to_str(value)} is unbound")
-        return value
-
     def intentions(self) -> list[Intention]:
         seen: dict[int, Intention] = {}
         for i in list(self.running) + list(self.suspended.values()):
@@ -1231,41 +1064,6 @@ def source_url(path: str) -> str:
     if not path or path.startswith("<") or ":" in path.split("/")[0]:
         return path or ""
     return "file:" + path
-
-
-def _simple_args(args: tuple) -> bool:
-    """True when every argument is a number, a string or an atom (so the literal is ground)."""
-    for a in args:
-        ta = type(a)
-        if ta is int or ta is float or ta is str:
-            continue
-        if ta is Literal and not a.args and a.annots is None:
-            continue
-        return False
-    return True
-
-
-_SOURCE_SELF_ONLY = (SOURCE_SELF,)
-
-
-def _bindings_free(lit: Term) -> bool:
-    """True for a literal that ``resolve`` would only copy: its arguments numbers, strings and atoms, its
-    annotations literals of those (a goal's ``g(1, 2)[source(self)]``)."""
-    if type(lit) is not Literal or lit.annot_tail is not None or not _constant_args(lit.args):
-        return False
-    for a in lit.annots or ():
-        if type(a) is not Literal or a.annots is not None or a.annot_tail is not None or not _constant_args(a.args):
-            return False
-    return True
-
-
-def _constant_args(args: tuple) -> bool:
-    for a in args:
-        ta = type(a)
-        if not (ta is int or ta is float or ta is str
-                or (ta is Literal and not a.args and a.annots is None and a.annot_tail is None)):
-            return False
-    return True
 
 
 class _PendingGoal:

@@ -3,7 +3,7 @@ and its cases), one ``_exec_*`` per kind of formula, chosen by ``_DISPATCH``; an
 internal action sees.
 
 Moved unchanged from ``agentspeak/agent.py`` (issue 23), which keeps the cycle itself (sense, deliberate,
-act). ``ag: Agent`` is ``agentspeak.agent.Agent``, named but not imported: the agent imports this module.
+act), with ``fresh_goal``, the literal a goal formula posts; waiting is ``agentspeak/suspension.py``. ``ag: Agent`` is ``agentspeak.agent.Agent``, named but not imported: the agent imports this module.
 Compiled with the interpreter (``body.pxd``).
 """
 from __future__ import annotations
@@ -17,7 +17,9 @@ from agentspeak.intentions import Event, Frame, IntendedMeans, Intention
 from agentspeak.program import ACHIEVE, ADD, BEL, DEL, TEST, PlanTerm, Trigger
 from agentspeak.solver import _COMPILED, _true_k, compiled, solve, solve_first
 from agentspeak.stdlib.registry import IAError, Suspend, yields_solutions
-from agentspeak.terms import Literal, Term, Var, is_ground, rename, resolve, to_str, variables
+from agentspeak.terms import (
+    _EXACT, INT_OPS, Arith, Literal, NsTerm, Term, Var, is_ground, rename, resolve, to_str, variables,
+)
 from agentspeak.unify import undo, unify
 
 _new = object.__new__
@@ -53,7 +55,7 @@ class IAContext:
 
 
 def _exec_achieve(ag: Agent, intention: Intention, im: IntendedMeans, frame: Frame, instr) -> None:
-    trigger = Trigger(ADD, ACHIEVE, ag._fresh_goal(instr.term, im.b))
+    trigger = Trigger(ADD, ACHIEVE, fresh_goal(instr.term, im.b))
     if ag.event_waiters:  # post_internal, inlined: this is the step of every subgoal
         ag._notify_waiters(trigger)
     if ag.plans.has_meta:
@@ -63,7 +65,7 @@ def _exec_achieve(ag: Agent, intention: Intention, im: IntendedMeans, frame: Fra
 
 
 def _exec_achieve_new(ag: Agent, intention, im, frame, instr) -> None:
-    lit = ag._fresh_goal(instr.term, im.b)
+    lit = fresh_goal(instr.term, im.b)
     ag.post_external(Trigger(ADD, ACHIEVE, lit), force=True)
     frame.pc += 1
 
@@ -75,13 +77,85 @@ def _exec_test(ag: Agent, intention, im, frame, instr) -> None:
         return
     value = resolve(query, im.b)
     if type(value) is Literal and ag.plans.relevant(Trigger(ADD, TEST, value)):
-        lit = ag._fresh_goal(value, im.b)
+        lit = fresh_goal(value, im.b)
         ag.post_internal(Trigger(ADD, TEST, lit), intention)
         return
     raise IAError("test_goal_failed", f"test goal '{to_str(value)}' failed")
 
 
 _SOURCE_SELF_ONLY = (SOURCE_SELF,)
+
+
+def fresh_goal(lit: Term, b: dict) -> Term:
+    """The literal of a goal event (``!g``, ``?g`` with plans, ``!!g``, ``.at``, an initial goal; Jason's
+    prepareBodyForEvent): apply bindings, rename unbound variables apart (binding the caller's to the new ones),
+    and add ``source(self)``."""
+    if type(lit) is Literal and lit.annots is None and lit.annot_tail is None:
+        # the usual goal: arguments that resolve to numbers, strings or atoms; built once
+        args = []
+        for a in lit.args:
+            ta = type(a)
+            if ta is Var:
+                a = b.get(a, a)
+                ta = type(a)
+            if ta is not int and ta is not float and ta is not str:
+                if ta is Arith and a.right is not None and a.op in INT_OPS:
+                    # `N + 1` over integers (resolve's own fast case, without the call)
+                    x, y = a.left, a.right
+                    if type(x) is Var:
+                        x = b.get(x, x)
+                    if type(y) is Var:
+                        y = b.get(y, y)
+                    if type(x) is int and type(y) is int:
+                        r = INT_OPS[a.op](x, y)
+                        if -_EXACT < r < _EXACT:
+                            args.append(r)
+                            continue
+                a = resolve(a, b)
+                ta = type(a)
+                if not (ta is int or ta is float or ta is str
+                        or (ta is Literal and not a.args and a.annots is None)):
+                    break
+            args.append(a)
+        else:
+            return Literal(lit.functor, tuple(args), _SOURCE_SELF_ONLY, lit.neg)
+    value = resolve(lit, b)
+    if type(value) is Literal:
+        if value.annots or value.annot_tail is not None or not constant_args(value.args):
+            vs = variables(value)
+            if vs:
+                mapping: dict = {}
+                value = rename(value, mapping)
+                for old, new in mapping.items():
+                    b[old] = new
+        if not value.annots or not has_source(value):
+            value = value.add_annot(SOURCE_SELF)
+    elif type(value) is Var:
+        raise IAError("wrong_arguments", f"unbound variable {value.name} used as a goal")
+    elif type(value) is NsTerm:
+        raise IAError("wrong_arguments", f"the name space of the goal {to_str(value)} is unbound")
+    return value
+
+
+def bindings_free(lit: Term) -> bool:
+    """True for a literal that ``resolve`` would only copy: its arguments numbers, strings and atoms, its
+    annotations literals of those (a goal's ``g(1, 2)[source(self)]``)."""
+    if type(lit) is not Literal or lit.annot_tail is not None or not constant_args(lit.args):
+        return False
+    for a in lit.annots or ():
+        if type(a) is not Literal or a.annots is not None or a.annot_tail is not None or not constant_args(a.args):
+            return False
+    return True
+
+
+def constant_args(args: tuple) -> bool:
+    """Every argument is a number, a string or an atom (so a literal of them is ground and has no variable)."""
+    for a in args:
+        ta = type(a)
+        if not (ta is int or ta is float or ta is str
+                or (ta is Literal and not a.args and a.annots is None and a.annot_tail is None)):
+            return False
+    return True
 
 
 def _belief_literal(term: Term, b: dict) -> Literal:

@@ -121,7 +121,8 @@ def at(ctx, when, event):
     agent = ctx.agent
     literal = resolve(trigger.literal, ctx.b)
     if trigger.kind == ACHIEVE and trigger.op == ADD and isinstance(literal, Literal):
-        literal = agent._fresh_goal(literal, {})
+        from agentspeak.body import fresh_goal   # the body formulas import the internal actions
+        literal = fresh_goal(literal, {})
     pending = _AtEvent(agent, Trigger(trigger.op, trigger.kind, literal))
     ats = getattr(agent, "at_events", None)
     if ats is None:

@@ -55,11 +55,13 @@ class _Clock:
 def _agents(monkeypatch, sources: dict[str, str]):
     from agentspeak import agent as agent_module
     from agentspeak import communication as communication_module
+    from agentspeak import suspension as suspension_module
     from agentspeak.runtime import LocalRuntime
     from agentspeak.stdlib.registry import CURRENT
     clock = _Clock()
     monkeypatch.setattr(agent_module, "time", clock)
     monkeypatch.setattr(communication_module, "time", clock)
+    monkeypatch.setattr(suspension_module, "time", clock)
     lines: list[str] = []
     runtime = LocalRuntime(printer=lambda name, text: lines.append(f"{name}: {text}"))
     agents = {name: runtime.add_agent(name, text) for name, text in sources.items()}
