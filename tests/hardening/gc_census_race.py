@@ -140,7 +140,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--setup", choices=("detector", "world"), action="append",
                         help="the detector in a loop (the mechanism), or a world stepped by its runner (the soak)")
-    parser.add_argument("--mode", choices=("census", "collect", "quiescent", "none"), action="append")
+    parser.add_argument("--mode", choices=("census", "collect", "quiescent", "none"), action="append",
+                        help="what the other thread does: gc.get_objects (the soak before the fix), gc.collect, "
+                             "gc.get_objects with the world held still (the fix; world setup only), nothing")
     parser.add_argument("--seconds", type=float, default=20.0, help="per setup and mode (default 20)")
     args = parser.parse_args(argv)
     for setup in args.setup or ["detector", "world"]:
