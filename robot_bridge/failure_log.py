@@ -33,7 +33,9 @@ class FailureLog:
         """Every failure, logged or not."""
         self.consecutive = 0
         """Failures since the last success."""
-        self.last_error: BaseException | None = None
+        self.last_error = ""
+        """The last failure's ``repr`` (not the exception: its traceback would keep the failed call's frames and
+        their data alive)."""
         self._total_at_line = 0
         """``total`` when the last line was written: the failures after it and before the one logged now were
         not logged one by one (those of the episode under way are told as "N times in a row")."""
@@ -62,7 +64,7 @@ class FailureLog:
         with self._lock:
             self.total += 1
             self.consecutive += 1
-            self.last_error = exc
+            self.last_error = repr(exc)
             consecutive, now = self.consecutive, self.clock()
             first = consecutive == 1 and (self.total == 1 or now - self._last_line >= self.quiet)
             milestone = consecutive >= 10 and _power_of_ten(consecutive)

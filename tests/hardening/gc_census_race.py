@@ -121,7 +121,7 @@ def run_world(mode: str, seconds: float) -> dict:
     return {"setup": "world + runner + SimBridge", "mode": mode, "seconds": round(elapsed, 1), "frames": frames,
             "detections": detections[0], "failed": failed,
             "per_1000": round(1000 * failed / max(1, detections[0]), 1),
-            "runner_alive": runner.error is None, **counts, "first_error": repr(error) if error else ""}
+            "runner_alive": runner.error is None, **counts, "first_error": error}
 
 
 def _run_threads(targets, seconds: float, stop: threading.Event) -> float:

@@ -166,5 +166,5 @@ def test_a_census_with_the_world_held_still_does_not_fail_its_opencv_calls():
         bridge.shutdown()
     assert len(frames) >= 40 and len(censuses) >= 40
     assert listener.failures.total == 0, f"{listener.failures.total} of {len(frames)} frames failed: " \
-                                         f"{listener.failures.last_error!r}"
+                                         f"{listener.failures.last_error}"
     assert set(contours) == {400}
