@@ -84,6 +84,7 @@ class RosContext:
         while self.ok() and not getattr(self.executor, "_is_shutdown", False):
             try:
                 self.executor.spin_once()
+                failures.succeeded()
             except ExternalShutdownException:
                 return
             except Exception as exc:
