@@ -168,3 +168,19 @@ def test_a_census_with_the_world_held_still_does_not_fail_its_opencv_calls():
     assert listener.failures.total == 0, f"{listener.failures.total} of {len(frames)} frames failed: " \
                                          f"{listener.failures.last_error}"
     assert set(contours) == {400}
+
+
+def test_a_failure_to_render_the_frames_side_by_side_leaves_each_listener_to_render_its_own(monkeypatch, caplog):
+    from robot_bridge.sim import camera
+
+    world = pair()
+    frames = []
+    world.subscribe_camera("watcher", lambda frame: frames.append(frame.rgb.shape), reads_pixels=True)
+
+    def broken(frames_due):
+        raise OSError("render workers gone")
+    monkeypatch.setattr(camera, "render_all", broken)
+    with caplog.at_level(logging.WARNING, logger="robot_bridge.sim.world"):
+        world.run(0.5)
+    assert len(frames) == 5 and all(shape[2] == 3 for shape in frames)     # rendered by the listener's read
+    assert sum("rendering the frames due side by side failed" in r.getMessage() for r in caplog.records) == 1
