@@ -107,11 +107,11 @@ class SimServer:
         """Every ``interval``: the clock, then each robot's percepts; what fails is logged (once, then at 10,
         100... in a row: not a line every 20 ms) and tried again next time (a closed session at shutdown is
         not logged)."""
-        clock = FailureLog(log, "sim server: publishing the clock")
-        percepts = {name: FailureLog(log, f"sim server: publishing {name}'s percepts") for name in self.bridges}
+        publishers = [(FailureLog(log, "sim server: publishing the clock"), self.publish_clock)]
+        publishers += [(FailureLog(log, f"sim server: publishing {name}'s percepts"),
+                        lambda name=name: self.publish_percepts(name)) for name in self.bridges]
         while not self._stop.wait(self.interval):
-            for failures, publish in [(clock, self.publish_clock)] + \
-                    [(percepts[name], lambda name=name: self.publish_percepts(name)) for name in self.bridges]:
+            for failures, publish in publishers:
                 try:
                     publish()
                 except Exception as exc:
