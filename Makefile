@@ -48,10 +48,15 @@ $(CHROMIUM):
 	command -v apt-get >/dev/null && [ "$$(id -u)" = 0 ] || { echo "install Debian's chromium (apt-get install chromium) for the browser tests" >&2; exit 1; }
 	apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
 
+# On TEST_WORKERS pytest-xdist workers: much of the suite waits (processes starting, ROS discovery, the network,
+# agents' deadlines), so two workers overlap those waits on 2 cores. --dist loadfile keeps each test file on one
+# worker (a module fixture that starts a team starts once). TEST_WORKERS=0: one process, as plain pytest.
+TEST_WORKERS ?= 2
+XDIST = -n $(TEST_WORKERS) --dist loadfile
 test: speedups browser
-	$(PY) -m pytest -q -p no:cacheprovider -m "not slow"
+	$(PY) -m pytest -q -p no:cacheprovider -m "not slow" $(XDIST)
 	# the language suite again on the interpreter run from source (what runs without a C compiler)
-	$(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider tests/agentspeak
+	$(PURE_PYTHON) $(PY) -m pytest -q -p no:cacheprovider $(XDIST) tests/agentspeak
 
 # The end-to-end tests marked `slow` (minutes each, each covered in shorter form by `make test`), kept out of
 # `make test`'s ~10 min budget

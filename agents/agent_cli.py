@@ -168,7 +168,8 @@ def cmd_agent_run(args: argparse.Namespace) -> int:
                                  members=declared if args.project else None).attach()
         from agents.inspector.publisher import MindPublisher  # state on demand for `faultmas inspect`
         inspected = MindPublisher(transport, runtime, bridge, allow_control=args.allow_pause).start()
-        if args.wait_for_peers > 0 and not bridge.wait_for_peers(declared, args.wait_for_peers):
+        if args.wait_for_peers > 0 and not bridge.wait_for_peers(declared, args.wait_for_peers) \
+                and not runtime.stop_requested():
             missing = sorted(set(declared) - transport.alive_agents() - bridge.dead)
             log.warning("agent %s: still missing after %.0f s: %s; starting anyway", args.name,
                         args.wait_for_peers, ", ".join(missing))

@@ -393,10 +393,15 @@ class TransportBridge:
 
     def wait_for_peers(self, names: Iterable[str], timeout: float) -> bool:
         """Wait until every agent of ``names`` is reachable, or known dead (the launcher says so: a peer
-        killed before it became reachable must not hold the others for the whole ``timeout``)."""
+        killed before it became reachable must not hold the others for the whole ``timeout``). False after
+        ``timeout``, or at once when this process is told to stop: a peer that ended by ``.stopMAS`` before
+        this one became reachable never will be, and its stop (or the launcher's, a signal) must not wait
+        for the ``timeout`` (a run's launcher SIGKILLed such an agent after 6 s)."""
         deadline = time.monotonic() + timeout
         wanted = set(names)
         while True:
+            if self.runtime.stop_requested():
+                return False
             pending = wanted - self.dead
             if self.transport.wait_for_agents(pending, timeout=min(0.2, max(0.0, deadline - time.monotonic()))):
                 if wanted & self.dead:

@@ -349,6 +349,11 @@ class LocalRuntime:
             self._stop_at = time.monotonic() + delay
             self._cond.notify()
 
+    def stop_requested(self) -> bool:
+        """A stop was asked for (``stop``: a signal, ``.stopMAS``, a launcher), due now or later. For code that waits
+        outside ``run`` (an agent process waiting for its peers) and must give up then."""
+        return self._stop_at is not None
+
     def wait_for_work(self, timeout: float | None) -> bool:
         """Block until an agent is ready or a stop is requested (True), or ``timeout`` passes (False).
         For loops that do something while the MAS is idle (e.g. publish status for a launcher)."""

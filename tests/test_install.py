@@ -24,6 +24,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.ros_domain import ros_domain
+
 REPO = Path(__file__).resolve().parents[1]
 
 pytestmark = pytest.mark.skipif(os.environ.get("FAULTMAS_INSTALL_TEST") != "1",
@@ -60,7 +62,7 @@ def _ros_wheels_start_once_and_load_on_import(venv: Path, env: dict[str, str]) -
     site_packages = next((venv / "lib").glob("python3.*/site-packages"))
     assert (site_packages / "_faultmas_ros_libraries.pth").is_file()
     assert (site_packages / "ros_wheels_bootstrapper.pth").is_file()
-    domain = str(1 + (os.getpid() + 89) % 100)
+    domain = str(ros_domain(89))
     ran = _run([str(venv / "bin" / "python"), "-c", ROS_ROUND_TRIP, domain], env, timeout=240)
     assert ran.returncode == 0, ran.stderr[-3000:]
     assert ran.stdout.split() == ["None", "1", "ok"], ran.stdout

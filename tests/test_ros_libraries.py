@@ -17,11 +17,12 @@ from pathlib import Path
 import pytest
 
 import _faultmas_ros_libraries as ros_libraries
+from tests.ros_domain import ros_domain  # noqa: E402
 
 SITE_PACKAGES = Path(sys.prefix, "lib", f"python{sys.version_info[0]}.{sys.version_info[1]}", "site-packages")
 pytestmark = pytest.mark.skipif(not (SITE_PACKAGES / "ros_wheels_bootstrapper.pth").exists(),
                                 reason="the ROS 2 wheels are not installed here (extra 'ros2')")
-DOMAIN = 1 + (os.getpid() + 83) % 100     # not the other ROS test modules' domains
+DOMAIN = ros_domain(83)     # not the other ROS test modules' domains
 
 
 def _shell_env(**extra: str) -> dict[str, str]:

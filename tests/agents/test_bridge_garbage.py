@@ -19,14 +19,15 @@ def test_an_idle_agent_process_collects_the_garbage_of_its_finished_intentions(m
     runtime.add_agent("a", "!go.\n+!go <- for ( .range(I, 1, 50) ) { .wait(1) }; .print(done).\n")
     transport = LocalTransport(unique_mas("garbage"), LocalBus()).open()
     bridge = TransportBridge(runtime, transport, declared=["a"]).attach()
-    def suspensions() -> int:
-        return sum(type(o) is Suspend for o in gc.get_objects())
     gc.collect()
-    before = suspensions()     # other tests' (still referred to): not this agent's
+    # other tests' (still referred to): not this agent's. Held here, so that one of them freed meanwhile (an
+    # earlier test's thread ending) neither lowers the count nor lends its id to a new one
+    others = [o for o in gc.get_objects() if type(o) is Suspend]
+    known = {id(o) for o in others}
     gc.disable()     # only the bridge's own collection may run
     try:
         assert bridge.run(timeout=1.5) == "timeout"
-        left = suspensions() - before
+        left = sum(type(o) is Suspend and id(o) not in known for o in gc.get_objects())
     finally:
         gc.enable()
         bridge.detach()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import re
 import signal
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -182,20 +183,42 @@ def test_agent_joins_a_mas_running_in_one_process(tmp_path):
     write_files(tmp_path, {"a.asl": "x(1).\n", "rr.mas2j": "MAS rr { agents: a; }\n",
                            "b.asl": '+agent_alive(a) <- .send(a, askOne, x(X), A); .print("got ", A); .stopMAS.\n'})
     endpoint = loopback_endpoint()
-    host = mas_run(tmp_path / "rr.mas2j", "--listen", endpoint, "--timeout", "20")
-    with ZenohTransport("rr", ZenohOptions(connect=(endpoint,))) as probe:
-        assert probe.wait_for_agents(["a"], 60)
-    joined = agent_run(tmp_path, "b", "rr", endpoint, "--timeout", "60")
-    assert joined.finish() == 0 and joined.out == ["[b] got x(1)[source(a)]"]
-    assert host.finish() == 124  # ran to its --timeout
-    assert any("not_a_member" in line and "from b" in line for line in host.err)
+    host = mas_run(tmp_path / "rr.mas2j", "--listen", endpoint, "--timeout", "120")
+    try:
+        with ZenohTransport("rr", ZenohOptions(connect=(endpoint,))) as probe:
+            assert probe.wait_for_agents(["a"], 60)
+        joined = agent_run(tmp_path, "b", "rr", endpoint, "--timeout", "60")
+        assert joined.finish() == 0 and joined.out == ["[b] got x(1)[source(a)]"]
+        # b's stop reached the host and was refused; the host runs on (a stop it obeyed would end it at once:
+        # delay 0). Not waiting for its --timeout: the refusal, then 2 s alive, prove the same 18 s sooner.
+        assert poll(lambda: any("not_a_member" in line and "from b" in line for line in host.err), 60), host.err
+        with pytest.raises(subprocess.TimeoutExpired):
+            host.process.wait(2.0)
+    finally:
+        host.stop()
+
+
+def test_an_agent_waiting_for_its_peers_stops_when_told(tmp_path):
+    """``agent run --wait-for-peers``: a stop (a signal here; ``.stopMAS``, the launcher's) ends the wait at once.
+    A peer that ended by ``.stopMAS`` before this one became reachable never will be: ``mas run --processes``
+    then had to SIGKILL such an agent after 6 s of stop, SIGINT and SIGTERM (one run in two of a short MAS)."""
+    write_files(tmp_path, {"b.asl": "", "m.mas2j": "MAS m { agents: a; b; }\n"})
+    endpoint, mas = loopback_endpoint(), unique_mas("peers")
+    with ZenohTransport(mas, ZenohOptions(listen=(endpoint,))) as probe:
+        b = agent_run(tmp_path, "b", mas, endpoint, "--project", str(tmp_path / "m.mas2j"), "--wait-for-peers", "120")
+        try:
+            assert probe.wait_for_agents(["b"], 60), b.err      # b is up, waiting for a (never there)
+            b.process.send_signal(signal.SIGINT)
+            assert b.finish(timeout=30) == 0, b.err               # not after the 120 s wait (nor killed)
+            assert not any("still missing" in line for line in b.err), b.err
+        finally:
+            b.stop()
 
 
 def test_processes_from_a_non_editable_install(tmp_path):
     """``pip install .`` (not editable) of this repository: the agent processes find the installed package
     and the user's sources, from the user's folder."""
     import os
-    import subprocess
     import sys
     repo = Path(__file__).resolve().parents[2]
     target = tmp_path / "site"

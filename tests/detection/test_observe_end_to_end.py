@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import json
 import signal
-import os
 import subprocess
 import sys
 import threading
@@ -21,8 +20,9 @@ pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'fa
 
 from robot_bridge.ros2.runtime import loopback_env  # noqa: E402
 from .conftest import NAV_MODEL, REPAIR_RULES, interrupt  # noqa: E402
+from tests.ros_domain import ros_domain  # noqa: E402
 
-DOMAIN = 1 + (os.getpid() + 63) % 100
+DOMAIN = ros_domain(63)
 HERE = Path(__file__).resolve().parent
 
 OBSERVERS = """\
@@ -82,6 +82,18 @@ def changes(json_lines: list[str]) -> list[tuple]:
     return out
 
 
+def is_slow_down(literal: str, measured: float) -> bool:
+    """The publisher's drop to 3 Hz. On a starved machine a ~hz(scan) may also come at start-up (no message
+    yet: 0 Hz) or after a burst of messages taken late (far above 10 Hz): true, but not what this test is about."""
+    return literal == "~hz(scan)" and measured is not None and 0 < measured < 8
+
+
+def repaired(live: list[tuple]) -> bool:
+    """hz(scan) again after the slow-down was observed."""
+    slowed = next((i for i, (literal, _, measured, _) in enumerate(live) if is_slow_down(literal, measured)), None)
+    return slowed is not None and any(c[0] == "hz(scan)" for c in live[slowed + 1:])
+
+
 def test_slow_publisher_is_diagnosed_and_repaired_and_the_bag_replays_the_same(tmp_path):
     (tmp_path / "obs.yaml").write_text(OBSERVERS)
     (tmp_path / "nav.yaml").write_text(NAV_MODEL)
@@ -98,9 +110,8 @@ def test_slow_publisher_is_diagnosed_and_repaired_and_the_bag_replays_the_same(t
         pub_out, obs_out = Lines(publisher.stdout), Lines(observe.stdout)
         assert pub_out.wait_for(lambda ls: "rate=3.0" in ls, 30), "the publisher never slowed down"
         # the rule's set_parameter reaches the node: its parameter has changed
-        assert pub_out.wait_for(lambda ls: "rate=10.0" in ls, 30), (obs_out.lines, observe.stderr)
-        repaired = lambda ls: any(c[0] == "hz(scan)" for c in changes(ls)[1:])  # noqa: E731
-        assert obs_out.wait_for(repaired, 30), obs_out.lines
+        assert pub_out.wait_for(lambda ls: "rate=10.0" in ls[ls.index("rate=3.0"):], 30), (obs_out.lines, observe.stderr)
+        assert obs_out.wait_for(lambda ls: repaired(changes(ls)), 30), obs_out.lines
     finally:
         try:
             interrupt(observe)                      # Ctrl-C ends it cleanly
@@ -110,12 +121,11 @@ def test_slow_publisher_is_diagnosed_and_repaired_and_the_bag_replays_the_same(t
     assert observe.returncode == 0, observe.stderr.read()
     obs_out.join()                                  # the last lines may still be in the pipe
     updates = [json.loads(line) for line in obs_out.lines]
-    fault = next(u for u in updates if any(c["literal"] == "~hz(scan)" for c in u["changed"]))
+    fault = next(u for u in updates if any(is_slow_down(c["literal"], c["measured"]) for c in u["changed"]))
     assert fault["diagnoses"] == [["laser_driver"]] and fault["possibly_faulty"] == ["laser_driver"]
     assert fault["fired"] == [{"rule": "speed_up_laser", "error": None}]
-    assert fault["changed"][0]["measured"] < 8
     live = changes(obs_out.lines)
-    assert [c[0] for c in live][-2:] == ["~hz(scan)", "hz(scan)"]
+    assert [c[0] for c in live][-2:] == ["~hz(scan)", "hz(scan)"], live
 
     # the same configuration over the recorded bag: exactly the same observations
     replay = faultmas("obs.yaml", "--model", "nav.yaml", "--rules", "nav.rules.yaml", "--bag", "run.mcap",

@@ -6,7 +6,6 @@ deadlines; nothing is a timed assertion except the issue's "activated false with
 """
 from __future__ import annotations
 
-import os
 import subprocess
 import sys
 import threading
@@ -19,8 +18,9 @@ pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'fa
 
 from detection.config import load_observers  # noqa: E402
 from robot_bridge.ros2.runtime import loopback_env, wait_for  # noqa: E402
+from tests.ros_domain import ros_domain  # noqa: E402
 
-DOMAIN = 1 + (os.getpid() + 37) % 100      # not the other ROS test modules' domains
+DOMAIN = ros_domain(37)      # not the other ROS test modules' domains
 HERE = Path(__file__).resolve().parent
 
 

@@ -8,15 +8,15 @@ from __future__ import annotations
 import contextlib
 import io
 import json
-import os
 
 import pytest
 
 pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'faultmas[ros2]')")
 
 from agents.cli import main as faultmas  # noqa: E402
+from tests.ros_domain import ros_domain  # noqa: E402
 
-DOMAIN = 1 + (os.getpid() + 61) % 100
+DOMAIN = ros_domain(61)
 
 
 def test_a_short_ros2_run_detects_the_fault_and_switches_the_real_node():

@@ -21,7 +21,7 @@ from agents.transport.identity import (Identity, IdentityError, generate_keys, p
 from agents.zenoh_arch import TransportBridge
 from agentspeak.mas2j import load_mas2j
 from agentspeak.runtime import LocalRuntime
-from tests.agents.transport_fixtures import unique_mas
+from tests.agents.transport_fixtures import poll, unique_mas
 
 REPO = Path(__file__).resolve().parents[2]
 BOB = "secret(42).\n+!act[source(S)] <- +did(act, S).\n"
@@ -153,10 +153,14 @@ def test_mas_run_processes_in_the_secure_profile_talks_and_a_missing_private_key
     assert run.finish(timeout=150) == 0, run.err[-20:]
     assert "[alice] answer secret(42)[source(bob)]" in run.out
     assert not any("dropped" in line for line in run.err), run.err  # nothing refused between members
-    (tmp_path / "keys" / "bob.key").unlink()  # bob's process refuses to start; alice is ended by the timeout
-    run = mas_run(tmp_path / "team.mas2j", "--processes", "--timeout", "20", cwd=tmp_path)
-    assert run.finish(timeout=150) != 0
-    assert any("bob.key: cannot read the key" in line for line in run.err), run.err[-20:]
+    (tmp_path / "keys" / "bob.key").unlink()  # bob's process refuses to start, naming the file
+    run = mas_run(tmp_path / "team.mas2j", "--processes", "--timeout", "120", cwd=tmp_path)
+    try:
+        assert poll(lambda: any("bob.key: cannot read the key" in line for line in run.err), 60), run.err[-20:]
+        assert poll(lambda: any("bob died" in line for line in run.err), 60), run.err[-20:]
+        assert not any("answer" in line for line in run.out), run.out      # alice got no answer from bob
+    finally:     # alice, idle, would wait for the --timeout: not waited out (it proves nothing more)
+        run.stop()
 
 
 def test_a_forged_agent_status_is_refused_in_the_secure_profile(tmp_path):

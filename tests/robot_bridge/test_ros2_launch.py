@@ -1,16 +1,15 @@
 """``faultmas ros launch``'s supervisor: real node subprocesses, found in the graph, stopped cleanly."""
 from __future__ import annotations
 
-import os
-
 import pytest
 
 pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'faultmas[ros2]')")
 
 from robot_bridge.protocol import Action  # noqa: E402
 from robot_bridge.ros2 import launch  # noqa: E402
+from tests.ros_domain import ros_domain  # noqa: E402
 
-DOMAIN = 1 + (os.getpid() + 50) % 100     # not the in-process graph's domain
+DOMAIN = ros_domain(25)     # not the in-process graph's domain
 
 
 def test_plan_rejects_bad_robot_names_and_faults():

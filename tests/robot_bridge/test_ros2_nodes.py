@@ -16,8 +16,9 @@ pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'fa
 
 from robot_bridge.protocol import Action  # noqa: E402
 from robot_bridge.ros2.runtime import RosContext, wait_for  # noqa: E402
+from tests.ros_domain import ros_domain  # noqa: E402
 
-DOMAIN = 1 + os.getpid() % 100          # unique per test run; 0..101 keeps Fast DDS off ephemeral ports
+DOMAIN = ros_domain(0)          # unique per test run; 0..101 keeps Fast DDS off ephemeral ports
 FAULTY_START = (2.0, -0.4, math.pi / 2)  # ahead of the helper, side-on to its camera, driving across it
 
 

@@ -16,8 +16,9 @@ pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'fa
 
 from robot_bridge.ros2.launch import NodeSpec, Supervisor  # noqa: E402
 from robot_bridge.ros2.runtime import RosContext, wait_for  # noqa: E402
+from tests.ros_domain import ros_domain  # noqa: E402
 
-DOMAIN = 1 + (os.getpid() + 37) % 100
+DOMAIN = ros_domain(37)
 
 
 class Listener:

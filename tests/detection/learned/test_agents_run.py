@@ -7,15 +7,16 @@ process only, and only while the ground truth says it is on."""
 from __future__ import annotations
 
 import json
-import os
 import time
 
 import numpy as np
 import pytest
 
+from tests.ros_domain import ros_domain
+
 pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'faultmas[ros2]')")
 
-DOMAIN = 1 + (os.getpid() + 37) % 100
+DOMAIN = ros_domain(37)
 
 
 @pytest.fixture(scope="module")
@@ -129,7 +130,7 @@ def test_a_model_of_an_agent_watches_it_live_over_ros2_and_zenoh(agents_run, tmp
     model = ComponentModel("faulty_agent", features, list(TARGET_NAMES), np.zeros(d), np.ones(d), np.zeros(k),
                            np.ones(k), np.zeros((k, d)), np.zeros(k), np.zeros(k), np.eye(k), threshold=1e12,
                            target_fpr=0.005)
-    domain = 1 + (os.getpid() + 41) % 100
+    domain = ros_domain(41)
     agents = CooperativeAgents()
     supervisor = Supervisor(plan(list(ROBOTS), fault=agents.robot_fault(3), camera=False, seed=3), domain)
     supervisor.start()

@@ -5,7 +5,6 @@ the run recorded with ``--record`` and replayed with ``--bag`` gives the same ve
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 import threading
@@ -16,6 +15,7 @@ import pytest
 from agents.cli import main
 
 from ..conftest import interrupt
+from tests.ros_domain import ros_domain  # noqa: E402
 
 LEAKING = "helper_motion_decomposer"
 
@@ -77,7 +77,7 @@ def test_observe_learned_names_the_leaking_node_live(smoke_evaluation, tmp_path)
     from robot_bridge.ros2.perfbugs import ENV_VAR, PerfBug, write_schedule
     from robot_bridge.ros2.runtime import RosContext, loopback_env
 
-    domain = 1 + (os.getpid() + 53) % 100
+    domain = ros_domain(53)
     models = tmp_path / "models"
     models.mkdir()
     for name, model in smoke_evaluation.models.items():

@@ -3,15 +3,15 @@ on in one node through the perf-bug hook, the learned ``resource`` observer (mod
 data) watches it live and the pipeline's diagnoser names the leaking node."""
 from __future__ import annotations
 
-import os
 import threading
 import time
 
 import pytest
+from tests.ros_domain import ros_domain  # noqa: E402
 
 pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'faultmas[ros2]')")
 
-DOMAIN = 1 + (os.getpid() + 70) % 100
+DOMAIN = ros_domain(70)
 LEAKING = "helper_motion_decomposer"
 
 

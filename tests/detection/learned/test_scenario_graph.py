@@ -2,13 +2,13 @@
 run with the node's name (a fixed wait once recorded runs without components, silently)."""
 from __future__ import annotations
 
-import os
 
 import pytest
 
 from detection.learned.scenario import settled_graph
+from tests.ros_domain import ros_domain  # noqa: E402
 
-DOMAIN = 1 + (os.getpid() + 71) % 100
+DOMAIN = ros_domain(71)
 
 
 def test_the_graph_is_taken_once_every_planned_node_is_there_and_a_missing_one_is_named():

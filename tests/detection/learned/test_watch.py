@@ -37,12 +37,14 @@ def test_a_nodes_process_is_found_in_its_own_domain_and_never_guessed():
 
     from detection.learned.observer import node_processes
 
+    # domains 201..203: valid ids outside the 1..100 that the ROS tests run real kobuki_sim nodes in
+    # (tests/ros_domain.py), which a test running at the same time on another worker would add here
     sleepers = [subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)", "robot_bridge.ros2.kobuki_sim",
-                                  "--robot", "faulty", "--domain-id", str(domain)]) for domain in (5, 6)]
+                                  "--robot", "faulty", "--domain-id", str(domain)]) for domain in (201, 202)]
     try:
         component = Component("faulty_kobuki_sim", "/faulty", "kobuki_sim")
-        assert node_processes([component], 6)["faulty_kobuki_sim"].pid == sleepers[1].pid
-        assert node_processes([component], 7) == {}
+        assert node_processes([component], 202)["faulty_kobuki_sim"].pid == sleepers[1].pid
+        assert node_processes([component], 203) == {}
         with pytest.raises(ValueError, match="several processes look like the same node"):
             node_processes([component])                    # two teams, no domain: ambiguous
     finally:
