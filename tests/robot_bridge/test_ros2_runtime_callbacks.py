@@ -3,15 +3,15 @@ callback ended ``RosContext``'s spin thread, and every node of the context went 
 from __future__ import annotations
 
 import logging
-import os
 
 import pytest
 
 pytest.importorskip("rclpy", reason="ROS 2 is an optional extra (pip install 'faultmas[ros2]')")
 
 from robot_bridge.ros2.runtime import RosContext, wait_for  # noqa: E402
+from tests.ros_domain import ros_domain  # noqa: E402
 
-DOMAIN = 1 + (os.getpid() + 89) % 100      # not the other ROS test modules' domains
+DOMAIN = ros_domain(44)      # not the other ROS test modules' domains
 
 
 def test_a_timer_callback_that_raises_does_not_stop_the_executor(caplog):
