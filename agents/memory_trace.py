@@ -9,13 +9,16 @@ whenever it gets SIGUSR1, a snapshot ``DIR/NAME-NNN.tracemalloc`` and a census o
 censuses, which also carry pymalloc's own account. ``python -m agents.memory_trace DIR NAME`` then says what grew between the
 second snapshot and the last (the first is taken while the agent is still loading): the tracebacks whose
 memory grew most and the object types whose count did. tracemalloc slows the agent and costs memory of its
-own, so this is for a diagnostic run, never the default."""
+own, so this is for a diagnostic run, never the default. The census holds this process's simulated worlds still
+while it runs (``gc.get_objects`` beside the simulator's camera detector failed its OpenCV calls, issue 22)."""
 from __future__ import annotations
 
 import argparse
 import collections
+import contextlib
 import gc
 import json
+import logging
 import os
 import signal
 import sys
@@ -144,10 +147,14 @@ class MemoryTrace:
         self._thread.join(timeout=60)
 
     def _loop(self) -> None:
-        while True:
+        from robot_bridge.failure_log import FailureLog
+
+        failures = FailureLog(logging.getLogger(__name__), f"memory trace of {self.name}: a snapshot")   # a full
+        while True:                                                            # disk costs snapshots, not the trace
             self._wake.wait(self.every)
             self._wake.clear()
-            self.write()
+            with failures.contained(f"number {self.count}"):
+                self.write()
             if self._stopped.is_set():
                 return
 
@@ -157,12 +164,13 @@ class MemoryTrace:
         self.count += 1
         if tracemalloc.is_tracing():
             tracemalloc.take_snapshot().dump(f"{stem}.tracemalloc")
-        kept = {"types": census(), "pymalloc": pymalloc_stats(), "gc_stats": gc.get_stats()}
-        if os.environ.get(ENV_COLLECT):      # how much of it was garbage in cycles, waiting for a full collection
-            kept["collected"] = gc.collect()
-            kept["types_after_collect"] = census()
-        if os.environ.get(ENV_HOLDERS):
-            kept["holders"] = holders(_lines(os.environ[ENV_HOLDERS]))
+        with _worlds_still():
+            kept = {"types": census(), "pymalloc": pymalloc_stats(), "gc_stats": gc.get_stats()}
+            if os.environ.get(ENV_COLLECT):      # how much of it was garbage in cycles, waiting for a full collection
+                kept["collected"] = gc.collect()
+                kept["types_after_collect"] = census()
+            if os.environ.get(ENV_HOLDERS):
+                kept["holders"] = holders(_lines(os.environ[ENV_HOLDERS]))
         if self.holdings is not None:
             try:
                 kept["holdings"] = self.holdings()
@@ -170,6 +178,18 @@ class MemoryTrace:
                 kept["holdings"] = {"error": repr(exc)}
         stem.with_suffix(".census.json").write_text(json.dumps(kept))
         return stem.with_suffix(".tracemalloc")
+
+
+def _worlds_still():
+    """The simulated worlds of this process held still while the census runs (a no-op without a simulator).
+
+    ``gc.get_objects`` hands out every object under construction too: a census beside the simulator's thread took
+    the tuple ``cv2.findContours`` was filling with the GIL released, and OpenCV failed that camera frame with
+    ``SystemError: ... tupleobject.c: bad argument to internal function`` (issue 22; docs/reliability.md). Other C
+    extensions that release the GIL while filling a new tuple can fail the same way: the trace is a diagnostic
+    switch, never on by default."""
+    runner = sys.modules.get("robot_bridge.sim.runner")     # loaded only where a world runs: no import for it
+    return runner.all_paused() if runner is not None else contextlib.nullcontext()
 
 
 def agent_holdings(runtime) -> dict:

@@ -9,6 +9,7 @@
 // Positions are reported in my odometry frame: seen(BearingDeg, DepthM, HeadingDeg).
 //
 // Percepts (robot_bridge/percepts.py): robot_seen(Name, AngleDeg, DepthM, YawDeg), odom(X,Y,YawDeg),
+// camera_failed(Part),
 // agent_alive(Name) (agents/zenoh_arch.py).
 
 { include("geometry.asl") }
@@ -23,13 +24,16 @@ near_limit(1.0, 1.4).    // metres: a robot found closer than the first may driv
                          // range during its test motion: I back off to the second
 far_limit(3.2, 2.6).     // metres: farther than the first, its cylinders are small: I come to the second
 
-available :- not helping(_) & not on_mission & not diagnosing & not self_suspect.
+// A robot whose camera has failed (camera_failed(Part): its detector failed on every frame for a while)
+// cannot look for anyone: it does not offer help, and a search under way ends, not found.
+available :- not helping(_) & not on_mission & not diagnosing & not self_suspect & not camera_failed(_).
 
 // ---- being asked ------------------------------------------------------------------------------
 +!helpMe(F, At)[source(F)] : available & odom(_, _, Yaw)
    <- +helping(F); -+home_yaw(Yaw); -+help_at(F, At);
       .print(F, " needs help: I offer mine");
       .send(F, tell, canHelp).
++!helpMe(F, _)[source(F)] : camera_failed(Part) <- .print(F, " needs help, but my camera's ", Part, " has failed").
 +!helpMe(F, _)[source(F)] <- .print(F, " needs help, but I am busy").
 -!helpMe(F, _)[error(receiver_not_found)] : helping(F) <- .print(F, " is gone"); !release(F).
 
@@ -69,6 +73,7 @@ available :- not helping(_) & not on_mission & not diagnosing & not self_suspect
       !searchResult(F, Result).
 +?findRobot(F, not_helping).
 
++!search(F, _) : camera_failed(Part) <- .print("my camera's ", Part, " has failed: I cannot see ", F).
 +!search(F, _) : robot_seen(F, _, _, _) <- !centre(F, 0).
 +!search(F, Turned) : Turned >= 360.
 +!search(F, Turned) : search_step(S) & look_wait(W)

@@ -18,6 +18,9 @@ percept                             meaning
 ``bumper(Side)``                    a front bumper is pressed; Side is ``left``, ``centre`` or ``right``
 ``over_current(Wheel)``             a wheel motor is overloaded (pushing a blocked wheel); ``left``/``right``
 ``camera_ok``                       the camera delivers frames
+``camera_failed(Part)``             the camera's frames arrive but ``Part`` of its pipeline (``detector``) has
+                                    failed on the last ``CAMERA_FAILED_AFTER`` (10) frames in a row: no
+                                    ``robot_seen`` until it works again; replaces ``camera_ok`` meanwhile
 ``robot_seen(Name, AngleDeg,        the camera sees robot ``Name`` (the seed paper's
 DepthM, YawDeg)``                   ``robot(Name,Angle,Depth,Yaw)``): bearing from the optical axis, left
                                     positive (so ``turn(AngleDeg)`` faces it; the paper's formula has the
@@ -50,9 +53,17 @@ VOCABULARY: dict[tuple[str, int], PerceptSpec] = {(s.name, len(s.args)): s for s
     PerceptSpec("bumper", ("Side left|centre|right",), "a front bumper is pressed"),
     PerceptSpec("over_current", ("Wheel left|right",), "a wheel motor is overloaded"),
     PerceptSpec("camera_ok", (), "the camera delivers frames"),
+    PerceptSpec("camera_failed", ("Part",), "a part of the camera's pipeline fails on every frame"),
     PerceptSpec("robot_seen", ("Name", "AngleDeg deg", "DepthM m", "YawDeg deg"),
                 "another robot seen by the camera"),
 )}
+
+
+CAMERA_FAILED_AFTER = 10
+"""A camera's pipeline that has failed on this many frames in a row (a second at 10 Hz) is reported as
+``camera_failed(Part)`` (instead of ``camera_ok``) until it handles a frame again, by every bridge: one bad frame
+is dropped and logged, a pipeline that keeps failing is a fault the robot perceives, as a real robot's diagnostics
+report a camera driver or perception node that stopped working, instead of the robot silently seeing nothing."""
 
 
 def normalize_degrees(angle: float) -> float:
@@ -97,6 +108,11 @@ def over_current(wheel: str) -> Percept:
 def camera_ok() -> Percept:
     """``camera_ok``."""
     return Percept("camera_ok")
+
+
+def camera_failed(part: str) -> Percept:
+    """``camera_failed(Part)``: ``part`` (e.g. ``detector``) of the camera's pipeline keeps failing."""
+    return Percept("camera_failed", (str(part),))
 
 
 def robot_seen(name: str, angle_deg: float, depth_m: float, yaw_deg: float) -> Percept:

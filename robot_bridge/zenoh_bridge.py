@@ -40,6 +40,7 @@ from typing import Any, ClassVar
 
 from robot_bridge import actions
 from robot_bridge.clock import FollowingClock
+from robot_bridge.failure_log import FailureLog
 from robot_bridge.messaging import PendingActions, PerceptStore, answer_timeout
 from robot_bridge.protocol import Action, Completion, Percept, RobotBridge, completed
 
@@ -235,5 +236,7 @@ class ZenohBridge(RobotBridge):
         return time.monotonic() - self._clock_heard < CLOCK_SILENCE_S
 
     def _expire_loop(self) -> None:
+        failures = FailureLog(log, f"Zenoh bridge of {self.robot}: expiring unanswered actions")  # never hang one
         while not self._stop.wait(EXPIRE_INTERVAL_S):
-            self._pending.expire(f"robot {self.robot} (key {robot_key(self.mas, self.robot, 'status')})")
+            with failures.contained():
+                self._pending.expire(f"robot {self.robot} (key {robot_key(self.mas, self.robot, 'status')})")

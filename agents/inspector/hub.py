@@ -37,6 +37,7 @@ from typing import Any, Callable
 
 from agents.inspector import TIMELINE_MARKS, keys
 from agents.transport import keys as mas_keys
+from robot_bridge.failure_log import FailureLog
 
 log = logging.getLogger("faultmas.inspector")
 
@@ -159,6 +160,7 @@ class TeamHub:
 
     def _poll(self) -> None:
         next_summary = 0.0
+        summaries = FailureLog(log, "inspector hub: the agents' summaries")   # one bad round, not the viewer's feed
         while not self._stop.wait(POLL):
             if self.truth is not None:
                 try:
@@ -167,7 +169,8 @@ class TeamHub:
                     log.debug("ground truth not available", exc_info=True)
             if time.monotonic() >= next_summary:
                 next_summary = time.monotonic() + SUMMARY_EVERY
-                self._query_summaries()
+                with summaries.contained():
+                    self._query_summaries()
 
     def _query_summaries(self) -> None:
         try:

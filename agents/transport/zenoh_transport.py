@@ -38,6 +38,7 @@ from agents.transport.name_claims import Claimant, NameUndecided, decode_claim, 
 from agents.transport.proved_presence import HEARTBEAT, LEASE, ProvedPresence
 from agents.transport.registrations import QUERY_TIMEOUT, encode_services, new_nonce, open_services
 from agents.transport.status import AgentStatus
+from robot_bridge.failure_log import FailureLog
 
 
 INBOX_CAPACITY = 8192
@@ -270,12 +271,14 @@ class ZenohTransport(Transport):
 
     def _heartbeats(self) -> None:
         """Every ``HEARTBEAT`` seconds: each local agent's signed heartbeat, then the leases checked."""
-        while not self._heartbeats_done.wait(HEARTBEAT):
-            for agent in list(self._tokens):
-                self._heartbeat(agent)
-            self._proof.expire()
-            for agent, service in list(self._claims):
-                self._settle_subscription(agent, service)
+        failures = FailureLog(log, "heartbeats and leases")   # one bad round must not end them: peers would
+        while not self._heartbeats_done.wait(HEARTBEAT):    # see this process's agents die of silence
+            with failures.contained():
+                for agent in list(self._tokens):
+                    self._heartbeat(agent)
+                self._proof.expire()
+                for agent, service in list(self._claims):
+                    self._settle_subscription(agent, service)
 
     def _on_heartbeat(self, sample: Any) -> None:
         key = str(sample.key_expr)

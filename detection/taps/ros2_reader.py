@@ -21,6 +21,8 @@ import threading
 import time
 from typing import Callable
 
+from robot_bridge.failure_log import FailureLog
+
 log = logging.getLogger("faultmas.detection")
 
 Batch = list[tuple[int, str, bytes]]
@@ -37,6 +39,8 @@ class _Listener:
         self.on_batch, self.on_tick, self.tick_s = on_batch, on_tick, tick_s
         self.topics: set[str] | None = None if topics is None else set(topics)
         self.next_tick = time.monotonic() + tick_s
+        self.failures = FailureLog(log, f"ROS 2 reader: consumer {getattr(on_batch, '__qualname__', on_batch)!s}")
+        """One consumer that raises loses that batch or tick, not the reader the others share."""
 
 
 class TopicReader:
@@ -181,18 +185,17 @@ class TopicReader:
                     batch.sort(key=lambda m: m[0])
                     self.received += len(batch)
                     for listener in listeners:
-                        if listener.topics is None:
-                            listener.on_batch(batch)
-                        else:
-                            mine = [m for m in batch if m[1] in listener.topics]
-                            if mine:
+                        mine = batch if listener.topics is None else [m for m in batch if m[1] in listener.topics]
+                        if mine:
+                            with listener.failures.contained(f"a batch of {len(mine)} messages"):
                                 listener.on_batch(mine)
                 now = time.monotonic()
                 for listener in listeners:
                     if now >= listener.next_tick:
                         listener.next_tick = now + listener.tick_s
                         if listener.on_tick is not None:
-                            listener.on_tick()
+                            with listener.failures.contained("its tick"):
+                                listener.on_tick()
                 if batch:
                     self._stop.wait(self.batch_s)
         except Exception:

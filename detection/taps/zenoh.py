@@ -24,6 +24,7 @@ from detection.config import ObserverConfig
 from detection.observation import Observation
 from detection.observer_set import ObserverSet
 from detection.taps.live import LiveTap
+from robot_bridge.failure_log import FailureLog
 
 INFO_KEY = "faultmas/observers/info"
 
@@ -143,8 +144,10 @@ class ZenohTap(LiveTap):
 
     def _ticks(self) -> None:
         period = 0.5 / max(self.config.rate_hz, 1.0)
+        failures = FailureLog(log, "Zenoh tap: the observers' tick")   # one bad tick must not end the ticks
         while not self._stop.wait(period):
-            self.tick()
+            with failures.contained():
+                self.tick()
 
     def info_publisher(self, key: str = INFO_KEY):
         """A pipeline listener putting each ``Update`` as JSON on ``key``."""

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import heapq
 import json
+import logging
 import mmap
 import os
 import threading
@@ -190,21 +191,26 @@ class BugRunner:
             self._history = []
 
     def _harm(self) -> None:
+        from robot_bridge.failure_log import FailureLog
+
         tick, last_leak = 0.1, 0.0
+        failures = FailureLog(logging.getLogger(__name__), f"performance bugs of {self.component}: a leak")
         while not self._stop.is_set():
             started = time.monotonic()
-            if "memory_leak" in self.active:         # anonymous maps: given back to the OS when closed
-                block = mmap.mmap(-1, len(_LEAK_BLOCK))
-                block.write(_LEAK_BLOCK)
-                self._leaked.append(block)
-            if started - last_leak >= LEAK_PERIOD_S:
-                last_leak = started
-                if "fd_leak" in self.active:
-                    self._fds.append(os.open(os.devnull, os.O_RDONLY))
-                if "thread_leak" in self.active:
-                    thread = threading.Thread(target=self._release_threads.wait, daemon=True, name="perfbugs-leaked")
-                    thread.start()
-                    self._threads.append(thread)
+            with failures.contained():   # a leak that hit a limit (EMFILE, no memory) must not end the others
+                if "memory_leak" in self.active:         # anonymous maps: given back to the OS when closed
+                    block = mmap.mmap(-1, len(_LEAK_BLOCK))
+                    block.write(_LEAK_BLOCK)
+                    self._leaked.append(block)
+                if started - last_leak >= LEAK_PERIOD_S:
+                    last_leak = started
+                    if "fd_leak" in self.active:
+                        self._fds.append(os.open(os.devnull, os.O_RDONLY))
+                    if "thread_leak" in self.active:
+                        thread = threading.Thread(target=self._release_threads.wait, daemon=True,
+                                                  name="perfbugs-leaked")
+                        thread.start()
+                        self._threads.append(thread)
             if "wasted_cpu" in self.active:
                 busy_until = started + tick * WASTED_CPU_SHARE
                 while time.monotonic() < busy_until:
@@ -212,6 +218,9 @@ class BugRunner:
             self._stop.wait(max(0.0, tick - (time.monotonic() - started)))
 
     def _send_delayed(self) -> None:
+        from robot_bridge.failure_log import FailureLog
+
+        failures = FailureLog(logging.getLogger(__name__), f"performance bugs of {self.component}: a delayed publish")
         while not self._stop.is_set():
             with self._delayed_lock:
                 while not self._delayed and not self._stop.is_set():
@@ -224,7 +233,8 @@ class BugRunner:
                     self._delayed_lock.wait(wait)
                     continue
                 heapq.heappop(self._delayed)
-            publish(msg)
+            with failures.contained():   # one message lost (logged), not every later one
+                publish(msg)
 
 
 def _wrap_callback(runner: BugRunner, callback: Callable) -> Callable:

@@ -6,6 +6,7 @@ that works (executor, nodes, context, thread; see the notes, section 6) without 
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import sys
 import threading
@@ -72,14 +73,24 @@ class RosContext:
         self._closed = False
 
     def _spin(self) -> None:
+        """``executor.spin()``, except that a callback that raises costs its message or timer tick, not the
+        thread: before, one exception in one callback ended every node of the context (logged once, then at
+        10, 100... in a row, see ``FailureLog``)."""
         from rclpy.executors import ExternalShutdownException
-        try:
-            self.executor.spin()
-        except ExternalShutdownException:
-            pass
-        except Exception:           # a context shut down under the executor's feet
-            if self.ok():
-                raise
+
+        from robot_bridge.failure_log import FailureLog
+
+        failures = FailureLog(logging.getLogger(__name__), "rclpy executor: a callback")
+        while self.ok() and not getattr(self.executor, "_is_shutdown", False):
+            try:
+                self.executor.spin_once()
+                failures.succeeded()
+            except ExternalShutdownException:
+                return
+            except Exception as exc:
+                if not self.ok():   # a context shut down under the executor's feet
+                    return
+                failures.failed(exc)
 
     def ok(self) -> bool:
         return self.context.ok() and not self._closed

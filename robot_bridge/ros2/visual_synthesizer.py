@@ -5,10 +5,14 @@ Subscribes ``camera/rgb/image_raw`` (rgb8 or bgr8), ``camera/depth_registered/im
 or 32FC1 m) and ``camera/rgb/camera_info`` with sensor-data QoS, runs :mod:`perception`'s detector
 (``detect_all``) on each RGB frame with the latest depth frame, and publishes on ``jason/percepts`` a snapshot of
 source ``camera``: ``camera_ok`` plus one ``robot_seen(Name, AngleDeg, DepthM, YawDeg)`` per robot
-found (see :mod:`robot_bridge.percepts`). The markers do not say whose they are: ``Name`` is the
+found (see :mod:`robot_bridge.percepts`). A frame the detector fails on is dropped with a log line
+(the node goes on: before, one exception ended it); after ``CAMERA_FAILED_AFTER`` such frames in a row
+the snapshot says ``camera_failed(detector)`` instead of ``camera_ok``, as the simulator's camera does. The markers do not say whose they are: ``Name`` is the
 parameter ``observed`` (default: the other robot of ``robots`` when there are two).
 """
 from __future__ import annotations
+
+import logging
 
 from robot_bridge.ros2.runtime import require_ros, run_node
 
@@ -23,6 +27,7 @@ from std_msgs.msg import String  # noqa: E402
 
 from perception.camera import CameraModel  # noqa: E402
 from robot_bridge import percepts  # noqa: E402
+from robot_bridge.failure_log import FailureLog  # noqa: E402
 from robot_bridge.protocol import Percept  # noqa: E402
 from robot_bridge.ros2.convert import image_to_array  # noqa: E402
 from robot_bridge.ros2.wire import PerceptSnapshot  # noqa: E402
@@ -78,6 +83,8 @@ class VisualSynthesizer(Node):
         self.frames = 0
         self.last: list[Percept] = []
         self._detect = _load_detector(self.get_logger())
+        self._detect_failures = FailureLog(logging.getLogger(__name__), f"visual synthesizer {namespace or '/'}: "
+                                           "the detector", persistent_after=percepts.CAMERA_FAILED_AFTER)
         self.create_subscription(CameraInfo, "camera/rgb/camera_info", self._on_info, qos_profile_sensor_data)
         self.create_subscription(Image, "camera/depth_registered/image_raw", self._on_depth, qos_profile_sensor_data)
         self.create_subscription(Image, "camera/rgb/image_raw", self._on_rgb, qos_profile_sensor_data)
@@ -99,8 +106,14 @@ class VisualSynthesizer(Node):
         if self.depth.shape != rgb.shape[:2]:
             self.get_logger().warning(f"depth {self.depth.shape} and rgb {rgb.shape[:2]} differ; frame skipped")
             return
-        found = [percepts.camera_ok()]
-        found += [seen(d, self.observed) for d in self._detect(rgb, self.depth, self.camera)]
+        try:
+            found = [percepts.camera_ok()]
+            found += [seen(d, self.observed) for d in self._detect(rgb, self.depth, self.camera)]
+        except Exception as exc:    # this frame is lost, not the node; one that keeps failing is named
+            self._detect_failures.failed(exc, f"frame {self.frames}")
+            found = [percepts.camera_failed("detector") if self._detect_failures.persistent else percepts.camera_ok()]
+        else:
+            self._detect_failures.succeeded()
         self.frames += 1
         self.last = found
         self._out.publish(String(data=PerceptSnapshot(self.agent_name, "camera", tuple(found),

@@ -13,12 +13,17 @@ drive the world directly (``World.step``/``run_until``) instead of through a run
 """
 from __future__ import annotations
 
+import logging
 import threading
 import time
 import weakref
+from contextlib import ExitStack, contextmanager
+from typing import Iterator
 
 from robot_bridge.sim import allocator
 from robot_bridge.sim.world import World
+
+log = logging.getLogger(__name__)
 
 
 class WorldRunner:
@@ -33,11 +38,21 @@ class WorldRunner:
         flat out). Agents in other processes, whose commands arrive some wall milliseconds late and whose
         deadlines count in simulated time, need it: flat out, one robot's move spent another's whole move
         deadline before its command arrived."""
+        _every_runner.add(self)
         self._users = 0
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._mutex = threading.Lock()
+        self._gate = threading.Condition()
+        self._pausers = 0
+        self._stepping = False
+        self._waiting = False
+        self._owed = False
+        """A pause ended while the thread waited to step: the next pause waits for that step (pausers taking
+        turns back to back would hold the world still for ever)."""
         self.error: BaseException | None = None
+        """What ended the thread, if something did (a failure of the world itself, not of a camera listener's:
+        those cost a frame, see ``World.subscribe_camera``); the bridges then fail actions with it."""
 
     def acquire(self) -> None:
         """One more user: start the thread on the first."""
@@ -65,6 +80,53 @@ class WorldRunner:
     def running(self) -> bool:
         return self._thread is not None and self._thread.is_alive()
 
+    @contextmanager
+    def paused(self) -> Iterator[None]:
+        """Hold the world still: wait for the step under way to end, keep the thread from starting another
+        until the block ends (simulated time stands meanwhile, as when everything is at rest).
+
+        For what must not run beside the simulator's thread: a census of the live objects
+        (``gc.get_objects``) holds references to every object under construction, and the tuple
+        ``cv2.findContours`` is filling, with the GIL released, in the camera detector is one of them: OpenCV
+        then fails that frame with ``SystemError: ... bad argument to internal function`` (issue 22, see
+        docs/reliability.md, ``tests/hardening/gc_census_race.py``)."""
+        if threading.current_thread() is self._thread:   # asked from within a step (a listener): nothing else steps
+            yield
+            return
+        with self._gate:
+            self._gate.wait_for(lambda: not self._owed, timeout=1.0)   # a pause after a pause: one step between
+            self._pausers += 1
+            while self._stepping:
+                self._gate.wait()
+        try:
+            yield
+        finally:
+            with self._gate:
+                self._pausers -= 1
+                self._owed = self._pausers == 0 and self._waiting
+                self._gate.notify_all()
+
+    def _step(self, world: World) -> None:
+        """One step, unless someone holds the world still (``paused``)."""
+        with self._gate:
+            self._waiting = True
+            while self._pausers and not self._stop.is_set():
+                self._gate.wait(0.05)
+            self._waiting = False
+            if self._stop.is_set():
+                self._owed = False
+                self._gate.notify_all()
+                return
+            self._stepping = True
+        try:
+            world.step()
+        finally:
+            with self._gate:
+                self._stepping = False
+                if self._pausers or self._owed:
+                    self._owed = False
+                    self._gate.notify_all()
+
     def _run(self) -> None:
         world, dt = self.world, self.world.dt
         anchor_wall, anchor_sim, flat_out = time.monotonic(), world.time, False
@@ -77,7 +139,7 @@ class WorldRunner:
                 fast = self.speed == 0 and world.busy()
                 cap = self.busy_cap
                 if fast and cap is None:
-                    world.step()
+                    self._step(world)
                     flat_out = True
                     continue
                 rate = self.speed or (cap if fast else 1.0)
@@ -85,14 +147,29 @@ class WorldRunner:
                     anchor_wall, anchor_sim, flat_out = time.monotonic(), world.time, fast
                 due = anchor_sim + (time.monotonic() - anchor_wall) * rate
                 if world.time + dt <= due:
-                    world.step()
+                    self._step(world)
                     continue
                 with world.changed:  # a new command (or shutdown) wakes us early
                     world.changed.wait(timeout=min(0.05, (world.time + dt - due) / rate))
         except BaseException as exc:  # keep the failure for the bridges to report
             self.error = exc
-            world.cancel_all("shutdown")
-            raise
+            log.critical("the simulator's thread failed at %.2f s simulated: %r; every action now fails "
+                         "(shutdown: simulator failed)", world.time, exc, exc_info=exc)
+            world.cancel_all("shutdown")   # logged above with its traceback: not raised again for a second one
+
+
+_every_runner: "weakref.WeakSet[WorldRunner]" = weakref.WeakSet()
+"""Every runner of this process, for ``all_paused``."""
+
+
+@contextmanager
+def all_paused() -> Iterator[None]:
+    """Every world of this process held still (``WorldRunner.paused``) for the block: where a census of the live
+    objects (``gc.get_objects``, ``agents.memory_trace``) may run without failing the simulator's camera frames."""
+    with ExitStack() as stack:
+        for runner in list(_every_runner):
+            stack.enter_context(runner.paused())
+        yield
 
 
 _shared: "weakref.WeakValueDictionary[int, WorldRunner]" = weakref.WeakValueDictionary()

@@ -20,6 +20,7 @@ import threading
 import time
 from typing import Any
 
+from robot_bridge.failure_log import FailureLog
 from robot_bridge.protocol import Action, Completion
 from robot_bridge.sim.bridge import SimBridge
 from robot_bridge.zenoh_bridge import clock_document, clock_key, robot_key
@@ -103,18 +104,21 @@ class SimServer:
         return document if self.sealed is None else self.sealed.seal(self.sealed.environment, document)
 
     def _loop(self) -> None:
+        """Every ``interval``: the clock, then each robot's percepts; what fails is logged (once, then at 10,
+        100... in a row: not a line every 20 ms) and tried again next time (a closed session at shutdown is
+        not logged)."""
+        publishers = [(FailureLog(log, "sim server: publishing the clock"), self.publish_clock)]
+        publishers += [(FailureLog(log, f"sim server: publishing {name}'s percepts"),
+                        lambda name=name: self.publish_percepts(name)) for name in self.bridges]
         while not self._stop.wait(self.interval):
-            try:
-                self.publish_clock()
-            except Exception as exc:  # a closed session at shutdown
-                if not self._stop.is_set():
-                    log.warning("sim server: cannot publish the clock: %s", exc)
-            for name in self.bridges:
+            for failures, publish in publishers:
                 try:
-                    self.publish_percepts(name)
-                except Exception as exc:  # a closed session at shutdown
+                    publish()
+                except Exception as exc:
                     if not self._stop.is_set():
-                        log.warning("sim server: cannot publish %s's percepts: %s", name, exc)
+                        failures.failed(exc)
+                else:
+                    failures.succeeded()
 
     def _on_request(self, name: str, sample) -> None:
         from robot_bridge.ros2 import wire

@@ -11,6 +11,7 @@ trajectories (each robot draws its noise from its own generator, seeded by the w
 from __future__ import annotations
 
 import functools
+import logging
 import math
 import threading
 import zlib
@@ -22,11 +23,15 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 from robot_bridge import percepts as vocabulary
+from robot_bridge.failure_log import FailureLog
+from robot_bridge.percepts import CAMERA_FAILED_AFTER
 from robot_bridge.protocol import Completion, Percept
 from robot_bridge.sim import allocator, faults, imu, kobuki, motion, odometry
 from robot_bridge.sim.camera_frame import CameraFrame
 from robot_bridge.sim.faults import NO_FAULT, Fault
 from robot_bridge.sim.odometry_fusion import OdometryFusion, Pose2D
+
+log = logging.getLogger(__name__)
 
 DEFAULT_DT = 0.02
 """Simulated seconds per step: the Kobuki reports its sensors at 50 Hz."""
@@ -74,6 +79,17 @@ class TrajectoryPoint(NamedTuple):
     odom_yaw_deg: float
 
 
+@dataclass(eq=False)
+class _CameraListener:
+    """One subscriber of a robot's camera, with the record of its failures."""
+
+    call: Callable[[CameraFrame], None]
+    part: str
+    reads_pixels: bool
+    robots_only: bool
+    failures: FailureLog
+
+
 @dataclass
 class _Robot:
     name: str
@@ -89,7 +105,7 @@ class _Robot:
     command: kobuki.WheelSpeeds | None = None
     bumper: str | None = None
     camera: CameraMount | None = None
-    camera_listeners: list[Callable[[CameraFrame], None]] = field(default_factory=list)
+    camera_listeners: list[_CameraListener] = field(default_factory=list)
     pixel_readers: int = 0
     """How many of ``camera_listeners`` read every frame's pixels (their frames are rendered in parallel)."""
     robot_readers: int = 0
@@ -132,6 +148,7 @@ class World:
         self._robots: dict[str, _Robot] = {}
         self._steps = 0
         self._lock = threading.RLock()
+        self._render_failures = FailureLog(log, "world: rendering the frames due side by side")
         self.changed = threading.Condition(self._lock)
         """Notified on every new command and every step, for runners and waiters."""
 
@@ -264,10 +281,17 @@ class World:
                     future.set_result(completion)
             if any(read for _, _, read in frames):
                 from robot_bridge.sim import camera
-                camera.render_all([frame for _, frame, read in frames if read])
+                with self._render_failures.contained(f"at {self.time:.2f} s"):   # the listeners render their own
+                    camera.render_all([frame for _, frame, read in frames if read])
             for listeners, frame, _ in frames:
-                for listener in listeners:
-                    listener(frame)
+                for listener in listeners:   # one that raises loses this frame, not the world (issue 22)
+                    try:
+                        listener.call(frame)
+                    except Exception as exc:
+                        listener.failures.failed(exc, f"frame at {frame.time:.2f} s")
+                    else:   # a robot detector skips a frame no robot can be in: no proof that it works again
+                        if not listener.robots_only or getattr(frame, "may_show_robots", True):
+                            listener.failures.succeeded()
 
     def run(self, seconds: float) -> None:
         """Advance by ``seconds`` (rounded to whole steps)."""
@@ -433,13 +457,18 @@ class World:
             for wheel, since in zip(("left", "right"), robot.over_current_at):
                 if self.time - since <= OVER_CURRENT_HOLD_S:
                     found.append(vocabulary.over_current(wheel))
-            if robot.camera is not None and self.time - robot.last_frame <= 3.0 / robot.camera.rate_hz:
+            failed = next((listener.part for listener in robot.camera_listeners if listener.failures.persistent),
+                          None)
+            if failed is not None:
+                found.append(vocabulary.camera_failed(failed))
+            elif robot.camera is not None and self.time - robot.last_frame <= 3.0 / robot.camera.rate_hz:
                 found.append(vocabulary.camera_ok())
             return found
 
     # ------------------------------------------------------------------ cameras
     def subscribe_camera(self, name: str, listener: Callable[[CameraFrame], None],
-                         reads_pixels: bool = False, robots_only: bool = False) -> Callable[[], None]:
+                         reads_pixels: bool = False, robots_only: bool = False,
+                         part: str = "listener") -> Callable[[], None]:
         """Call ``listener`` with each frame robot ``name``'s camera takes at its rate; returns unsubscribe.
 
         Frames render their pixels when first read. A listener that reads every frame (a detector)
@@ -447,21 +476,28 @@ class World:
         on the cores before the listeners are called, instead of one after the other in the listeners.
         ``robots_only`` (with ``reads_pixels``): it reads only the frames that may show a robot (a robot
         detector checks ``DeferredFrame.may_show_robots`` first), so the others are not rendered for it.
+
+        A listener that raises loses that frame (logged, rate-limited, see ``FailureLog``); the world and the
+        other listeners go on. After ``CAMERA_FAILED_AFTER`` failed frames in a row the robot perceives
+        ``camera_failed(Part)``, ``part`` naming the listener (the bridge's ``detector``).
         """
+        what = f"robot {name}'s camera {part} ({getattr(listener, '__qualname__', type(listener).__qualname__)})"
+        subscriber = _CameraListener(listener, part, bool(reads_pixels), bool(reads_pixels and robots_only),
+                                     FailureLog(log, what, persistent_after=CAMERA_FAILED_AFTER))
         with self._lock:
             robot = self._robot(name)
             if robot.camera is None:
                 raise ValueError(f"robot {name!r} has no camera (add it with camera=True)")
-            robot.camera_listeners.append(listener)
-            robot.pixel_readers += bool(reads_pixels)
-            robot.robot_readers += bool(reads_pixels and robots_only)
+            robot.camera_listeners.append(subscriber)
+            robot.pixel_readers += subscriber.reads_pixels
+            robot.robot_readers += subscriber.robots_only
 
         def unsubscribe() -> None:
             with self._lock:
-                if listener in robot.camera_listeners:
-                    robot.camera_listeners.remove(listener)
-                    robot.pixel_readers -= bool(reads_pixels)
-                    robot.robot_readers -= bool(reads_pixels and robots_only)
+                if subscriber in robot.camera_listeners:
+                    robot.camera_listeners.remove(subscriber)
+                    robot.pixel_readers -= subscriber.reads_pixels
+                    robot.robot_readers -= subscriber.robots_only
         return unsubscribe
 
     def camera_frame(self, name: str) -> CameraFrame:

@@ -76,3 +76,39 @@ def test_the_report_names_a_missing_directory(tmp_path, capsys):
 
     assert main([str(tmp_path / "none"), "robot1"]) == 2
     assert "fewer than two snapshots of robot1" in capsys.readouterr().err
+
+
+def test_the_census_holds_the_simulated_worlds_of_the_process_still(tmp_path, monkeypatch):
+    """``gc.get_objects`` beside the simulator's thread failed its camera detector's OpenCV calls (issue 22,
+    docs/reliability.md): the census runs while every world of the process stands still."""
+    import time
+
+    from agents import memory_trace
+    from robot_bridge import Action
+    from robot_bridge.sim.bridge import SimBridge
+
+    bridge = SimBridge("robot1")
+    bridge.setup()
+    world, seen = bridge.world, []
+    census = memory_trace.census
+
+    def census_watching_the_world():
+        before = world.time
+        time.sleep(0.2)
+        seen.append((before, world.time))
+        return census()
+
+    monkeypatch.setattr(memory_trace, "census", census_watching_the_world)
+    try:
+        bridge.act(Action("rotate", (30.0,)))             # the world steps flat out
+        started = world.time
+        deadline = time.monotonic() + 30.0
+        while world.time == started and time.monotonic() < deadline:
+            time.sleep(0.01)
+        MemoryTrace(tmp_path, "robot1", frames=0).write()
+        moving = world.time
+        time.sleep(0.2)
+        assert world.time > moving                        # and it steps again afterwards
+    finally:
+        bridge.shutdown()
+    assert seen and all(before == after for before, after in seen), seen

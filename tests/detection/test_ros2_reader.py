@@ -115,3 +115,35 @@ def test_the_reader_ends_when_its_context_is_shut_down_under_it(publisher):
     ros.close()                                             # as a caller that forgets the reader does
     reader._thread.join(10)
     assert not reader._thread.is_alive()
+
+
+def test_a_consumer_that_raises_loses_its_batch_not_the_reader_the_others_share(publisher, caplog):
+    """Before: one consumer's exception ended the reader's thread ("ROS 2 reader stopped"), and every observer
+    sharing it went deaf."""
+    import logging
+
+    from std_msgs.msg import Float64
+
+    from detection.taps.ros2_reader import TopicReader
+
+    raised, others, ticks = [], [], []
+
+    def broken(batch):
+        raised.append(len(batch))
+        raise ValueError("an observer's bug")
+
+    def broken_tick():
+        ticks.append(1)
+        raise ValueError("a tick's bug")
+
+    with caplog.at_level(logging.WARNING, logger="faultmas.detection"):
+        with RosContext(domain_id=DOMAIN) as ros:
+            reader = TopicReader(ros.context, broken, on_tick=broken_tick, tick_s=0.05, name="reader_raising")
+            reader.add_listener(others.append)
+            reader.subscribe("/fast", Float64)
+            reader.start()
+            assert wait_for(lambda: len(raised) >= 5 and len(others) >= 5 and len(ticks) >= 5, 30)
+            assert reader._thread.is_alive()
+            reader.close()
+    lines = [r.getMessage() for r in caplog.records if "ROS 2 reader" in r.getMessage()]
+    assert 1 <= len(lines) <= 3 and "ValueError" in lines[0], lines    # said once (then at 10), not per batch

@@ -165,17 +165,25 @@ def _next_task(n: int, world, bridges, hub, mas: str, rng: random.Random, timeou
     return faulty, fault, unturned
 
 
-def _kept_by_simulator(world) -> dict:
+def _kept_by_simulator(world, runner) -> dict:
     """What the simulator holds that may grow with time, so a RSS step can be told from a leak: the camera
-    renderers' static layers (bounded, 32 poses each), the trajectory rows kept, Python's gc objects."""
+    renderers' static layers (bounded, 32 poses each), the trajectory rows kept, Python's gc objects; and the
+    camera frames its listeners (the robots' detectors) failed on so far, each dropped with a log line.
+
+    The census runs with the world held still (``WorldRunner.paused``): ``gc.get_objects`` beside the simulator's
+    thread took the tuple ``cv2.findContours`` was filling, and OpenCV failed that frame with a SystemError
+    (issue 22, docs/reliability.md: 32 to 60 per 1,000 detections in ``tests/hardening/gc_census_race.py``)."""
     import gc
 
-    renderers = _renderers_alive()
+    with runner.paused():
+        renderers = _renderers_alive()
+        gc_objects = len(gc.get_objects())
     layers = sum(len(r._static) for r in renderers)
     layer_bytes = sum(kept[1].nbytes + kept[2].nbytes for r in renderers for kept in list(r._static.values()))
     rows = sum(len(robot.trajectory) for robot in world._robots.values())
+    failed = sum(listener.failures.total for robot in world._robots.values() for listener in robot.camera_listeners)
     return {"static_layers": layers, "static_layers_mib": round(layer_bytes / 2 ** 20, 1),
-            "trajectory_rows": rows, "gc_objects": len(gc.get_objects())}
+            "trajectory_rows": rows, "gc_objects": gc_objects, "camera_frames_failed": failed}
 
 
 def _renderers_alive() -> list:
@@ -305,16 +313,18 @@ def soak(sim_seconds: float, wall_seconds: float | None, task_timeout: float, se
                    "soak_rss_mib": round(me.memory_info().rss / 2 ** 20, 1), "soak_memory": memory_breakdown(),
                    "soak_threads": threading.active_count(),
                    "soak_os_threads": me.num_threads(), "soak_fds": me.num_fds(), "hub_declared": _declared(hub),
-                   **_kept_by_simulator(world)}
+                   **_kept_by_simulator(world, runner)}
             if n == 1:
-                type_counts["first"] = _type_counts()
+                with runner.paused():   # a census beside the simulator's thread fails its OpenCV calls
+                    type_counts["first"] = _type_counts()
             if agent_log and row["outcome"] != "correct":
                 _write_paths(f"{agent_log}.task{n}.json", world, robots, task_sim)
             kept_rows.write(json.dumps(row) + "\n")
             emit(row)
             why = limit_reached()
             if why is not None or len(row["agent_processes"]) < len(robots):
-                type_counts["last"] = _type_counts()
+                with runner.paused():
+                    type_counts["last"] = _type_counts()
                 hold_state["ended_by"] = why or "an agent process ended"
                 return
             n += 1

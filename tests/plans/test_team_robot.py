@@ -42,3 +42,19 @@ def test_a_new_task_ends_what_the_last_one_left_going():
     assert "awaitHelper" not in goals and "askForHelp" not in goals, goals
     assert solve_first(robot, parse_term("available"), {})
     assert solve_first(robot, parse_term("start_pose(1.0, 2.0, 90.0)"), {})
+
+
+def test_a_robot_whose_camera_has_failed_does_not_offer_help():
+    """``camera_failed(Part)`` (robot_bridge/percepts.py): it cannot look for anyone, so it is not available, says
+    why when asked, and a search it is in ends at once."""
+    path = plans_dir().joinpath("team_robot.asl")
+    printed = []
+    runtime = LocalRuntime(printer=lambda name, text: printed.append(text))
+    robot = runtime.add_agent("robot1", program=parse_program(path.read_text(), str(path)), source_file=str(path),
+                              extra_beliefs=[parse_term("camera_failed(detector)"), parse_term("odom(0, 0, 0)")],
+                              extra_goals=[parse_term("search(robot2, 0)")])
+    runtime.add_agent("robot2", source="!go.\n+!go <- .send(robot1, achieve, helpMe(robot2, at(1, 2))).\n")
+    runtime.run(timeout=2, stop_when_idle=True)
+    assert not solve_first(robot, parse_term("available"), {})
+    assert "robot2 needs help, but my camera's detector has failed" in printed, printed
+    assert "my camera's detector has failed: I cannot see robot2" in printed, printed

@@ -79,3 +79,25 @@ def test_callbacks_and_publishing_are_slowed_only_while_on():
         assert time.perf_counter() - started >= perfbugs.ADDED_LATENCY_S
     finally:
         runner.stop()
+
+
+def test_a_delayed_publish_that_raises_loses_that_message_not_the_later_ones():
+    """Before: one publish that raised (a node being destroyed) ended the delaying thread, and every later
+    message of ``delayed_communication`` stayed queued for ever."""
+    now = time.time()
+    runner = BugRunner("a_node", [PerfBug("a_node", "delayed_communication", now - 1.0, now + 60.0)])
+    runner.start()
+    sent = []
+
+    def publish(msg):
+        if msg == "bad":
+            raise RuntimeError("publisher destroyed")
+        sent.append(msg)
+
+    try:
+        assert _wait(lambda: runner.active == {"delayed_communication"})
+        for msg in ("bad", "after"):
+            runner.publish(publish, msg)
+        assert _wait(lambda: sent == ["after"])
+    finally:
+        runner.stop()

@@ -239,6 +239,26 @@ def test_a_camera_frame_reaches_visual_synthesizer_and_a_percept_comes_out(camer
     assert percept(bridges["faulty"], "camera_ok") is None           # the faulty robot has no camera here
 
 
+def test_a_detector_that_keeps_failing_is_named_camera_failed_and_the_node_goes_on(camera, bridges):
+    """Before: one exception in the detector ended the node (rclpy's spin raised); now a failed frame is dropped
+    and logged, and ``CAMERA_FAILED_AFTER`` in a row make the snapshot say ``camera_failed(detector)``."""
+    sim, synth = camera
+    detect = synth._detect
+
+    def broken(rgb, depth, camera_model):
+        raise SystemError("Objects/tupleobject.c:117: bad argument to internal function")
+    synth._detect = broken
+    try:
+        assert wait_for(lambda: percept(bridges["helper"], "camera_failed") is not None, 30), \
+            f"{synth.frames} frames, {synth._detect_failures.consecutive} failed in a row"
+        assert percept(bridges["helper"], "camera_failed").args == ("detector",)
+        assert percept(bridges["helper"], "camera_ok") is None and percept(bridges["helper"], "robot_seen") is None
+    finally:
+        synth._detect = detect
+    assert wait_for(lambda: percept(bridges["helper"], "camera_ok") is not None, 30)
+    assert percept(bridges["helper"], "camera_failed") is None
+
+
 def test_the_helper_sees_the_faulty_robot_where_it_is(graph, camera, bridges):
     pytest.importorskip("perception.detect", reason="the perception detector is not built yet")
     _, nodes = graph

@@ -136,7 +136,7 @@ def test_a_frame_the_detector_fails_on_is_dropped_and_the_world_runs_on(caplog):
     try:
         world.run(0.5)
         assert failures and world.time == pytest.approx(0.5)
-        assert "the detector failed" in caplog.text
+        assert "robot watcher's camera detector (SimBridge._on_frame) failed (frame at 0.00 s)" in caplog.text
         pytest.importorskip("perception.detect")
         assert any(p.name == "robot_seen" for p in bridge.percepts())     # later frames are seen again
     finally:
