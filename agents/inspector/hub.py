@@ -223,7 +223,7 @@ class TeamHub:
                 subscriber = self.session.declare_subscriber(keys.stream_key(self.mas, agent), self._on_stream)
             self._watch[agent] = (viewers + 1, subscriber)
         if viewers == 0:
-            threading.Thread(target=self.refresh, args=(agent,), daemon=True).start()
+            threading.Thread(target=self._refresh_in_background, args=(agent,), daemon=True).start()
 
     def unwatch(self, agent: str) -> None:
         with self._lock:
@@ -274,13 +274,19 @@ class TeamHub:
 
     def _fetch_plans(self, name: str) -> None:
         try:
-            self.refresh(name)
-        except Exception as exc:   # zenoh.ZError: the session closed under this thread (seen as a test's end)
-            if not self._stop.is_set():
-                log.warning("inspector: %s's plan library could not be fetched: %s", name, exc)
+            self._refresh_in_background(name)
         finally:
             with self._lock:
                 self._fetching.discard(name)
+
+    def _refresh_in_background(self, name: str) -> None:
+        """``refresh`` on a thread of its own: a failure is logged, not the thread's end (a zenoh.ZError when the
+        session closes under it, seen as a test's end; every such thread goes through here)."""
+        try:
+            self.refresh(name)
+        except Exception as exc:
+            if not self._stop.is_set():
+                log.warning("inspector: %s's mind could not be fetched: %s", name, exc)
 
     def control(self, agent: str, command: str) -> dict:
         """Ask ``agent`` to pause, step or resume; its answer (it refuses unless the MAS allows it)."""
@@ -306,7 +312,7 @@ class TeamHub:
                 except ValueError as exc:
                     self._drop(key, str(exc))
                     continue
-                threading.Thread(target=self.refresh, args=(agent,), daemon=True).start()
+                threading.Thread(target=self._refresh_in_background, args=(agent,), daemon=True).start()
                 return answer
         return {"ok": False, "error": f"agent {agent} did not answer (gone, or not inspectable)"}
 
