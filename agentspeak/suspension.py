@@ -5,7 +5,7 @@ it may go on, then the formula succeeds or fails (Jason's suspended intentions, 
 Part of the reasoning cycle (``agentspeak.agent``), kept here so that the cycle's file holds its steps (sense,
 deliberate, act) and this one everything about waiting. ``ag: Agent`` is ``agentspeak.agent.Agent``, named but
 not imported: the agent imports this module. Runs from source (not in ``_speedups.COMPILED_MODULES``): it runs
-once per wait, not once per cycle.
+once per wait, and per cycle only while an intention waits for a condition (``.wait(Cond)``).
 """
 from __future__ import annotations
 
