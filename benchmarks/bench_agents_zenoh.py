@@ -15,7 +15,8 @@ sink process (Linux ``/proc``), which says where the time goes when the machine 
 Last, where a tell's CPU goes (the smallest size), by stage, the same two programs in this one process without a
 network (``_stages``): the sending agent (loop, ``.send``, envelope encoding, batching); on the sink's
 side the envelope's decoding and checks, the content's reading, and the reasoning (belief, event,
-plan); beside them, the CPU a tell may cost on each side for the 30% target at the raw rate measured.
+plan); beside them, the CPU a tell could cost on each side at 30% of the raw rate measured (issue 3's target, since
+retired by the owner: a tell's reference is Java Jason's own messaging rate, which faultmas beats).
 
 And what ``.create_agent`` of a fresh name costs (``_creates``): in one process without a network, and in a MAS over
 Zenoh with another process, where the name is first claimed from every process (issue 22: two processes making one
@@ -79,7 +80,7 @@ def run(quick: bool = False) -> str:
     lines.append(f"where a {SIZES[0]} B tell's CPU goes, one process, no network: sending agent "
                  f"{stages['sender']:.1f} µs; sink {stages['sink']:.1f} µs = envelope decoding and checks "
                  f"{stages['decode']:.1f} + content reading {stages['content']:.1f} + reasoning "
-                 f"{stages['reasoning']:.1f}; the 30% target allows {allowed:.1f} µs per tell on each side")
+                 f"{stages['reasoning']:.1f}; 30% of raw (a retired target) would allow {allowed:.1f} µs per tell on each side")
     lines.append(f"secure profile (Ed25519-signed envelopes, replay check), the same {SIZES[0]} B tell: sending agent "
                  f"{secure['sender']:.1f} µs (+{secure['sender'] - stages['sender']:.1f}); envelope decoding and "
                  f"checks {secure['decode']:.1f} µs (+{secure['decode'] - stages['decode']:.1f}); sink "
@@ -96,8 +97,8 @@ def run(quick: bool = False) -> str:
     lines.append("`.create_agent` of a fresh name, median / p95: "
                  + "; ".join(f"{where} {_ms(times, 0.5):.2f} / {_ms(times, 0.95):.2f} ms" for where, times in creates.items()))
     lines.append("raw round trip: 200 B ping/pong; ratio: agents / raw for rates, raw / agents for latencies")
-    lines.append("targets: tell >= 30% of raw; askOne median < 1,000 µs; `.create_agent` in one process: no claim "
-                 "(no network); its claim over Zenoh: median < 2 ms")
+    lines.append("targets: askOne median < 1,000 µs; `.create_agent` in one process: no claim (no network); its claim "
+                 "over Zenoh: median < 2 ms; tell: Java Jason's own messaging rate (the 30%-of-raw target is retired)")
     return "\n".join(lines)
 
 
@@ -165,9 +166,7 @@ def _agents(count: int, trips: int) -> tuple[dict[int, float], list[float], dict
     bridge = TransportBridge(runtime, transport, declared=("bench", "sink")).attach()
     folder = Path(tempfile.mkdtemp(prefix="bench_agents_"))
     (folder / "sink.asl").write_text(SINK)
-    child = subprocess.Popen([sys.executable, "-m", "agents", "agent", "run", str(folder / "sink.asl"),
-                              "--name", "sink", "--mas", mas, "--connect", transport.endpoints[0]],
-                             cwd=REPO, stdin=subprocess.DEVNULL, env=dict(os.environ, PYTHONUNBUFFERED="1"))
+    child = _start_sink(folder, mas, transport.endpoints[0])
     loop = threading.Thread(target=bridge.run, daemon=True)
     loop.start()
 
@@ -203,12 +202,24 @@ def _agents(count: int, trips: int) -> tuple[dict[int, float], list[float], dict
         loop.join(10)
         bridge.detach()
         transport.close()
-        try:
-            child.wait(10)
-        except subprocess.TimeoutExpired:
-            child.kill()
-            child.wait()
+        _end_sink(child)
     return rates, rtt, cpu
+
+
+def _start_sink(folder: Path, mas: str, endpoint: str, **popen) -> subprocess.Popen:
+    """The other process of the MAS: ``faultmas agent run`` of ``folder/sink.asl`` as ``sink``, joined to ``endpoint``."""
+    return subprocess.Popen([sys.executable, "-m", "agents", "agent", "run", str(folder / "sink.asl"),
+                             "--name", "sink", "--mas", mas, "--connect", endpoint],
+                            cwd=REPO, stdin=subprocess.DEVNULL, env=dict(os.environ, PYTHONUNBUFFERED="1"), **popen)
+
+
+def _end_sink(child: subprocess.Popen) -> None:
+    """Wait for the sink to stop (it was told to), killing it after 10 s."""
+    try:
+        child.wait(10)
+    except subprocess.TimeoutExpired:
+        child.kill()
+        child.wait()
 
 
 KID = "!up.\n+!up <- .print(up).\n"
@@ -240,10 +251,7 @@ def _creates(count: int) -> dict[str, list[float]]:
     runtime = LocalRuntime()
     transport = ZenohTransport(mas, ZenohOptions(listen=(loopback_endpoint(),))).open()
     bridge = TransportBridge(runtime, transport, declared=("sink",)).attach()
-    child = subprocess.Popen([sys.executable, "-m", "agents", "agent", "run", str(folder / "sink.asl"),
-                              "--name", "sink", "--mas", mas, "--connect", transport.endpoints[0]],
-                             cwd=REPO, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                             env=dict(os.environ, PYTHONUNBUFFERED="1"))
+    child = _start_sink(folder, mas, transport.endpoints[0], stdout=subprocess.DEVNULL)
     try:
         if not transport.wait_for_agents(["sink"], 60):
             raise RuntimeError("agent sink did not come up")
@@ -253,11 +261,7 @@ def _creates(count: int) -> dict[str, list[float]]:
         transport.publish_control("stop", by="bench")
         bridge.detach()
         transport.close()
-        try:
-            child.wait(10)
-        except subprocess.TimeoutExpired:
-            child.kill()
-            child.wait()
+        _end_sink(child)
     return results
 
 
